@@ -1,0 +1,73 @@
+#pragma once
+/// \file
+/// What a scene asks the spring solvers to simulate: the network, its supports and drives,
+/// the loads, the initial state and the probes, resolved against the mesh.
+
+#include "vtb/core/spring_network.hh"
+#include "vtb/meshes/region.hh"
+
+namespace vtb {
+
+/// Switch-on profile of loads and drives: 0 before `start`, then a linear ramp to 1 over
+/// `ramp` seconds (a step when ramp = 0).
+inline double ramp_factor(double t, double start, double ramp) {
+  if (t < start) return 0.0;
+  if (ramp <= 0) return 1.0;
+  return t >= start + ramp ? 1.0 : (t - start) / ramp;
+}
+/// Time derivative of ramp_factor (0 at the kinks).
+inline double ramp_rate(double t, double start, double ramp) {
+  return (ramp > 0 && t >= start && t < start + ramp) ? 1.0 / ramp : 0.0;
+}
+
+/// A fix (displacement 0) or drive (prescribed displacement), with its reaction reported.
+template <int dim>
+struct Support {
+  std::string name;
+  std::vector<int> nodes;
+  bool driven = false;
+  Vec<dim> displacement = Vec<dim>::Zero();
+  double start = 0, ramp = 0;
+};
+
+/// A load: fixed nodal forces (lumped traction or point force) times the ramp.
+template <int dim>
+struct Load {
+  std::string name;
+  std::vector<int> nodes;
+  Nodal<dim> force; ///< column per entry of `nodes`
+  double start = 0, ramp = 0;
+};
+
+template <int dim>
+struct Model {
+  Mesh<dim> mesh;
+  SpringNetwork<dim> net;
+  std::vector<Support<dim>> supports;
+  std::vector<Load<dim>> loads;
+  std::vector<char> constrained; ///< per node: fixed or driven
+  std::vector<int> free_nodes;   ///< sorted
+  std::vector<int> free_index;   ///< node -> index in free_nodes, or -1
+  Nodal<dim> initial_velocity;
+  std::vector<std::pair<std::string, int>> probes; ///< name, node
+  double duration = 0, output_interval = 0;
+
+  int num_nodes() const { return net.num_nodes(); }
+  bool has_constraints() const { return free_nodes.size() != constrained.size(); }
+
+  /// f = external load at time t (f is overwritten; allocates nothing).
+  void external_forces(double t, Nodal<dim>& f) const;
+  /// Sets displacement and velocity of every constrained node for time t.
+  void apply_constraints(double t, Nodal<dim>& u, Nodal<dim>& v) const;
+};
+
+/// Resolves a scene against its mesh. Throws InputError naming the scene key when a vector
+/// has the wrong dimension, a region selects no node, regions conflict (a node both fixed
+/// and driven, or in two drives), or the body is a mechanism that a solver cannot integrate.
+template <int dim>
+Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
+
+/// Loads the scene's mesh (file or generator).
+AnyMesh load_mesh(const Scene& scene);
+
+} // namespace vtb

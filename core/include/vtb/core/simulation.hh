@@ -1,0 +1,71 @@
+#pragma once
+/// \file
+/// Running a scene with a spring solver: the time loop, sampling, stability watch, timing.
+
+#include "vtb/core/integrator.hh"
+
+#include <filesystem>
+
+namespace vtb {
+
+/// What the loop records at each sample time.
+template <int dim>
+struct Trajectory {
+  std::vector<double> t;
+  std::vector<std::vector<Vec<dim>>> probe_u;  ///< [sample][probe]
+  std::vector<std::vector<Vec<dim>>> reaction; ///< [sample][support]: force the support exerts on the body
+  std::vector<Nodal<dim>> field;               ///< [sample] all displacements, when asked for
+};
+
+struct StepStats {
+  double mean = 0, median = 0, p99 = 0; ///< seconds per step
+};
+
+/// The outcome of one run; what summary.json reports.
+struct RunReport {
+  std::string solver;
+  int dim = 2;
+  int nodes = 0, springs = 0, free_nodes = 0;
+  double dt = 0, duration = 0;
+  long steps = 0, steps_taken = 0;
+  double precompute_seconds = 0;
+  StepStats step_seconds;
+  bool stable = true;
+  std::string failure;      ///< why the run was stopped, empty when stable
+  double failure_time = -1; ///< simulated time of the failure
+  double max_strain = 0;    ///< max over samples of max |l/L0 - 1|
+  double courant_dt = 0;    ///< predicted stability limit of the explicit scheme (estimate)
+  std::string calibration;
+  double effective_poisson_ratio = 0;
+  std::string filter;
+  bool momentum_correction = false;
+  double strain_limit = 0;
+};
+
+/// A run stops as unstable when the state is non-finite or a spring's strain exceeds this.
+inline constexpr double kRunawayStrain = 10.0;
+
+/// Runs `model` with the integrator options; samples every model.output_interval (at the first
+/// step at or after each sample time). Never throws for a numerical blow-up: it stops the run
+/// and reports stable = false.
+template <int dim>
+RunReport simulate(const Model<dim>& model, const IntegratorOptions& options, Trajectory<dim>& out,
+                   bool record_field = false);
+
+/// Support reactions at a state: minus the internal and external forces at its nodes.
+template <int dim>
+void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
+                       std::vector<Vec<dim>>& out);
+
+/// Options of `vtb run` that override the scene.
+struct RunOverrides {
+  std::optional<std::string> solver;
+  std::optional<double> dt;
+  std::optional<double> duration;
+};
+
+/// Everything `vtb run` does: load mesh, build model, simulate, write probes.csv,
+/// reactions.csv and summary.json into `out_dir` (all or nothing). Returns the report.
+RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
+
+} // namespace vtb

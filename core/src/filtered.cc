@@ -1,0 +1,206 @@
+#include "vtb/core/filtered.hh"
+
+#include "vtb/core/selected_inverse.hh"
+
+#include <Eigen/Dense>
+
+namespace vtb {
+
+template <int dim>
+Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt) {
+  const auto& net = model.net;
+  const int nf = static_cast<int>(model.free_nodes.size());
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(static_cast<std::size_t>(nf + 4 * net.num_springs()));
+  for (int a = 0; a < nf; ++a) {
+    const int i = model.free_nodes[static_cast<std::size_t>(a)];
+    trip.emplace_back(a, a, net.mass[i] * (1.0 + dt * net.mass_damping));
+  }
+  for (int s = 0; s < net.num_springs(); ++s) {
+    const double w = dt * net.damping[s] + dt * dt * net.stiffness[s];
+    const int a = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][0])];
+    const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][1])];
+    if (a >= 0) trip.emplace_back(a, a, w);
+    if (b >= 0) trip.emplace_back(b, b, w);
+    if (a >= 0 && b >= 0) {
+      trip.emplace_back(a, b, -w);
+      trip.emplace_back(b, a, -w);
+    }
+  }
+  Eigen::SparseMatrix<double> H(nf, nf);
+  H.setFromTriplets(trip.begin(), trip.end());
+  return H;
+}
+
+template <int dim>
+Eigen::MatrixXd filter_matrix_full(const Model<dim>& model, double dt) {
+  const Eigen::MatrixXd H(filter_system_matrix(model, dt));
+  const Eigen::Index nf = H.rows();
+  Eigen::VectorXd m(nf);
+  for (Eigen::Index a = 0; a < nf; ++a) m[a] = model.net.mass[model.free_nodes[static_cast<std::size_t>(a)]];
+  Eigen::MatrixXd W = Eigen::MatrixXd(m.asDiagonal());
+  Eigen::LLT<Eigen::MatrixXd> llt(H);
+  llt.solveInPlace(W);
+  return W;
+}
+
+template <int dim>
+Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim>& model, double dt) {
+  Eigen::SparseMatrix<double> Z = selected_inverse(filter_system_matrix(model, dt));
+  // W_ab = Z_ab m_b: scale column b.
+  for (int b = 0; b < Z.outerSize(); ++b)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, b); it; ++it)
+      it.valueRef() *= model.net.mass[model.free_nodes[static_cast<std::size_t>(b)]];
+  return Eigen::SparseMatrix<double, Eigen::RowMajor>(Z);
+}
+
+template <int dim>
+FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
+    : Integrator<dim>(o.dt),
+      m_model(model),
+      m_full(o.filter == "full"),
+      m_correct(o.momentum_correction && !model.has_constraints()),
+      m_strain_limit(o.strain_limit) {
+  if (o.filter != "full" && o.filter != "neighbors")
+    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors or full");
+  const Eigen::Index n = model.num_nodes();
+  const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
+  if (m_full) {
+    m_h = std::make_unique<OrderedLDLT>(filter_system_matrix(model, o.dt));
+    if (!m_h->factorize()) throw std::runtime_error("filtered: H is not positive definite");
+    m_rhs.resize(nf, dim);
+  } else {
+    m_sparse = filter_matrix_neighbors(model, o.dt);
+  }
+  m_force.resize(dim, n);
+  m_acc.resize(dim, nf);
+  m_dv.resize(dim, nf);
+}
+
+template <int dim>
+void FilteredImplicit<dim>::step(State<dim>& s) {
+  const double dt = this->dt();
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const auto nf = static_cast<Eigen::Index>(free.size());
+
+  // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
+  m_model.external_forces(s.t + dt, m_force);
+  add_internal_forces(net, s.u, s.v, m_force, dt);
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const int i = free[static_cast<std::size_t>(a)];
+    m_acc.col(a) = m_force.col(i) / net.mass[i];
+  }
+  // dv = dt W a.
+  if (m_full) {
+    // W a = H^-1 M a = H^-1 F_node.
+    for (Eigen::Index a = 0; a < nf; ++a) m_rhs.row(m_h->ordered(static_cast<int>(a))) = m_force.col(free[static_cast<std::size_t>(a)]).transpose();
+    m_h->solve_in_place(m_rhs);
+    for (Eigen::Index a = 0; a < nf; ++a) m_dv.col(a) = dt * m_rhs.row(m_h->ordered(static_cast<int>(a))).transpose();
+  } else {
+    const int* ptr = m_sparse.outerIndexPtr();
+    const int* col = m_sparse.innerIndexPtr();
+    const double* val = m_sparse.valuePtr();
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      Vec<dim> acc = Vec<dim>::Zero();
+      for (int p = ptr[a]; p < ptr[a + 1]; ++p) acc += val[p] * m_acc.col(col[p]);
+      m_dv.col(a) = dt * acc;
+    }
+  }
+  if (m_correct) correct_momentum(s);
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const int i = free[static_cast<std::size_t>(a)];
+    s.v.col(i) += m_dv.col(a);
+    s.u.col(i) += dt * s.v.col(i);
+  }
+  s.t += dt;
+  m_model.apply_constraints(s.t, s.u, s.v);
+  if (m_strain_limit > 0) limit_strain(s);
+}
+
+template <int dim>
+void FilteredImplicit<dim>::correct_momentum(const State<dim>& s) {
+  // The unfiltered impulse dt F carries exactly the right linear and angular impulse
+  // (internal forces are central pairs); remove what the filter changed.
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  const double dt = this->dt();
+  double mtot = 0;
+  Vec<dim> xg = Vec<dim>::Zero(), dp = Vec<dim>::Zero();
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const int i = free[static_cast<std::size_t>(a)];
+    const double m = net.mass[i];
+    mtot += m;
+    xg += m * (net.rest.col(i) + s.u.col(i));
+    dp += m * (m_dv.col(a) - dt * m_acc.col(a));
+  }
+  xg /= mtot;
+  m_dv.colwise() -= dp / mtot;
+  if constexpr (dim == 2) {
+    double dl = 0, inertia = 0;
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Vec<2> r = net.rest.col(i) + s.u.col(i) - xg;
+      const Vec<2> e = m_dv.col(a) - dt * m_acc.col(a);
+      dl += net.mass[i] * (r.x() * e.y() - r.y() * e.x());
+      inertia += net.mass[i] * r.squaredNorm();
+    }
+    const double w = dl / inertia;
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Vec<2> r = net.rest.col(i) + s.u.col(i) - xg;
+      m_dv.col(a) -= Vec<2>(-w * r.y(), w * r.x());
+    }
+  } else {
+    Eigen::Vector3d dl = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Eigen::Vector3d r = net.rest.col(i) + s.u.col(i) - xg;
+      const Eigen::Vector3d e = m_dv.col(a) - dt * m_acc.col(a);
+      dl += net.mass[i] * r.cross(e);
+      inertia += net.mass[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+    }
+    const Eigen::Vector3d w = inertia.ldlt().solve(dl);
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Eigen::Vector3d r = net.rest.col(i) + s.u.col(i) - xg;
+      m_dv.col(a) -= w.cross(r);
+    }
+  }
+}
+
+template <int dim>
+void FilteredImplicit<dim>::limit_strain(State<dim>& s) const {
+  const auto& net = m_model.net;
+  const double inv_dt = 1.0 / this->dt();
+  const double limit = 1.0 + m_strain_limit;
+  for (int sp = 0; sp < net.num_springs(); ++sp) {
+    const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];
+    const double wi = m_model.constrained[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / net.mass[i];
+    const double wj = m_model.constrained[static_cast<std::size_t>(j)] ? 0.0 : 1.0 / net.mass[j];
+    if (wi + wj == 0) continue;
+    const Vec<dim> d = net.rest.col(j) + s.u.col(j) - net.rest.col(i) - s.u.col(i);
+    const double l = d.norm();
+    const double target = limit * net.rest_length[sp];
+    if (!(l > target)) continue;
+    const Vec<dim> shift = (l - target) / (l * (wi + wj)) * d; // total shortening along d
+    const Vec<dim> di = wi * shift, dj = -wj * shift;
+    s.u.col(i) += di;
+    s.v.col(i) += inv_dt * di;
+    s.u.col(j) += dj;
+    s.v.col(j) += inv_dt * dj;
+  }
+}
+
+template class FilteredImplicit<2>;
+template class FilteredImplicit<3>;
+template Eigen::SparseMatrix<double> filter_system_matrix<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double> filter_system_matrix<3>(const Model<3>&, double);
+template Eigen::MatrixXd filter_matrix_full<2>(const Model<2>&, double);
+template Eigen::MatrixXd filter_matrix_full<3>(const Model<3>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<3>(const Model<3>&, double);
+
+} // namespace vtb

@@ -1,0 +1,191 @@
+#include "vtb/core/model.hh"
+
+#include "vtb/meshes/generate.hh"
+#include "vtb/meshes/msh_io.hh"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <set>
+
+namespace vtb {
+
+template <int dim>
+void Model<dim>::external_forces(double t, Nodal<dim>& f) const {
+  f.setZero();
+  for (const auto& l : loads) {
+    const double s = ramp_factor(t, l.start, l.ramp);
+    if (s == 0) continue;
+    for (std::size_t a = 0; a < l.nodes.size(); ++a) f.col(l.nodes[a]) += s * l.force.col(static_cast<Eigen::Index>(a));
+  }
+}
+
+template <int dim>
+void Model<dim>::apply_constraints(double t, Nodal<dim>& u, Nodal<dim>& v) const {
+  for (const auto& s : supports) {
+    const Vec<dim> d = s.driven ? Vec<dim>(ramp_factor(t, s.start, s.ramp) * s.displacement) : Vec<dim>::Zero();
+    const Vec<dim> dv = s.driven ? Vec<dim>(ramp_rate(t, s.start, s.ramp) * s.displacement) : Vec<dim>::Zero();
+    for (int i : s.nodes) {
+      u.col(i) = d;
+      v.col(i) = dv;
+    }
+  }
+}
+
+namespace {
+
+template <int dim>
+Vec<dim> as_vec(const Eigen::VectorXd& v, const std::string& what, const std::string& file) {
+  if (v.size() != dim)
+    throw InputError(file + ": " + what + " has " + std::to_string(v.size()) + " components; the mesh is " +
+                     std::to_string(dim) + "D");
+  return v;
+}
+
+template <int dim>
+Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDesc& r, const std::string& file) {
+  RegionSpec<dim> spec;
+  const std::string what = file + ": " + r.label;
+  if (r.box) spec.box = Box<dim>{as_vec<dim>(r.box->first, r.label + ".box", file), as_vec<dim>(r.box->second, r.label + ".box", file)};
+  spec.group = r.group;
+  if (r.point) spec.point = as_vec<dim>(*r.point, r.label + ".point", file);
+  Selection<dim> s = select(mesh, spec, what);
+  if (s.nodes.empty()) throw InputError(what + ": the region selects no node of mesh " + mesh.source);
+  return s;
+}
+
+} // namespace
+
+AnyMesh load_mesh(const Scene& scene) {
+  const auto& m = scene.mesh;
+  if (!m.generated()) {
+    try {
+      return read_msh(m.file);
+    } catch (const InputError& e) {
+      throw InputError(scene.file.string() + ": [mesh].file: " + e.what());
+    }
+  }
+  if (m.shape == "rectangle") return generate_rectangle(m.size, m.divisions);
+  return generate_box(m.size, m.divisions);
+}
+
+template <int dim>
+Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
+  const std::string file = scene.file.string();
+  Model<dim> model;
+  model.duration = scene.duration;
+  model.output_interval = scene.output_interval;
+  model.net = build_network(mesh, scene.material, scene.solver.springs);
+  const int n = model.net.num_nodes();
+  model.constrained.assign(static_cast<std::size_t>(n), 0);
+  // A node may sit in two fixes (both hold it at zero) but in no drive shared with anything.
+  std::vector<int> owner(static_cast<std::size_t>(n), -1);
+  auto claim = [&](int idx) {
+    const Support<dim>& s = model.supports[static_cast<std::size_t>(idx)];
+    for (int i : s.nodes) {
+      int& o = owner[static_cast<std::size_t>(i)];
+      if (o >= 0 && (s.driven || model.supports[static_cast<std::size_t>(o)].driven)) {
+        std::string at;
+        for (int a = 0; a < dim; ++a) at += (a ? ", " : "") + std::to_string(mesh.points(a, i));
+        throw InputError(file + ": " + s.name + " and " + model.supports[static_cast<std::size_t>(o)].name +
+                         " both constrain node " + std::to_string(i) + " at (" + at + ")");
+      }
+      o = idx;
+      model.constrained[static_cast<std::size_t>(i)] = 1;
+    }
+  };
+  for (const auto& f : scene.fixes) {
+    Support<dim> s;
+    s.name = f.region.label;
+    s.nodes = resolve(mesh, f.region, file).nodes;
+    model.supports.push_back(s);
+    claim(static_cast<int>(model.supports.size()) - 1);
+  }
+  for (const auto& d : scene.drives) {
+    Support<dim> s;
+    s.name = d.region.label;
+    s.nodes = resolve(mesh, d.region, file).nodes;
+    s.driven = true;
+    s.displacement = as_vec<dim>(d.displacement, d.region.label + ".displacement", file);
+    s.start = d.start;
+    s.ramp = d.ramp;
+    model.supports.push_back(s);
+    claim(static_cast<int>(model.supports.size()) - 1);
+  }
+  for (const auto& l : scene.loads) {
+    const Selection<dim> sel = resolve(mesh, l.region, file);
+    const Vec<dim> total = as_vec<dim>(l.total_force, l.region.label + ".total_force", file);
+    Load<dim> load;
+    load.name = l.region.label;
+    load.start = l.start;
+    load.ramp = l.ramp;
+    load.nodes = sel.nodes;
+    load.force = Nodal<dim>::Zero(dim, static_cast<Eigen::Index>(sel.nodes.size()));
+    auto slot = [&](int node) {
+      return static_cast<Eigen::Index>(std::lower_bound(sel.nodes.begin(), sel.nodes.end(), node) - sel.nodes.begin());
+    };
+    double measure = 0;
+    for (const auto& f : sel.facets) measure += facet_measure(mesh, f);
+    if (!sel.facets.empty() && measure > 0) {
+      // Uniform traction: each facet carries total * |facet| / |region|, split equally
+      // among its vertices (exact lumping of a constant traction on linear facets).
+      for (const auto& f : sel.facets) {
+        const Vec<dim> share = total * (facet_measure(mesh, f) / measure) / dim;
+        for (int v : f) load.force.col(slot(v)) += share;
+      }
+      // Nodes inside the box but on no loaded facet carry nothing: drop them.
+      std::vector<int> keep;
+      Nodal<dim> kept(dim, 0);
+      std::vector<Vec<dim>> cols;
+      for (std::size_t a = 0; a < load.nodes.size(); ++a)
+        if (load.force.col(static_cast<Eigen::Index>(a)).squaredNorm() > 0) {
+          keep.push_back(load.nodes[a]);
+          cols.push_back(load.force.col(static_cast<Eigen::Index>(a)));
+        }
+      load.nodes = keep;
+      load.force.resize(dim, static_cast<Eigen::Index>(cols.size()));
+      for (std::size_t a = 0; a < cols.size(); ++a) load.force.col(static_cast<Eigen::Index>(a)) = cols[a];
+    } else {
+      // A point, or a region with no boundary facet: the force is shared equally by its nodes.
+      load.force.colwise() = total / static_cast<double>(sel.nodes.size());
+    }
+    model.loads.push_back(std::move(load));
+  }
+  model.free_index.assign(static_cast<std::size_t>(n), -1);
+  for (int i = 0; i < n; ++i)
+    if (!model.constrained[static_cast<std::size_t>(i)]) {
+      model.free_index[static_cast<std::size_t>(i)] = static_cast<int>(model.free_nodes.size());
+      model.free_nodes.push_back(i);
+    }
+  if (model.free_nodes.empty()) throw InputError(file + ": every node is constrained; nothing to simulate");
+
+  model.initial_velocity = Nodal<dim>::Zero(dim, n);
+  if (scene.initial_velocity.size() > 0)
+    model.initial_velocity.colwise() = as_vec<dim>(scene.initial_velocity, "[initial].velocity", file);
+  if (scene.initial_angular_velocity.size() > 0) {
+    const int want = dim == 2 ? 1 : 3;
+    if (scene.initial_angular_velocity.size() != want)
+      throw InputError(file + ": [initial].angular_velocity must be " + (dim == 2 ? "a number in 2D" : "a 3-vector in 3D"));
+    const Vec<dim> centroid = (mesh.points * model.net.mass).array() / model.net.mass.sum();
+    for (int i = 0; i < n; ++i) {
+      const Vec<dim> r = mesh.points.col(i) - centroid;
+      if constexpr (dim == 2) {
+        const double w = scene.initial_angular_velocity[0];
+        model.initial_velocity.col(i) += Vec<dim>(-w * r.y(), w * r.x());
+      } else {
+        const Eigen::Vector3d w = scene.initial_angular_velocity;
+        model.initial_velocity.col(i) += w.cross(r);
+      }
+    }
+  }
+  for (const auto& p : scene.probes)
+    model.probes.push_back({p.name, nearest_node(mesh, as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file))});
+  model.mesh = std::move(mesh);
+  return model;
+}
+
+template struct Model<2>;
+template struct Model<3>;
+template Model<2> build_model<2>(const Scene&, Mesh<2>);
+template Model<3> build_model<3>(const Scene&, Mesh<3>);
+
+} // namespace vtb

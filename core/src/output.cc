@@ -1,0 +1,85 @@
+#include "vtb/core/output.hh"
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace vtb {
+
+std::string summary_json(const RunReport& r, const std::string& scene_name) {
+  nlohmann::ordered_json j;
+  j["scene"] = scene_name;
+  j["solver"] = r.solver;
+  j["dim"] = r.dim;
+  j["nodes"] = r.nodes;
+  j["free_nodes"] = r.free_nodes;
+  j["springs"] = r.springs;
+  j["dt"] = r.dt;
+  j["duration"] = r.duration;
+  j["steps"] = r.steps_taken;
+  j["steps_planned"] = r.steps;
+  j["precompute_seconds"] = r.precompute_seconds;
+  j["step_seconds"] = {{"mean", r.step_seconds.mean}, {"median", r.step_seconds.median}, {"p99", r.step_seconds.p99}};
+  j["stable"] = r.stable;
+  if (!r.stable) {
+    j["failure"] = r.failure;
+    j["failure_time"] = r.failure_time;
+  }
+  j["max_strain"] = r.max_strain;
+  j["courant_dt_estimate"] = r.courant_dt;
+  j["calibration"] = r.calibration;
+  j["effective_poisson_ratio"] = r.effective_poisson_ratio;
+  if (r.solver == "filtered") {
+    j["filter"] = r.filter;
+    j["momentum_correction"] = r.momentum_correction;
+    j["strain_limit"] = r.strain_limit;
+  }
+  return j.dump(2) + "\n";
+}
+
+namespace {
+
+void write_file(const std::filesystem::path& path, const std::string& text) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw InputError(path.string() + ": cannot write");
+  f << text;
+  if (!f) throw InputError(path.string() + ": write failed");
+}
+
+} // namespace
+
+template <int dim>
+void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
+                       const RunReport& report, const std::string& scene_name) {
+  std::error_code ec;
+  std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
+  std::ostringstream probes, reactions;
+  probes << std::setprecision(10) << "t,probe,ux,uy,uz\n";
+  reactions << std::setprecision(10) << "t,region,fx,fy,fz\n";
+  for (std::size_t k = 0; k < traj.t.size(); ++k) {
+    for (std::size_t p = 0; p < model.probes.size(); ++p) {
+      const auto& u = traj.probe_u[k][p];
+      probes << traj.t[k] << ',' << model.probes[p].first << ',' << u[0] << ',' << u[1] << ','
+             << (dim == 3 ? u[dim - 1] : 0.0) << '\n';
+    }
+    for (std::size_t q = 0; q < model.supports.size(); ++q) {
+      const auto& f = traj.reaction[k][q];
+      reactions << traj.t[k] << ',' << model.supports[q].name << ',' << f[0] << ',' << f[1] << ','
+                << (dim == 3 ? f[dim - 1] : 0.0) << '\n';
+    }
+  }
+  const std::pair<const char*, std::string> files[] = {
+      {"probes.csv", probes.str()}, {"reactions.csv", reactions.str()}, {"summary.json", summary_json(report, scene_name)}};
+  for (const auto& [name, text] : files) write_file(dir / (std::string(name) + ".part"), text);
+  for (const auto& [name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+}
+
+template void write_run_outputs<2>(const std::filesystem::path&, const Model<2>&, const Trajectory<2>&, const RunReport&,
+                                   const std::string&);
+template void write_run_outputs<3>(const std::filesystem::path&, const Model<3>&, const Trajectory<3>&, const RunReport&,
+                                   const std::string&);
+
+} // namespace vtb

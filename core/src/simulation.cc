@@ -1,0 +1,166 @@
+#include "vtb/core/simulation.hh"
+
+#include "vtb/core/calibration.hh"
+#include "vtb/core/explicit_euler.hh"
+#include "vtb/core/filtered.hh"
+#include "vtb/core/output.hh"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+namespace vtb {
+
+template <int dim>
+void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
+                       std::vector<Vec<dim>>& out) {
+  model.external_forces(s.t, ext);
+  scratch = ext;
+  add_internal_forces(model.net, s.u, s.v, scratch);
+  out.resize(model.supports.size());
+  for (std::size_t k = 0; k < model.supports.size(); ++k) {
+    Vec<dim> r = Vec<dim>::Zero();
+    for (int i : model.supports[k].nodes) r -= scratch.col(i);
+    out[k] = r;
+  }
+}
+
+namespace {
+
+StepStats stats(std::vector<double> t) {
+  StepStats s;
+  if (t.empty()) return s;
+  double sum = 0;
+  for (double x : t) sum += x;
+  s.mean = sum / static_cast<double>(t.size());
+  auto at = [&t](double q) {
+    const auto k = static_cast<std::size_t>(std::min<double>(static_cast<double>(t.size() - 1), std::floor(q * static_cast<double>(t.size()))));
+    std::nth_element(t.begin(), t.begin() + static_cast<std::ptrdiff_t>(k), t.end());
+    return t[k];
+  };
+  s.median = at(0.5);
+  s.p99 = at(0.99);
+  return s;
+}
+
+} // namespace
+
+template <int dim>
+RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
+  using clock = std::chrono::steady_clock;
+  RunReport rep;
+  rep.solver = o.kind;
+  rep.dim = dim;
+  rep.nodes = model.num_nodes();
+  rep.springs = model.net.num_springs();
+  rep.free_nodes = static_cast<int>(model.free_nodes.size());
+  rep.dt = o.dt;
+  rep.duration = model.duration;
+  rep.calibration = model.net.calibration;
+  rep.effective_poisson_ratio = spring_poisson_ratio(dim);
+  if (o.kind == "filtered") {
+    rep.filter = o.filter;
+    rep.momentum_correction = o.momentum_correction && !model.has_constraints();
+    rep.strain_limit = o.strain_limit;
+  }
+  {
+    const double w2 = max_omega_squared(model, false);
+    const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
+    rep.courant_dt = explicit_critical_dt(w2, tau, model.net.mass_damping);
+  }
+
+  const auto t0 = clock::now();
+  auto integrator = make_integrator(model, o);
+  rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+
+  State<dim> s = initial_state(model);
+  const long steps = std::max(1L, std::lround(model.duration / o.dt));
+  rep.steps = steps;
+  const long samples = static_cast<long>(std::floor(model.duration / model.output_interval + 1e-9)) + 1;
+  traj.t.reserve(static_cast<std::size_t>(samples));
+  traj.probe_u.reserve(static_cast<std::size_t>(samples));
+  traj.reaction.reserve(static_cast<std::size_t>(samples));
+  if (record_field) traj.field.reserve(static_cast<std::size_t>(samples));
+  Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
+  std::vector<Vec<dim>> reactions;
+  std::vector<double> step_time;
+  step_time.reserve(static_cast<std::size_t>(steps));
+
+  long next_sample = 0;
+  auto record = [&]() {
+    traj.t.push_back(s.t);
+    std::vector<Vec<dim>> pu;
+    for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
+    traj.probe_u.push_back(std::move(pu));
+    support_reactions(model, s, scratch, ext, reactions);
+    traj.reaction.push_back(reactions);
+    if (record_field) traj.field.push_back(s.u);
+    rep.max_strain = std::max(rep.max_strain, max_strain(model.net, s.u));
+    ++next_sample;
+  };
+  record();
+  const double eps = 1e-9 * o.dt;
+  for (long k = 0; k < steps; ++k) {
+    const auto a = clock::now();
+    integrator->step(s);
+    step_time.push_back(std::chrono::duration<double>(clock::now() - a).count());
+    ++rep.steps_taken;
+    if (!s.u.allFinite() || !s.v.allFinite()) {
+      rep.stable = false;
+      rep.failure = "non-finite displacement or velocity";
+      rep.failure_time = s.t;
+      break;
+    }
+    if (next_sample < samples && s.t + eps >= static_cast<double>(next_sample) * model.output_interval) {
+      record();
+      if (!(rep.max_strain <= kRunawayStrain)) {
+        rep.stable = false;
+        rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
+                      "% of its rest length)";
+        rep.failure_time = s.t;
+        break;
+      }
+    }
+  }
+  rep.step_seconds = stats(std::move(step_time));
+  return rep;
+}
+
+RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
+  Scene scene = scene_in;
+  if (ov.solver) scene.solver.kind = *ov.solver;
+  if (ov.dt) {
+    if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
+    scene.solver.dt = *ov.dt;
+  }
+  if (ov.duration) {
+    if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");
+    scene.duration = *ov.duration;
+    scene.output_interval = std::min(scene.output_interval, scene.duration);
+  }
+  if (scene.solver.dt > scene.duration) throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
+  IntegratorOptions o;
+  o.kind = scene.solver.kind;
+  o.dt = scene.solver.dt;
+  o.filter = scene.solver.filter;
+  o.momentum_correction = scene.solver.momentum_correction;
+  o.strain_limit = scene.solver.strain_limit;
+  AnyMesh mesh = load_mesh(scene);
+  return std::visit(
+      [&](auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        const Model<dim> model = build_model<dim>(scene, std::move(m));
+        Trajectory<dim> traj;
+        RunReport rep = simulate(model, o, traj);
+        write_run_outputs(out_dir, model, traj, rep, scene.name);
+        return rep;
+      },
+      mesh);
+}
+
+template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
+template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
+template void support_reactions<2>(const Model<2>&, const State<2>&, Nodal<2>&, Nodal<2>&, std::vector<Vec<2>>&);
+template void support_reactions<3>(const Model<3>&, const State<3>&, Nodal<3>&, Nodal<3>&, std::vector<Vec<3>>&);
+
+} // namespace vtb

@@ -1,0 +1,108 @@
+#include "vtb/core/spring_network.hh"
+
+#include "vtb/core/calibration.hh"
+
+#include <algorithm>
+#include <numeric>
+
+namespace vtb {
+
+template <int dim>
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat, std::string_view calibration) {
+  SpringNetwork<dim> net;
+  net.rest = mesh.points;
+  net.mass = lumped_masses(mesh, mat.density, mat.thickness);
+  net.edge = unique_edges(mesh);
+  net.calibration = std::string(calibration);
+  if (calibration == "lloyd")
+    net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
+  else if (calibration == "van-gelder")
+    net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
+  else
+    throw InputError("[solver].springs = \"" + std::string(calibration) + "\": must be lloyd or van-gelder");
+  net.damping = mat.retardation_time * net.stiffness;
+  net.mass_damping = mat.mass_damping;
+  const int ns = net.num_springs();
+  net.rest_length.resize(ns);
+  for (int s = 0; s < ns; ++s)
+    net.rest_length[s] = (mesh.points.col(net.edge[static_cast<std::size_t>(s)][1]) -
+                          mesh.points.col(net.edge[static_cast<std::size_t>(s)][0])).norm();
+
+  const int n = net.num_nodes();
+  std::vector<std::vector<std::pair<int, int>>> adj(static_cast<std::size_t>(n));
+  for (int s = 0; s < ns; ++s) {
+    const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+    adj[static_cast<std::size_t>(i)].push_back({j, s});
+    adj[static_cast<std::size_t>(j)].push_back({i, s});
+  }
+  net.adj_ptr.assign(1, 0);
+  for (auto& a : adj) {
+    std::sort(a.begin(), a.end());
+    for (const auto& [j, s] : a) {
+      net.adj_node.push_back(j);
+      net.adj_spring.push_back(s);
+    }
+    net.adj_ptr.push_back(static_cast<int>(net.adj_node.size()));
+  }
+  return net;
+}
+
+template <int dim>
+void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
+                         double extra_damping_per_k) {
+  const int ns = net.num_springs();
+  const auto* e = net.edge.data();
+  for (int s = 0; s < ns; ++s) {
+    const int i = e[s][0], j = e[s][1];
+    const Vec<dim> xi = net.rest.col(i) + u.col(i);
+    const Vec<dim> xj = net.rest.col(j) + u.col(j);
+    const double k = net.stiffness[s];
+    const Vec<dim> fi =
+        voigt_force<dim>(xi, xj, v.col(i), v.col(j), net.rest_length[s], k, net.damping[s] + extra_damping_per_k * k);
+    f.col(i) += fi;
+    f.col(j) -= fi;
+  }
+  if (net.mass_damping != 0)
+    f.noalias() -= net.mass_damping * (v * net.mass.asDiagonal());
+}
+
+template <int dim>
+double max_strain(const SpringNetwork<dim>& net, const Nodal<dim>& u) {
+  double m = 0;
+  for (int s = 0; s < net.num_springs(); ++s) {
+    const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
+    const double l = (net.rest.col(j) + u.col(j) - net.rest.col(i) - u.col(i)).norm();
+    const double strain = std::abs(l / net.rest_length[s] - 1.0);
+    if (!(strain <= m)) m = strain; // propagates NaN
+  }
+  return m;
+}
+
+template <int dim>
+double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u) {
+  double e = 0;
+  for (int s = 0; s < net.num_springs(); ++s) {
+    const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
+    const double l = (net.rest.col(j) + u.col(j) - net.rest.col(i) - u.col(i)).norm();
+    e += 0.5 * net.stiffness[s] * (l - net.rest_length[s]) * (l - net.rest_length[s]);
+  }
+  return e;
+}
+
+template <int dim>
+double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v) {
+  return 0.5 * (v.colwise().squaredNorm().transpose().array() * net.mass.array()).sum();
+}
+
+#define VTB_INSTANTIATE(D)                                                                                   \
+  template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view);          \
+  template void add_internal_forces<D>(const SpringNetwork<D>&, const Nodal<D>&, const Nodal<D>&, Nodal<D>&, \
+                                       double);                                                              \
+  template double max_strain<D>(const SpringNetwork<D>&, const Nodal<D>&);                                   \
+  template double elastic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);                               \
+  template double kinetic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);
+VTB_INSTANTIATE(2)
+VTB_INSTANTIATE(3)
+#undef VTB_INSTANTIATE
+
+} // namespace vtb

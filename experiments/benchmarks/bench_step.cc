@@ -1,0 +1,115 @@
+// Step cost of each spring integrator on the paper's mesh sizes (structured stand-ins until
+// the CGAL plates land: 126 ~ 123 nodes, exactly 517 nodes) and on 3D boxes, plus the W
+// precompute. Run: build/bin/vtb_bench_step --benchmark_repetitions=5
+//   --benchmark_report_aggregates_only=true  (medians are what the closing notes quote).
+#include "vtb/core/explicit_euler.hh"
+#include "vtb/core/filtered.hh"
+#include "vtb/core/integrator.hh"
+#include "vtb/meshes/generate.hh"
+
+#include <benchmark/benchmark.h>
+
+namespace vtb {
+namespace {
+
+/// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max.
+template <int dim>
+Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div) {
+  Scene s;
+  s.file = "bench";
+  s.duration = 1.0;
+  s.output_interval = 0.01;
+  s.material = MaterialDesc{5.0e4, 0.3333, 1000.0, 0.001, 0.05, 0.0};
+  s.solver.springs = "lloyd";
+  FixDesc fix;
+  fix.region.group = "left";
+  fix.region.label = "clamp";
+  s.fixes.push_back(fix);
+  LoadDesc load;
+  load.region.group = "right";
+  load.region.label = "pull";
+  load.total_force = Eigen::VectorXd::Zero(dim);
+  load.total_force[0] = 0.5;
+  s.loads.push_back(load);
+  if constexpr (dim == 2) return build_model<2>(s, generate_rectangle({0.2, 0.05}, div));
+  else return build_model<3>(s, generate_box({0.2, 0.05, 0.05}, div));
+}
+
+template <int dim>
+void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter) {
+  IntegratorOptions o;
+  o.kind = kind;
+  o.filter = filter;
+  o.dt = kind == "explicit" ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
+  auto integ = make_integrator(model, o);
+  State<dim> s = initial_state(model);
+  for (int k = 0; k < 10; ++k) integ->step(s); // warm up
+  const State<dim> saved = s;
+  long n = 0;
+  for (auto _ : st) {
+    integ->step(s);
+    if (++n % 1000 == 0) {
+      st.PauseTiming();
+      s = saved; // keep the state in the same regime
+      st.ResumeTiming();
+    }
+  }
+  st.counters["nodes"] = model.num_nodes();
+  st.counters["springs"] = model.net.num_springs();
+  st.counters["dt"] = o.dt;
+}
+
+const Model<2>& plate126() {
+  static const Model<2> m = bench_model<2>(Eigen::Vector2i(20, 5));
+  return m;
+}
+const Model<2>& plate517() {
+  static const Model<2> m = bench_model<2>(Eigen::Vector2i(46, 10));
+  return m;
+}
+const Model<3>& box275() {
+  static const Model<3> m = bench_model<3>(Eigen::Vector3i(10, 4, 4));
+  return m;
+}
+const Model<3>& box1701() {
+  static const Model<3> m = bench_model<3>(Eigen::Vector3i(20, 8, 8));
+  return m;
+}
+
+#define VTB_STEP_BENCH(MESH, KIND, FILTER, NAME)                                                    \
+  void BM_step_##MESH##_##NAME(benchmark::State& st) { run_steps(st, MESH(), KIND, FILTER); }       \
+  BENCHMARK(BM_step_##MESH##_##NAME)->Unit(benchmark::kMicrosecond);
+
+VTB_STEP_BENCH(plate126, "explicit", "", explicit)
+VTB_STEP_BENCH(plate126, "filtered", "neighbors", filtered_neighbors)
+VTB_STEP_BENCH(plate126, "filtered", "full", filtered_full)
+VTB_STEP_BENCH(plate126, "implicit-euler", "", implicit_euler)
+VTB_STEP_BENCH(plate517, "explicit", "", explicit)
+VTB_STEP_BENCH(plate517, "filtered", "neighbors", filtered_neighbors)
+VTB_STEP_BENCH(plate517, "filtered", "full", filtered_full)
+VTB_STEP_BENCH(plate517, "implicit-euler", "", implicit_euler)
+VTB_STEP_BENCH(box275, "explicit", "", explicit)
+VTB_STEP_BENCH(box275, "filtered", "neighbors", filtered_neighbors)
+VTB_STEP_BENCH(box275, "filtered", "full", filtered_full)
+VTB_STEP_BENCH(box275, "implicit-euler", "", implicit_euler)
+VTB_STEP_BENCH(box1701, "filtered", "neighbors", filtered_neighbors)
+VTB_STEP_BENCH(box1701, "filtered", "full", filtered_full)
+VTB_STEP_BENCH(box1701, "implicit-euler", "", implicit_euler)
+
+void BM_precompute_plate517_neighbors(benchmark::State& st) {
+  for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));
+}
+BENCHMARK(BM_precompute_plate517_neighbors)->Unit(benchmark::kMillisecond);
+
+void BM_precompute_plate517_full_factor(benchmark::State& st) {
+  IntegratorOptions o;
+  o.kind = "filtered";
+  o.filter = "full";
+  for (auto _ : st) benchmark::DoNotOptimize(make_integrator(plate517(), o));
+}
+BENCHMARK(BM_precompute_plate517_full_factor)->Unit(benchmark::kMillisecond);
+
+} // namespace
+} // namespace vtb
+
+BENCHMARK_MAIN();

@@ -1,0 +1,17 @@
+#pragma once
+/// \file
+/// The subcommands of the `vtb` CLI. Each registers its options on the app and returns
+/// the function that runs it (exit code).
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+
+namespace vtb::cli {
+
+using Action = std::function<int()>;
+
+Action add_run(CLI::App& app);
+Action add_mesh(CLI::App& app);
+
+} // namespace vtb::cli

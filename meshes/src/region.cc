@@ -1,0 +1,71 @@
+#include "vtb/meshes/region.hh"
+
+#include "vtb/meshes/input_error.hh"
+
+#include <algorithm>
+#include <limits>
+
+namespace vtb {
+
+template <int dim>
+std::vector<int> nodes_in_box(const Mesh<dim>& mesh, const Box<dim>& box) {
+  const double grow = 1e-9 * bounding_diagonal(mesh);
+  const auto lo = (box.min.array() - grow).matrix().eval();
+  const auto hi = (box.max.array() + grow).matrix().eval();
+  std::vector<int> out;
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const auto p = mesh.points.col(i);
+    if ((p.array() >= lo.array()).all() && (p.array() <= hi.array()).all()) out.push_back(i);
+  }
+  return out;
+}
+
+template <int dim>
+int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<double, dim, 1>& p) {
+  int best = -1;
+  double best_d = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < mesh.num_nodes(); ++i) {
+    const double d = (mesh.points.col(i) - p).squaredNorm();
+    if (d < best_d) {
+      best_d = d;
+      best = i;
+    }
+  }
+  return best;
+}
+
+template <int dim>
+Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what) {
+  Selection<dim> s;
+  if (spec.box) {
+    s.nodes = nodes_in_box(mesh, *spec.box);
+    std::vector<char> inside(static_cast<std::size_t>(mesh.num_nodes()), 0);
+    for (int i : s.nodes) inside[static_cast<std::size_t>(i)] = 1;
+    for (const auto& f : boundary_facets(mesh))
+      if (std::all_of(f.begin(), f.end(), [&](int v) { return inside[static_cast<std::size_t>(v)] != 0; }))
+        s.facets.push_back(f);
+  } else if (!spec.group.empty()) {
+    const auto it = mesh.groups.find(spec.group);
+    if (it == mesh.groups.end()) {
+      std::string known;
+      for (const auto& [name, g] : mesh.groups) known += (known.empty() ? "" : ", ") + name;
+      throw InputError(what + ": group \"" + spec.group + "\" is not in mesh " + mesh.source +
+                       " (groups: " + (known.empty() ? "none" : known) + ")");
+    }
+    s.nodes = it->second.nodes;
+    s.facets = it->second.facets;
+  } else if (spec.point) {
+    s.nodes = {nearest_node(mesh, *spec.point)};
+  }
+  return s;
+}
+
+#define VTB_INSTANTIATE(D)                                                                         \
+  template std::vector<int> nodes_in_box<D>(const Mesh<D>&, const Box<D>&);                        \
+  template int nearest_node<D>(const Mesh<D>&, const Eigen::Matrix<double, D, 1>&);                \
+  template Selection<D> select<D>(const Mesh<D>&, const RegionSpec<D>&, const std::string&);
+VTB_INSTANTIATE(2)
+VTB_INSTANTIATE(3)
+#undef VTB_INSTANTIATE
+
+} // namespace vtb

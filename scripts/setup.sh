@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Sourced by run_main.sh and run_tests.sh: installs the Debian packages vtb needs (only the
+# missing ones; root or sudo), then configures (once) and builds (cmake decides what is stale).
+set -euo pipefail
+
+VTB_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+VTB_BUILD=${VTB_BUILD:-$VTB_ROOT/build}
+
+# Everything the project uses, including what later modules (deal.II reference, CGAL meshes,
+# SUNDIALS, benchmarks) need, so that set-up never changes under a user's feet.
+VTB_PACKAGES=(
+  g++ cmake ninja-build pkg-config
+  libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev
+)
+
+vtb_install_packages() {
+  local missing=()
+  for p in "${VTB_PACKAGES[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  echo "vtb setup: installing ${missing[*]}"
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+}
+
+vtb_build() {
+  if [ ! -f "$VTB_BUILD/CMakeCache.txt" ]; then
+    cmake -S "$VTB_ROOT" -B "$VTB_BUILD" -G Ninja -DCMAKE_BUILD_TYPE=Release
+  fi
+  cmake --build "$VTB_BUILD" -j "$(nproc)"
+}
+
+vtb_install_packages
+vtb_build

@@ -1,0 +1,88 @@
+// Properties of the paper's filter matrix W = H^-1 M, H = M + dt C_L + dt^2 K_L.
+#include "support/small_models.hh"
+#include "vtb/core/explicit_euler.hh"
+#include "vtb/core/filtered.hh"
+#include "vtb/core/selected_inverse.hh"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+namespace vtb {
+namespace {
+
+Eigen::VectorXd free_masses(const Model<2>& m) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(m.free_nodes.size()));
+  for (Eigen::Index a = 0; a < v.size(); ++a) v[a] = m.net.mass[m.free_nodes[static_cast<std::size_t>(a)]];
+  return v;
+}
+
+TEST(SelectedInverse, MatchesTheDenseInverseOnThePattern) {
+  // A shifted graph Laplacian of an irregular mesh: SPD with a nontrivial fill pattern.
+  const Model<2> m = test::model_from(test::plate_scene(7, 3, ""));
+  const Eigen::SparseMatrix<double> H = filter_system_matrix(m, 0.01);
+  const Eigen::MatrixXd dense = Eigen::MatrixXd(H).inverse();
+  const Eigen::SparseMatrix<double> Z = selected_inverse(H);
+  ASSERT_EQ(Z.nonZeros(), H.nonZeros());
+  for (int c = 0; c < Z.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, c); it; ++it)
+      EXPECT_NEAR(it.value(), dense(it.row(), it.col()), 1e-12 * dense.cwiseAbs().maxCoeff());
+}
+
+TEST(FilterMatrix, FreeBodyRowsSumToOneAndHInverseIsSymmetricAndPositive) {
+  const Model<2> m = test::model_from(test::plate_scene(6, 2, ""));
+  ASSERT_FALSE(m.has_constraints());
+  const Eigen::MatrixXd W = filter_matrix_full(m, 0.01);
+  const Eigen::VectorXd mass = free_masses(m);
+  // H 1 = M 1 (Laplacians have zero row sums) => W 1 = H^-1 M 1 = 1: W averages accelerations.
+  EXPECT_LT((W.rowwise().sum().array() - 1.0).abs().maxCoeff(), 1e-12);
+  // W M^-1 = H^-1 is symmetric; H is an M-matrix so H^-1 >= 0 entrywise.
+  const Eigen::MatrixXd Hinv = W * mass.cwiseInverse().asDiagonal();
+  EXPECT_LT((Hinv - Hinv.transpose()).cwiseAbs().maxCoeff(), 1e-12 * Hinv.cwiseAbs().maxCoeff());
+  EXPECT_GE(W.minCoeff(), 0.0);
+  // Column sums weighted by mass: sum_i m_i W_ij = m_j, so the filtered impulses keep the
+  // total momentum (the reason W multiplies accelerations, not forces).
+  EXPECT_LT(((mass.transpose() * W).transpose() - mass).cwiseAbs().maxCoeff(), 1e-12 * mass.maxCoeff());
+}
+
+TEST(FilterMatrix, ConstrainedBodyRowsSumBelowOne) {
+  const Model<2> m = test::model_from(test::plate_scene(6, 2, "[[fix]]\ngroup = \"left\"\n"));
+  const Eigen::MatrixXd W = filter_matrix_full(m, 0.01);
+  EXPECT_LT(W.rowwise().sum().maxCoeff(), 1.0);
+  EXPECT_GT(W.rowwise().sum().minCoeff(), 0.0);
+}
+
+TEST(FilterMatrix, NeighbourTruncationKeepsExactEntriesAndDropsWeight) {
+  const Model<2> m = test::model_from(test::plate_scene(8, 3, ""));
+  const double dt = 0.01;
+  const Eigen::MatrixXd W = filter_matrix_full(m, dt);
+  const Eigen::SparseMatrix<double, Eigen::RowMajor> Wn = filter_matrix_neighbors(m, dt);
+  for (int r = 0; r < Wn.outerSize(); ++r) {
+    int count = 0;
+    for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(Wn, r); it; ++it, ++count)
+      EXPECT_NEAR(it.value(), W(it.row(), it.col()), 1e-12);
+    const int node = m.free_nodes[static_cast<std::size_t>(r)];
+    EXPECT_EQ(count, m.net.adj_ptr[static_cast<std::size_t>(node) + 1] - m.net.adj_ptr[static_cast<std::size_t>(node)] + 1)
+        << "the node and its mesh neighbours";
+  }
+  // Truncation drops positive weight: rows sum below the full rows (here, below 1).
+  const Eigen::VectorXd rows = Eigen::MatrixXd(Wn).rowwise().sum();
+  EXPECT_LT(rows.maxCoeff(), 1.0);
+}
+
+TEST(FilterMatrix, TruncatedWLosesDefinitenessAtLargeSteps) {
+  // The mechanism behind the neighbour filter's stability limit (docs/method.md): at the
+  // explicit limit the truncated W is still positive definite; at 10x it has negative
+  // eigenvalues, which turn the damping of the stiffest modes into amplification.
+  const Model<2> m = test::model_from(test::plate_scene(8, 2, "", 0.0));
+  const double dtc = explicit_critical_dt(max_omega_squared(m, true), 0.0, 0.0);
+  auto min_eig = [&](double dt) {
+    const Eigen::MatrixXd Wn(filter_matrix_neighbors(m, dt));
+    const Eigen::MatrixXd S = free_masses(m).cwiseSqrt().asDiagonal() * Wn * free_masses(m).cwiseSqrt().cwiseInverse().asDiagonal();
+    return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (S + S.transpose())).eigenvalues().minCoeff();
+  };
+  EXPECT_GT(min_eig(dtc), 0.0);
+  EXPECT_LT(min_eig(10 * dtc), 0.0);
+}
+
+} // namespace
+} // namespace vtb

@@ -1,0 +1,76 @@
+// vtb run's files: names, headers, reactions in balance with the loads at rest.
+#include "support/small_models.hh"
+#include "vtb/core/simulation.hh"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace vtb {
+namespace {
+
+std::string slurp(const std::filesystem::path& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+TEST(RunOutputs, WritesTheContractFilesAndBalancedReactions) {
+  const std::string text = test::plate_scene(8, 2, R"(
+[[fix]]
+name = "clamp"
+group = "left"
+[[load]]
+name = "pull"
+group = "right"
+total_force = [0.3, -0.1]
+[[probe]]
+name = "tip"
+point = [0.2, 0.025]
+[solver]
+kind = "implicit-euler"
+dt = 2e-3
+)", 0.05, "0.2, 0.05", 20.0);
+  const Scene scene = parse_scene(text, "plate.toml", ".");
+  const auto dir = std::filesystem::temp_directory_path() / "vtb_run_outputs";
+  std::filesystem::remove_all(dir);
+  const RunReport r = run_scene(scene, {}, dir);
+  ASSERT_TRUE(r.stable);
+  const std::string probes = slurp(dir / "probes.csv"), reactions = slurp(dir / "reactions.csv");
+  EXPECT_EQ(probes.substr(0, probes.find('\n')), "t,probe,ux,uy,uz");
+  EXPECT_EQ(reactions.substr(0, reactions.find('\n')), "t,region,fx,fy,fz");
+  EXPECT_EQ(std::count(probes.begin(), probes.end(), '\n'), 1 + 101) << "header + samples at 0, 0.01, ..., 1";
+  const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
+  for (const char* key : {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds", "stable", "max_strain"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["steps"], 500);
+  EXPECT_TRUE(j["step_seconds"].contains("median") && j["step_seconds"].contains("p99"));
+  // At rest the clamp's reaction balances the load: R + F = 0. Mass damping 20/s makes every
+  // mode decay at least like e^(-10 t) (gamma/2), so after 1 s the residual is < 1e-4 x
+  // the load; the slowest (bending) mode is overdamped and decays far faster. We allow 1e-4.
+  const std::string last = reactions.substr(reactions.rfind("1,clamp,"));
+  double fx = 0, fy = 0;
+  std::sscanf(last.c_str(), "1,clamp,%lf,%lf", &fx, &fy);
+  EXPECT_NEAR(fx, -0.3, 1e-4 * 0.3);
+  EXPECT_NEAR(fy, 0.1, 1e-4 * 0.3);
+  EXPECT_FALSE(std::filesystem::exists(dir / "summary.json.part"));
+}
+
+TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
+  const std::string text = test::plate_scene(8, 2, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.3, 0.0]\n[solver]\nkind = \"explicit\"\ndt = 1e-3\n");
+  const Scene scene = parse_scene(text, "plate.toml", ".");
+  const auto dir = std::filesystem::temp_directory_path() / "vtb_run_unstable";
+  const RunReport r = run_scene(scene, {}, dir);
+  EXPECT_FALSE(r.stable);
+  EXPECT_FALSE(r.failure.empty());
+  const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
+  EXPECT_EQ(j["stable"], false);
+  EXPECT_LT(j["steps"].get<long>(), 1000);
+}
+
+} // namespace
+} // namespace vtb

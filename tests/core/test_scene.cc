@@ -1,0 +1,130 @@
+// Scene files: every bad input is refused with one line naming the file, the key and the problem.
+#include "support/small_models.hh"
+#include "vtb/core/model.hh"
+
+#include <gtest/gtest.h>
+
+namespace vtb {
+namespace {
+
+const std::string kGood = test::plate_scene(4, 2, R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [1.0, 0.0]
+[[probe]]
+name = "tip"
+point = [0.2, 0.025]
+[solver]
+kind = "filtered"
+dt = 1e-3
+)");
+
+/// Replaces the first occurrence of `from` in the good scene.
+std::string with(const std::string& from, const std::string& to) {
+  std::string s = kGood;
+  const auto pos = s.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  return s.replace(pos, from.size(), to);
+}
+
+/// The message of the InputError that parsing and building throw, or "" if none.
+std::string error_of(const std::string& text) {
+  try {
+    const Scene s = parse_scene(text, "bad.toml", ".");
+    build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
+    return msg;
+  }
+  return "";
+}
+
+TEST(Scene, GoodSceneParses) {
+  const Scene s = parse_scene(kGood, "good.toml", ".");
+  EXPECT_EQ(s.name, "plate");
+  EXPECT_EQ(s.solver.filter, "full");
+  EXPECT_EQ(s.solver.strain_limit, 0.0);
+  EXPECT_EQ(error_of(kGood), "");
+}
+
+struct BadCase {
+  std::string from, to, expect;
+};
+
+class BadScene : public ::testing::TestWithParam<BadCase> {};
+
+TEST_P(BadScene, IsRefusedWithAPreciseMessage) {
+  const auto& c = GetParam();
+  const std::string msg = error_of(with(c.from, c.to));
+  EXPECT_NE(msg.find("bad.toml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(c.expect), std::string::npos) << "got: " << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, BadScene,
+    ::testing::Values(
+        BadCase{"young_modulus =", "youngs_modulus =", "[material].youngs_modulus: unknown key; did you mean 'young_modulus'?"},
+        BadCase{"poisson_ratio = 0.3333", "poisson_ratio = 0.5", "[material].poisson_ratio: = 0.5: must be in [0, 0.5)"},
+        BadCase{"density = 1000.0", "density = -1.0", "[material].density: = -1: must be > 0"},
+        BadCase{"density = 1000.0", "density = nan", "[material].density: must be finite"},
+        BadCase{"dt = 1e-3", "dt = 0.0", "[solver].dt: = 0: must be > 0"},
+        BadCase{"dt = 1e-3", "dt = -1e-3", "[solver].dt: = -0.001: must be > 0"},
+        BadCase{"kind = \"filtered\"", "kind = \"filterd\"", "[solver].kind: = \"filterd\": must be one of"},
+        BadCase{"group = \"left\"", "group = \"lefty\"", "group \"lefty\" is not in mesh"},
+        BadCase{"group = \"left\"", "box = [[5.0, 5.0], [6.0, 6.0]]", "the region selects no node"},
+        BadCase{"total_force = [1.0, 0.0]", "total_force = [1.0, 0.0, 0.0]", "has 3 components; the mesh is 2D"},
+        BadCase{"total_force = [1.0, 0.0]", "total_force = \"big\"", "total_force: must be an array of numbers"},
+        BadCase{"duration = 1.0", "duration = 1.0\nduration = 2.0", "TOML syntax"},
+        BadCase{"[[probe]]", "[[probe]]\nname = \"tip\"\npoint = [0.0, 0.0]\n[[probe]]", "probe name \"tip\" is used twice"},
+        BadCase{"group = \"left\"", "group = \"left\"\npoint = [0.0, 0.0]", "needs exactly one of box, group, point"},
+        BadCase{"generate = {", "file = \"missing.msh\"\n#", "missing.msh: cannot open mesh file"},
+        BadCase{"[[fix]]\ngroup = \"left\"", "[[fix]]\ngroup = \"left\"\n[[drive]]\ngroup = \"left\"\ndisplacement = [0.0, 0.001]",
+                "both constrain node"},
+        BadCase{"output_interval = 0.01", "output_interval = 5.0", "must not exceed [scene].duration"},
+        BadCase{"[solver]", "[solvr]", "unknown key; did you mean 'solver'?"}),
+    [](const auto& pinfo) { return "case" + std::to_string(pinfo.index); });
+
+TEST(Scene, ReadSceneNamesAMissingFile) {
+  try {
+    read_scene("/nonexistent/scene.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.toml: cannot open scene file"), std::string::npos);
+  }
+}
+
+TEST(Scene, EditDistanceSuggestsTheNearestKey) {
+  EXPECT_EQ(edit_distance("youngs_modulus", "young_modulus"), 1u);
+  EXPECT_EQ(edit_distance("", "abc"), 3u);
+  EXPECT_EQ(edit_distance("kitten", "sitting"), 3u);
+}
+
+TEST(Scene, TractionIsLumpedByBoundaryLengthAndPointLoadIsNodal) {
+  // A uniform traction on the right edge (2 segments of equal length): the end nodes carry
+  // half the share of the middle ones, and the total is the requested force.
+  const Model<2> m = test::model_from(kGood);
+  ASSERT_EQ(m.loads.size(), 1u);
+  const auto& l = m.loads[0];
+  ASSERT_EQ(l.nodes.size(), 3u);
+  EXPECT_NEAR(l.force.row(0).sum(), 1.0, 1e-14);
+  EXPECT_NEAR(l.force(0, 0), 0.25, 1e-14);
+  EXPECT_NEAR(l.force(0, 1), 0.5, 1e-14);
+  const Model<2> p = test::model_from(with("group = \"right\"", "point = [0.2, 0.05]"));
+  ASSERT_EQ(p.loads[0].nodes.size(), 1u);
+  EXPECT_NEAR(p.loads[0].force(0, 0), 1.0, 1e-14);
+}
+
+TEST(Scene, RampAndStepProfiles) {
+  EXPECT_EQ(ramp_factor(0.5, 1.0, 0.0), 0.0);
+  EXPECT_EQ(ramp_factor(1.0, 1.0, 0.0), 1.0);
+  EXPECT_DOUBLE_EQ(ramp_factor(1.25, 1.0, 0.5), 0.5);
+  EXPECT_EQ(ramp_factor(2.0, 1.0, 0.5), 1.0);
+  EXPECT_DOUBLE_EQ(ramp_rate(1.25, 1.0, 0.5), 2.0);
+  EXPECT_EQ(ramp_rate(2.0, 1.0, 0.5), 0.0);
+}
+
+} // namespace
+} // namespace vtb
