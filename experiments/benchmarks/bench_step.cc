@@ -13,8 +13,7 @@ namespace vtb {
 namespace {
 
 /// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max.
-template <int dim>
-Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div) {
+template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1> &div) {
   Scene s;
   s.file = "bench";
   s.duration = 1.0;
@@ -31,12 +30,14 @@ Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div) {
   load.total_force = Eigen::VectorXd::Zero(dim);
   load.total_force[0] = 0.5;
   s.loads.push_back(load);
-  if constexpr (dim == 2) return build_model<2>(s, generate_rectangle({0.2, 0.05}, div));
-  else return build_model<3>(s, generate_box({0.2, 0.05, 0.05}, div));
+  if constexpr (dim == 2)
+    return build_model<2>(s, generate_rectangle({0.2, 0.05}, div));
+  else
+    return build_model<3>(s, generate_box({0.2, 0.05, 0.05}, div));
 }
 
 template <int dim>
-void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter) {
+void run_steps(benchmark::State &st, const Model<dim> &model, const std::string &kind, const std::string &filter) {
   IntegratorOptions o;
   o.kind = kind;
   o.filter = filter;
@@ -59,25 +60,27 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
   st.counters["dt"] = o.dt;
 }
 
-const Model<2>& plate126() {
+const Model<2> &plate126() {
   static const Model<2> m = bench_model<2>(Eigen::Vector2i(20, 5));
   return m;
 }
-const Model<2>& plate517() {
+const Model<2> &plate517() {
   static const Model<2> m = bench_model<2>(Eigen::Vector2i(46, 10));
   return m;
 }
-const Model<3>& box275() {
+const Model<3> &box275() {
   static const Model<3> m = bench_model<3>(Eigen::Vector3i(10, 4, 4));
   return m;
 }
-const Model<3>& box1701() {
+const Model<3> &box1701() {
   static const Model<3> m = bench_model<3>(Eigen::Vector3i(20, 8, 8));
   return m;
 }
 
-#define VTB_STEP_BENCH(MESH, KIND, FILTER, NAME)                                                    \
-  void BM_step_##MESH##_##NAME(benchmark::State& st) { run_steps(st, MESH(), KIND, FILTER); }       \
+#define VTB_STEP_BENCH(MESH, KIND, FILTER, NAME)                                                                       \
+  void BM_step_##MESH##_##NAME(benchmark::State &st) {                                                                 \
+    run_steps(st, MESH(), KIND, FILTER);                                                                               \
+  }                                                                                                                    \
   BENCHMARK(BM_step_##MESH##_##NAME)->Unit(benchmark::kMicrosecond);
 
 VTB_STEP_BENCH(plate126, "explicit", "", explicit)
@@ -96,12 +99,12 @@ VTB_STEP_BENCH(box1701, "filtered", "neighbors", filtered_neighbors)
 VTB_STEP_BENCH(box1701, "filtered", "full", filtered_full)
 VTB_STEP_BENCH(box1701, "implicit-euler", "", implicit_euler)
 
-void BM_precompute_plate517_neighbors(benchmark::State& st) {
+void BM_precompute_plate517_neighbors(benchmark::State &st) {
   for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));
 }
 BENCHMARK(BM_precompute_plate517_neighbors)->Unit(benchmark::kMillisecond);
 
-void BM_precompute_plate517_full_factor(benchmark::State& st) {
+void BM_precompute_plate517_full_factor(benchmark::State &st) {
   IntegratorOptions o;
   o.kind = "filtered";
   o.filter = "full";

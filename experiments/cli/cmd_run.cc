@@ -7,13 +7,14 @@
 
 namespace vtb::cli {
 
-Action add_run(CLI::App& app) {
+Action add_run(CLI::App &app) {
   struct Opts {
     std::string scene, solver, out;
     double dt = 0, duration = 0;
   };
   auto o = std::make_shared<Opts>();
-  CLI::App* cmd = app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
+  CLI::App *cmd =
+      app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
   cmd->add_option("--solver", o->solver, "Override [solver].kind: explicit | filtered | implicit-euler");
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
@@ -25,12 +26,14 @@ Action add_run(CLI::App& app) {
     if (!o->solver.empty()) ov.solver = o->solver;
     if (o->dt != 0) ov.dt = o->dt;
     if (o->duration != 0) ov.duration = o->duration;
-    const std::filesystem::path out = o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
+    const std::filesystem::path out =
+        o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const RunReport r = run_scene(scene, ov, out);
     std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
               << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "
-              << r.step_seconds.p99 * 1e6 << " us; max strain " << r.max_strain << "; outputs in " << out.string() << "\n";
+              << r.step_seconds.p99 * 1e6 << " us; max strain " << r.max_strain << "; outputs in " << out.string()
+              << "\n";
     if (!r.stable) {
       std::cerr << "vtb: unstable: " << r.failure << " at t = " << r.failure_time << " s (" << r.solver
                 << ", dt = " << r.dt << " s); summary.json records stable = false\n";

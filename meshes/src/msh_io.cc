@@ -21,8 +21,8 @@ public:
     gmsh::option::setNumber("General.Verbosity", 1);
   }
   ~GmshSession() { gmsh::finalize(); }
-  GmshSession(const GmshSession&) = delete;
-  GmshSession& operator=(const GmshSession&) = delete;
+  GmshSession(const GmshSession &) = delete;
+  GmshSession &operator=(const GmshSession &) = delete;
 
   /// The last error gmsh logged, or "" if none.
   static std::string last_error() {
@@ -46,8 +46,7 @@ std::string element_name(int type) {
   return name + " (type " + std::to_string(type) + ")";
 }
 
-template <int dim>
-AnyMesh read_dim(const std::string& src) {
+template <int dim> AnyMesh read_dim(const std::string &src) {
   using Cell = typename Mesh<dim>::Cell;
   using Facet = typename Mesh<dim>::Facet;
   std::vector<std::size_t> node_tags;
@@ -63,11 +62,12 @@ AnyMesh read_dim(const std::string& src) {
   for (std::size_t i = 0; i < node_tags.size(); ++i) {
     if (!index.emplace(node_tags[i], static_cast<int>(i)).second)
       throw InputError(src + ": node tag " + std::to_string(node_tags[i]) + " appears twice");
-    for (int a = 0; a < dim; ++a) mesh.points(a, static_cast<Eigen::Index>(i)) = coords[3 * i + static_cast<std::size_t>(a)];
+    for (int a = 0; a < dim; ++a)
+      mesh.points(a, static_cast<Eigen::Index>(i)) = coords[3 * i + static_cast<std::size_t>(a)];
     if (dim == 2 && coords[3 * i + 2] != 0.0)
       throw InputError(src + ": node tag " + std::to_string(node_tags[i]) + " has z != 0 in a 2D mesh");
   }
-  auto node = [&](std::size_t tag, const std::string& where) {
+  auto node = [&](std::size_t tag, const std::string &where) {
     const auto it = index.find(tag);
     if (it == index.end())
       throw InputError(src + ": " + where + " refers to node tag " + std::to_string(tag) + ", which does not exist");
@@ -93,24 +93,24 @@ AnyMesh read_dim(const std::string& src) {
   }
   // Nodes that belong to no cell of the top dimension (e.g. geometry points) are dropped.
   std::vector<int> remap(static_cast<std::size_t>(mesh.num_nodes()), -1);
-  for (const auto& c : mesh.cells)
+  for (const auto &c : mesh.cells)
     for (int v : c) remap[static_cast<std::size_t>(v)] = 0;
   int kept = 0;
-  for (auto& r : remap)
+  for (auto &r : remap)
     if (r == 0) r = kept++;
   if (kept != mesh.num_nodes()) {
     Eigen::Matrix<double, dim, Eigen::Dynamic> pts(dim, kept);
     for (std::size_t i = 0; i < remap.size(); ++i)
       if (remap[i] >= 0) pts.col(remap[i]) = mesh.points.col(static_cast<Eigen::Index>(i));
     mesh.points = std::move(pts);
-    for (auto& c : mesh.cells)
-      for (int& v : c) v = remap[static_cast<std::size_t>(v)];
+    for (auto &c : mesh.cells)
+      for (int &v : c) v = remap[static_cast<std::size_t>(v)];
   }
   check_and_orient(mesh);
 
   gmsh::vectorpair groups;
   gmsh::model::getPhysicalGroups(groups, -1);
-  for (const auto& [gdim, gtag] : groups) {
+  for (const auto &[gdim, gtag] : groups) {
     if (gdim == dim) continue; // the domain itself
     std::string name;
     gmsh::model::getPhysicalName(gdim, gtag, name);
@@ -133,7 +133,8 @@ AnyMesh read_dim(const std::string& src) {
                                    "group \"" + name + "\"");
             const int idx = remap[static_cast<std::size_t>(local)];
             if (idx < 0)
-              throw InputError(src + ": group \"" + name + "\" uses node tag " + std::to_string(node_tags[static_cast<std::size_t>(local)]) +
+              throw InputError(src + ": group \"" + name + "\" uses node tag " +
+                               std::to_string(node_tags[static_cast<std::size_t>(local)]) +
                                ", which belongs to no cell");
             g.nodes.push_back(idx);
             if (nv == dim) f[static_cast<std::size_t>(v)] = idx;
@@ -144,7 +145,7 @@ AnyMesh read_dim(const std::string& src) {
     }
     std::sort(g.nodes.begin(), g.nodes.end());
     g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
-    auto& slot = mesh.groups[name];
+    auto &slot = mesh.groups[name];
     slot.nodes.insert(slot.nodes.end(), g.nodes.begin(), g.nodes.end());
     std::sort(slot.nodes.begin(), slot.nodes.end());
     slot.nodes.erase(std::unique(slot.nodes.begin(), slot.nodes.end()), slot.nodes.end());
@@ -155,7 +156,7 @@ AnyMesh read_dim(const std::string& src) {
 
 } // namespace
 
-AnyMesh read_msh(const std::filesystem::path& file) {
+AnyMesh read_msh(const std::filesystem::path &file) {
   const std::string src = file.string();
   {
     std::ifstream probe(file);
@@ -173,7 +174,7 @@ AnyMesh read_msh(const std::filesystem::path& file) {
     if (!t3.empty()) return read_dim<3>(src);
     gmsh::model::mesh::getElements(t2, a, b, 2, -1);
     if (!t2.empty()) return read_dim<2>(src);
-  } catch (const std::string& e) {
+  } catch (const std::string &e) {
     throw InputError(src + ": gmsh cannot read it: " + e);
   } catch (int) {
     const std::string e = GmshSession::last_error();
@@ -182,8 +183,7 @@ AnyMesh read_msh(const std::filesystem::path& file) {
   throw InputError(src + ": no triangles or tetrahedra in the file");
 }
 
-template <int dim>
-void write_msh(const Mesh<dim>& mesh, const std::filesystem::path& file) {
+template <int dim> void write_msh(const Mesh<dim> &mesh, const std::filesystem::path &file) {
   // gmsh picks the format from the extension, so the temporary name ends in .msh too.
   const std::filesystem::path tmp = file.parent_path() / ("." + file.filename().string() + ".part.msh");
   try {
@@ -195,23 +195,24 @@ void write_msh(const Mesh<dim>& mesh, const std::filesystem::path& file) {
     std::vector<double> xyz(3 * tags.size(), 0.0);
     for (std::size_t i = 0; i < tags.size(); ++i) {
       tags[i] = i + 1;
-      for (int a = 0; a < dim; ++a) xyz[3 * i + static_cast<std::size_t>(a)] = mesh.points(a, static_cast<Eigen::Index>(i));
+      for (int a = 0; a < dim; ++a)
+        xyz[3 * i + static_cast<std::size_t>(a)] = mesh.points(a, static_cast<Eigen::Index>(i));
     }
     gmsh::model::mesh::addNodes(dim, domain, tags, xyz);
     std::vector<std::size_t> etags, enodes;
     std::size_t next = 1;
-    for (const auto& c : mesh.cells) {
+    for (const auto &c : mesh.cells) {
       etags.push_back(next++);
       for (int v : c) enodes.push_back(static_cast<std::size_t>(v) + 1);
     }
     gmsh::model::mesh::addElementsByType(domain, dim == 2 ? kTriangle : kTetrahedron, etags, enodes);
     gmsh::model::setPhysicalName(dim, gmsh::model::addPhysicalGroup(dim, {domain}), "domain");
     int entity = 1;
-    for (const auto& [name, g] : mesh.groups) {
+    for (const auto &[name, g] : mesh.groups) {
       if (g.facets.empty()) continue; // node-only groups are not representable as facets
       const int ent = gmsh::model::addDiscreteEntity(dim - 1, entity++);
       std::vector<std::size_t> ft, fn;
-      for (const auto& f : g.facets) {
+      for (const auto &f : g.facets) {
         ft.push_back(next++);
         for (int v : f) fn.push_back(static_cast<std::size_t>(v) + 1);
       }
@@ -219,14 +220,14 @@ void write_msh(const Mesh<dim>& mesh, const std::filesystem::path& file) {
       gmsh::model::setPhysicalName(dim - 1, gmsh::model::addPhysicalGroup(dim - 1, {ent}), name);
     }
     gmsh::write(tmp.string());
-  } catch (const std::string& e) {
+  } catch (const std::string &e) {
     std::filesystem::remove(tmp);
     throw InputError(file.string() + ": cannot write: " + e);
   }
   std::filesystem::rename(tmp, file);
 }
 
-template void write_msh<2>(const Mesh<2>&, const std::filesystem::path&);
-template void write_msh<3>(const Mesh<3>&, const std::filesystem::path&);
+template void write_msh<2>(const Mesh<2> &, const std::filesystem::path &);
+template void write_msh<3>(const Mesh<3> &, const std::filesystem::path &);
 
 } // namespace vtb

@@ -10,7 +10,7 @@
 namespace vtb {
 namespace {
 
-Eigen::VectorXd free_masses(const Model<2>& m) {
+Eigen::VectorXd free_masses(const Model<2> &m) {
   Eigen::VectorXd v(static_cast<Eigen::Index>(m.free_nodes.size()));
   for (Eigen::Index a = 0; a < v.size(); ++a) v[a] = m.net.mass[m.free_nodes[static_cast<std::size_t>(a)]];
   return v;
@@ -61,7 +61,8 @@ TEST(FilterMatrix, NeighbourTruncationKeepsExactEntriesAndDropsWeight) {
     for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(Wn, r); it; ++it, ++count)
       EXPECT_NEAR(it.value(), W(it.row(), it.col()), 1e-12);
     const int node = m.free_nodes[static_cast<std::size_t>(r)];
-    EXPECT_EQ(count, m.net.adj_ptr[static_cast<std::size_t>(node) + 1] - m.net.adj_ptr[static_cast<std::size_t>(node)] + 1)
+    EXPECT_EQ(count,
+              m.net.adj_ptr[static_cast<std::size_t>(node) + 1] - m.net.adj_ptr[static_cast<std::size_t>(node)] + 1)
         << "the node and its mesh neighbours";
   }
   // Truncation drops positive weight: rows sum below the full rows (here, below 1).
@@ -77,7 +78,8 @@ TEST(FilterMatrix, TruncatedWLosesDefinitenessAtLargeSteps) {
   const double dtc = explicit_critical_dt(max_omega_squared(m, true), 0.0, 0.0);
   auto min_eig = [&](double dt) {
     const Eigen::MatrixXd Wn(filter_matrix_neighbors(m, dt));
-    const Eigen::MatrixXd S = free_masses(m).cwiseSqrt().asDiagonal() * Wn * free_masses(m).cwiseSqrt().cwiseInverse().asDiagonal();
+    const Eigen::MatrixXd S =
+        free_masses(m).cwiseSqrt().asDiagonal() * Wn * free_masses(m).cwiseSqrt().cwiseInverse().asDiagonal();
     return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (S + S.transpose())).eigenvalues().minCoeff();
   };
   EXPECT_GT(min_eig(dtc), 0.0);

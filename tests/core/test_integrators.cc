@@ -15,7 +15,7 @@
 namespace vtb {
 namespace {
 
-IntegratorOptions opts(const std::string& kind, double dt, const std::string& filter = "full", bool correct = true) {
+IntegratorOptions opts(const std::string &kind, double dt, const std::string &filter = "full", bool correct = true) {
   IntegratorOptions o;
   o.kind = kind;
   o.dt = dt;
@@ -26,7 +26,7 @@ IntegratorOptions opts(const std::string& kind, double dt, const std::string& fi
 }
 
 /// Max over [0, T] of |x(t) - F/k (1 - exp(-k t / c))| for the single element.
-double creep_error(const std::string& kind, const std::string& filter, double dt) {
+double creep_error(const std::string &kind, const std::string &filter, double dt) {
   const double k = 100.0, c = 10.0, m = 1e-6, F = 2.0, T = 0.5; // creep time c/k = 0.1 s
   Model<2> model = test::single_element(k, c, m, F);
   auto integ = make_integrator(model, opts(kind, dt, filter));
@@ -47,7 +47,7 @@ TEST_P(Creep, SingleVoigtElementFollowsTheCreepLaw) {
   // is x = F/k (1 - exp(-t/tau)), tau = c/k. Backward Euler's global error is first order:
   // |e| <= dt/(2 tau) * max_t (t/tau) e^(-t/tau) * F/k * (1 + O(dt/tau)) <= dt/(2 e tau) F/k;
   // we allow dt/tau * F/k, and check the order by halving dt (ratio 2 within 10 %).
-  const auto& [kind, filter] = GetParam();
+  const auto &[kind, filter] = GetParam();
   const double tau = 0.1, Fk = 0.02;
   const double e1 = creep_error(kind, filter, 1e-3), e2 = creep_error(kind, filter, 5e-4);
   EXPECT_LT(e1, 1e-3 / tau * Fk);
@@ -57,23 +57,25 @@ TEST_P(Creep, SingleVoigtElementFollowsTheCreepLaw) {
 INSTANTIATE_TEST_SUITE_P(ImplicitSchemes, Creep,
                          ::testing::Values(std::make_pair("implicit-euler", "full"), std::make_pair("filtered", "full"),
                                            std::make_pair("filtered", "neighbors")),
-                         [](const auto& pinfo) {
+                         [](const auto &pinfo) {
                            std::string n = pinfo.param.first + "_" + pinfo.param.second;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
 
 /// Static tip stretch (mean x displacement of the loaded end) of a clamped strip.
-double strip_stretch(double length, double width, double force, const std::string& springs, double* e_eff_t) {
+double strip_stretch(double length, double width, double force, const std::string &springs, double *e_eff_t) {
   const double h = 0.005; // square cells
-  const std::string text = test::plate_scene(static_cast<int>(std::lround(length / h)), static_cast<int>(std::lround(width / h)), R"(
+  const std::string text =
+      test::plate_scene(static_cast<int>(std::lround(length / h)), static_cast<int>(std::lround(width / h)), R"(
 [[fix]]
 group = "left"
 [[load]]
 group = "right"
 total_force = [)" + std::to_string(force) + R"(, 0.0]
 [solver]
-springs = ")" + springs + "\"\n", 0.05, std::to_string(length) + ", " + std::to_string(width), 20.0);
+springs = ")" + springs + "\"\n",
+                        0.05, std::to_string(length) + ", " + std::to_string(width), 20.0);
   Model<2> model = test::model_from(text);
   // Backward Euler with a long step and mass damping walks to the static state.
   model.duration = 20.0;
@@ -82,18 +84,21 @@ springs = ")" + springs + "\"\n", 0.05, std::to_string(length) + ", " + std::to_
   const RunReport r = simulate(model, opts("implicit-euler", 0.05), tr, true);
   EXPECT_TRUE(r.stable);
   double tip = 0;
-  const auto& right = model.mesh.groups.at("right").nodes;
+  const auto &right = model.mesh.groups.at("right").nodes;
   for (int i : right) tip += tr.field.back()(0, i) / static_cast<double>(right.size());
   // The union-jack lattice (square cells, one diagonal each) deforms affinely under uniform
   // strain (every node is a centre of symmetry), so its bulk moduli follow from the interior
   // spring constants: C11 = C22 = k_axis + k_diag / 2, C12 = k_diag / 2 (per thickness:
   // N/m), and the uniaxial modulus is E_eff t = C11 - C12^2 / C22.
-  const auto& net = model.net;
+  const auto &net = model.net;
   double k_axis = 0, k_diag = 0;
   for (int sp = 0; sp < net.num_springs(); ++sp) {
-    const Eigen::Vector2d d = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) - net.rest.col(net.edge[static_cast<std::size_t>(sp)][0]);
-    if (std::abs(d.y()) < 1e-12) k_axis = std::max(k_axis, net.stiffness[sp]);
-    else if (std::abs(d.x()) > 1e-12) k_diag = std::max(k_diag, net.stiffness[sp]);
+    const Eigen::Vector2d d = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
+                              net.rest.col(net.edge[static_cast<std::size_t>(sp)][0]);
+    if (std::abs(d.y()) < 1e-12)
+      k_axis = std::max(k_axis, net.stiffness[sp]);
+    else if (std::abs(d.x()) > 1e-12)
+      k_diag = std::max(k_diag, net.stiffness[sp]);
   }
   const double c11 = k_axis + k_diag / 2, c12 = k_diag / 2;
   *e_eff_t = c11 - c12 * c12 / c11;
@@ -123,27 +128,34 @@ TEST_P(Strip, StretchesByFLOverEffectiveEA) {
   const double bulk = (stiffness(0.04) - stiffness(0.02)) / 0.02;
   EXPECT_NEAR(bulk, e_t, 1e-3 * e_t);
   const double ratio = e_t / (5.0e4 * 0.001);
-  std::cout << springs << ": E_eff / E = " << ratio << " on the union-jack lattice, measured " << bulk / (5.0e4 * 0.001) << "\n";
+  std::cout << springs << ": E_eff / E = " << ratio << " on the union-jack lattice, measured " << bulk / (5.0e4 * 0.001)
+            << "\n";
   if (springs == "van-gelder") {
     EXPECT_NEAR(ratio, 1.2, 1e-12) << "k_axis = E t, k_diag = E t / 2 => 1.25 - 0.05";
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Calibrations, Strip, ::testing::Values("lloyd", "van-gelder"),
-                         [](const auto& pinfo) { return pinfo.param == "lloyd" ? std::string("lloyd") : std::string("van_gelder"); });
+INSTANTIATE_TEST_SUITE_P(Calibrations, Strip, ::testing::Values("lloyd", "van-gelder"), [](const auto &pinfo) {
+  return pinfo.param == "lloyd" ? std::string("lloyd") : std::string("van_gelder");
+});
 
 struct MomentumCase {
   std::string kind, filter;
   bool correct;
 };
 
+std::ostream &operator<<(std::ostream &os, const MomentumCase &c) {
+  return os << c.kind << " " << c.filter << (c.correct ? " corrected" : "");
+}
+
 class FreeBody : public ::testing::TestWithParam<MomentumCase> {};
 
 TEST_P(FreeBody, KeepsLinearAndAngularMomentum) {
   // A free plate thrown with velocity and spin, no loads. Internal forces are central pairs,
   // so the exact discrete dynamics keep both momenta; see each integrator's expectation.
-  const auto& c = GetParam();
-  Model<2> model = test::model_from(test::plate_scene(8, 2, "[initial]\nvelocity = [0.1, -0.05]\nangular_velocity = 2.0\n"));
+  const auto &c = GetParam();
+  Model<2> model =
+      test::model_from(test::plate_scene(8, 2, "[initial]\nvelocity = [0.1, -0.05]\nangular_velocity = 2.0\n"));
   // Explicit and the neighbour filter run at half the explicit limit, the full filter at 1 ms.
   const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.05, 0.0);
   const double dt = (c.kind == "filtered" && c.filter == "full") ? 1e-3 : 0.5 * dtc;
@@ -167,8 +179,9 @@ INSTANTIATE_TEST_SUITE_P(Schemes, FreeBody,
                          ::testing::Values(MomentumCase{"explicit", "", false}, MomentumCase{"filtered", "full", true},
                                            MomentumCase{"filtered", "neighbors", true},
                                            MomentumCase{"filtered", "neighbors", false}),
-                         [](const auto& pinfo) {
-                           std::string n = pinfo.param.kind + "_" + pinfo.param.filter + (pinfo.param.correct ? "_corrected" : "");
+                         [](const auto &pinfo) {
+                           std::string n =
+                               pinfo.param.kind + "_" + pinfo.param.filter + (pinfo.param.correct ? "_corrected" : "");
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
@@ -193,7 +206,7 @@ TEST(Integrators, ImplicitEulerAngularMomentumDriftIsFirstOrder) {
 
 /// Runs the explicit scheme on a clamped plate from a small random velocity and reports
 /// whether it stayed bounded.
-bool explicit_bounded(const Model<2>& model, double dt, int steps) {
+bool explicit_bounded(const Model<2> &model, double dt, int steps) {
   auto integ = make_integrator(model, opts("explicit", dt));
   State<2> s = initial_state(model);
   s.v.setRandom();
@@ -218,7 +231,7 @@ TEST_P(Courant, ExplicitIsStableJustBelowThePredictedStepAndUnstableJustAbove) {
 }
 
 INSTANTIATE_TEST_SUITE_P(UndampedAndDamped, Courant, ::testing::Values(0.0, 1e-4),
-                         [](const auto& pinfo) { return pinfo.param == 0.0 ? "undamped" : "damped"; });
+                         [](const auto &pinfo) { return pinfo.param == 0.0 ? "undamped" : "damped"; });
 
 TEST(Integrators, FilteredIsStableAtAHundredTimesTheExplicitStep) {
   // The full filter is linearised backward Euler with a scalar Laplacian: unconditionally
@@ -231,7 +244,8 @@ group = "left"
 [[load]]
 group = "right"
 total_force = [0.2, 0.05]
-)", 0.0);
+)",
+                                             0.0);
   Model<2> model = test::model_from(text);
   const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
   model.net.mass_damping = 0; // undamped: the hardest case for stability
@@ -249,7 +263,8 @@ total_force = [0.2, 0.05]
 TEST(Integrators, NeighbourFilterDivergesBeyondAFewExplicitSteps) {
   // The paper's truncated filter is conditionally stable (see FilterMatrix tests): stable at
   // the explicit step, divergent at 10x on the undamped plate. Recorded, not hidden.
-  const std::string text = test::plate_scene(16, 4, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.2, 0.0]\n", 0.0);
+  const std::string text = test::plate_scene(
+      16, 4, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.2, 0.0]\n", 0.0);
   Model<2> model = test::model_from(text);
   const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
   for (double mult : {1.0, 10.0}) {
@@ -284,9 +299,10 @@ retardation_time = 0.02
 [initial]
 velocity = [0.1, 0.0, -0.2]
 angular_velocity = [1.0, 2.0, 3.0]
-)", "box.toml", ".");
+)",
+                        "box.toml", ".");
   const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
-  auto momenta = [&](const State<3>& st, Eigen::Vector3d& p, Eigen::Vector3d& l, double& scale) {
+  auto momenta = [&](const State<3> &st, Eigen::Vector3d &p, Eigen::Vector3d &l, double &scale) {
     p.setZero();
     l.setZero();
     scale = 0;
@@ -329,7 +345,8 @@ group = "left"
 [[load]]
 group = "right"
 total_force = [0.0, -0.01, 0.005]
-)", "box.toml", ".");
+)",
+                        "box.toml", ".");
   const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
   IntegratorOptions o;
   o.dt = 5e-3;

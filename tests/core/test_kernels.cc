@@ -13,7 +13,7 @@ namespace {
 constexpr double kH = 1e-6;
 constexpr double kTol = 1e-7;
 
-double spring_energy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double L0, double k) {
+double spring_energy(const Eigen::Vector3d &xi, const Eigen::Vector3d &xj, double L0, double k) {
   const double l = (xj - xi).norm();
   return 0.5 * k * (l - L0) * (l - L0);
 }
@@ -44,8 +44,10 @@ TEST_P(KernelFd, JacobianMatchesForceDifferences) {
   for (int b = 0; b < 3; ++b) {
     Eigen::Vector3d e = Eigen::Vector3d::Zero();
     e[b] = kH;
-    const Eigen::Vector3d dfj = (voigt_force<3>(xi, xj + e, z, z, L0, k, 0) - voigt_force<3>(xi, xj - e, z, z, L0, k, 0)) / (2 * kH);
-    const Eigen::Vector3d dfi = (voigt_force<3>(xi + e, xj, z, z, L0, k, 0) - voigt_force<3>(xi - e, xj, z, z, L0, k, 0)) / (2 * kH);
+    const Eigen::Vector3d dfj =
+        (voigt_force<3>(xi, xj + e, z, z, L0, k, 0) - voigt_force<3>(xi, xj - e, z, z, L0, k, 0)) / (2 * kH);
+    const Eigen::Vector3d dfi =
+        (voigt_force<3>(xi + e, xj, z, z, L0, k, 0) - voigt_force<3>(xi - e, xj, z, z, L0, k, 0)) / (2 * kH);
     for (int a = 0; a < 3; ++a) {
       EXPECT_NEAR(K(a, b), dfj[a], kTol * k) << "d f_i / d x_j";
       EXPECT_NEAR(-K(a, b), dfi[a], kTol * k) << "d f_i / d x_i";
@@ -63,7 +65,8 @@ TEST_P(KernelFd, DashpotJacobianMatchesVelocityDifferences) {
   for (int b = 0; b < 2; ++b) {
     Eigen::Vector2d e = Eigen::Vector2d::Zero();
     e[b] = kH;
-    const Eigen::Vector2d d = (voigt_force<2>(xi, xj, vi, vj + e, 0.5, 0.0, c) - voigt_force<2>(xi, xj, vi, vj - e, 0.5, 0.0, c)) / (2 * kH);
+    const Eigen::Vector2d d =
+        (voigt_force<2>(xi, xj, vi, vj + e, 0.5, 0.0, c) - voigt_force<2>(xi, xj, vi, vj - e, 0.5, 0.0, c)) / (2 * kH);
     for (int a = 0; a < 2; ++a) EXPECT_NEAR(C(a, b), d[a], kTol * c);
   }
 }
@@ -82,7 +85,7 @@ TEST(Kernels, DashpotCarriesNoTorqueAndIgnoresRigidRotation) {
   // Relative velocity of a rigid rotation is perpendicular to the element: no dashpot force.
   const Eigen::Vector2d xi(0.1, 0.2), xj(0.5, -0.1);
   const double w = 3.0;
-  auto rot = [w](const Eigen::Vector2d& x) { return Eigen::Vector2d(-w * x.y(), w * x.x()); };
+  auto rot = [w](const Eigen::Vector2d &x) { return Eigen::Vector2d(-w * x.y(), w * x.x()); };
   const Eigen::Vector2d f = voigt_force<2>(xi, xj, rot(xi), rot(xj), (xj - xi).norm(), 10.0, 4.0);
   EXPECT_LT(f.norm(), 1e-14);
 }

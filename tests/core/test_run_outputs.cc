@@ -12,7 +12,7 @@
 namespace vtb {
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
+std::string slurp(const std::filesystem::path &p) {
   std::ifstream f(p);
   std::stringstream s;
   s << f.rdbuf();
@@ -34,7 +34,8 @@ point = [0.2, 0.025]
 [solver]
 kind = "implicit-euler"
 dt = 2e-3
-)", 0.05, "0.2, 0.05", 20.0);
+)",
+                                             0.05, "0.2, 0.05", 20.0);
   const Scene scene = parse_scene(text, "plate.toml", ".");
   const auto dir = std::filesystem::temp_directory_path() / "vtb_run_outputs";
   std::filesystem::remove_all(dir);
@@ -45,7 +46,8 @@ dt = 2e-3
   EXPECT_EQ(reactions.substr(0, reactions.find('\n')), "t,region,fx,fy,fz");
   EXPECT_EQ(std::count(probes.begin(), probes.end(), '\n'), 1 + 101) << "header + samples at 0, 0.01, ..., 1";
   const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
-  for (const char* key : {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds", "stable", "max_strain"})
+  for (const char *key :
+       {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds", "stable", "max_strain"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["steps"], 500);
   EXPECT_TRUE(j["step_seconds"].contains("median") && j["step_seconds"].contains("p99"));
@@ -61,7 +63,9 @@ dt = 2e-3
 }
 
 TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
-  const std::string text = test::plate_scene(8, 2, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.3, 0.0]\n[solver]\nkind = \"explicit\"\ndt = 1e-3\n");
+  const std::string text = test::plate_scene(8, 2,
+                                             "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = "
+                                             "[0.3, 0.0]\n[solver]\nkind = \"explicit\"\ndt = 1e-3\n");
   const Scene scene = parse_scene(text, "plate.toml", ".");
   const auto dir = std::filesystem::temp_directory_path() / "vtb_run_unstable";
   const RunReport r = run_scene(scene, {}, dir);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <ostream>
+
 namespace vtb {
 namespace {
 
@@ -22,7 +24,7 @@ dt = 1e-3
 )");
 
 /// Replaces the first occurrence of `from` in the good scene.
-std::string with(const std::string& from, const std::string& to) {
+std::string with(const std::string &from, const std::string &to) {
   std::string s = kGood;
   const auto pos = s.find(from);
   EXPECT_NE(pos, std::string::npos) << from;
@@ -30,11 +32,11 @@ std::string with(const std::string& from, const std::string& to) {
 }
 
 /// The message of the InputError that parsing and building throw, or "" if none.
-std::string error_of(const std::string& text) {
+std::string error_of(const std::string &text) {
   try {
     const Scene s = parse_scene(text, "bad.toml", ".");
     build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
-  } catch (const InputError& e) {
+  } catch (const InputError &e) {
     const std::string msg = e.what();
     EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
     return msg;
@@ -54,10 +56,14 @@ struct BadCase {
   std::string from, to, expect;
 };
 
+std::ostream &operator<<(std::ostream &os, const BadCase &c) {
+  return os << "'" << c.from << "' -> '" << c.to << "'";
+}
+
 class BadScene : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(BadScene, IsRefusedWithAPreciseMessage) {
-  const auto& c = GetParam();
+  const auto &c = GetParam();
   const std::string msg = error_of(with(c.from, c.to));
   EXPECT_NE(msg.find("bad.toml"), std::string::npos) << msg;
   EXPECT_NE(msg.find(c.expect), std::string::npos) << "got: " << msg;
@@ -66,8 +72,10 @@ TEST_P(BadScene, IsRefusedWithAPreciseMessage) {
 INSTANTIATE_TEST_SUITE_P(
     Cases, BadScene,
     ::testing::Values(
-        BadCase{"young_modulus =", "youngs_modulus =", "[material].youngs_modulus: unknown key; did you mean 'young_modulus'?"},
-        BadCase{"poisson_ratio = 0.3333", "poisson_ratio = 0.5", "[material].poisson_ratio: = 0.5: must be in [0, 0.5)"},
+        BadCase{"young_modulus =", "youngs_modulus =",
+                "[material].youngs_modulus: unknown key; did you mean 'young_modulus'?"},
+        BadCase{"poisson_ratio = 0.3333", "poisson_ratio = 0.5",
+                "[material].poisson_ratio: = 0.5: must be in [0, 0.5)"},
         BadCase{"density = 1000.0", "density = -1.0", "[material].density: = -1: must be > 0"},
         BadCase{"density = 1000.0", "density = nan", "[material].density: must be finite"},
         BadCase{"dt = 1e-3", "dt = 0.0", "[solver].dt: = 0: must be > 0"},
@@ -78,20 +86,22 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"total_force = [1.0, 0.0]", "total_force = [1.0, 0.0, 0.0]", "has 3 components; the mesh is 2D"},
         BadCase{"total_force = [1.0, 0.0]", "total_force = \"big\"", "total_force: must be an array of numbers"},
         BadCase{"duration = 1.0", "duration = 1.0\nduration = 2.0", "TOML syntax"},
-        BadCase{"[[probe]]", "[[probe]]\nname = \"tip\"\npoint = [0.0, 0.0]\n[[probe]]", "probe name \"tip\" is used twice"},
+        BadCase{"[[probe]]", "[[probe]]\nname = \"tip\"\npoint = [0.0, 0.0]\n[[probe]]",
+                "probe name \"tip\" is used twice"},
         BadCase{"group = \"left\"", "group = \"left\"\npoint = [0.0, 0.0]", "needs exactly one of box, group, point"},
         BadCase{"generate = {", "file = \"missing.msh\"\n#", "missing.msh: cannot open mesh file"},
-        BadCase{"[[fix]]\ngroup = \"left\"", "[[fix]]\ngroup = \"left\"\n[[drive]]\ngroup = \"left\"\ndisplacement = [0.0, 0.001]",
+        BadCase{"[[fix]]\ngroup = \"left\"",
+                "[[fix]]\ngroup = \"left\"\n[[drive]]\ngroup = \"left\"\ndisplacement = [0.0, 0.001]",
                 "both constrain node"},
         BadCase{"output_interval = 0.01", "output_interval = 5.0", "must not exceed [scene].duration"},
         BadCase{"[solver]", "[solvr]", "unknown key; did you mean 'solver'?"}),
-    [](const auto& pinfo) { return "case" + std::to_string(pinfo.index); });
+    [](const auto &pinfo) { return "case" + std::to_string(pinfo.index); });
 
 TEST(Scene, ReadSceneNamesAMissingFile) {
   try {
     read_scene("/nonexistent/scene.toml");
     FAIL();
-  } catch (const InputError& e) {
+  } catch (const InputError &e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.toml: cannot open scene file"), std::string::npos);
   }
 }
@@ -107,7 +117,7 @@ TEST(Scene, TractionIsLumpedByBoundaryLengthAndPointLoadIsNodal) {
   // half the share of the middle ones, and the total is the requested force.
   const Model<2> m = test::model_from(kGood);
   ASSERT_EQ(m.loads.size(), 1u);
-  const auto& l = m.loads[0];
+  const auto &l = m.loads[0];
   ASSERT_EQ(l.nodes.size(), 3u);
   EXPECT_NEAR(l.force.row(0).sum(), 1.0, 1e-14);
   EXPECT_NEAR(l.force(0, 0), 0.25, 1e-14);

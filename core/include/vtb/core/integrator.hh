@@ -11,27 +11,24 @@
 namespace vtb {
 
 /// Mutable simulation state: displacements u and velocities v of every node at time t.
-template <int dim>
-struct State {
+template <int dim> struct State {
   double t = 0;
   Nodal<dim> u;
   Nodal<dim> v;
 };
 
 /// Initial state of a model: zero displacement, the scene's initial velocity, constraints.
-template <int dim>
-State<dim> initial_state(const Model<dim>& model);
+template <int dim> State<dim> initial_state(const Model<dim> &model);
 
-template <int dim>
-class Integrator {
+template <int dim> class Integrator {
 public:
   explicit Integrator(double dt) : m_dt(dt) {}
   virtual ~Integrator() = default;
-  Integrator(const Integrator&) = delete;
-  Integrator& operator=(const Integrator&) = delete;
+  Integrator(const Integrator &) = delete;
+  Integrator &operator=(const Integrator &) = delete;
 
   /// Advances `s` from s.t to s.t + dt. Allocates nothing.
-  virtual void step(State<dim>& s) = 0;
+  virtual void step(State<dim> &s) = 0;
   virtual std::string_view name() const = 0;
   double dt() const { return m_dt; }
 
@@ -50,6 +47,6 @@ struct IntegratorOptions {
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
 template <int dim>
-std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& options);
+std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim> &model, const IntegratorOptions &options);
 
 } // namespace vtb

@@ -9,39 +9,33 @@
 namespace vtb {
 
 /// Axis-aligned closed box, grown by 1e-9 x the mesh diagonal when selecting.
-template <int dim>
-struct Box {
+template <int dim> struct Box {
   Eigen::Matrix<double, dim, 1> min;
   Eigen::Matrix<double, dim, 1> max;
 };
 
 /// What a region of a scene names: a box, a mesh group or a point (its nearest node).
-template <int dim>
-struct RegionSpec {
+template <int dim> struct RegionSpec {
   std::optional<Box<dim>> box;
   std::string group;
   std::optional<Eigen::Matrix<double, dim, 1>> point;
 };
 
 /// A selection: its nodes (sorted), and the boundary facets it covers (for tractions).
-template <int dim>
-struct Selection {
+template <int dim> struct Selection {
   std::vector<int> nodes;
   std::vector<std::array<int, dim>> facets;
 };
 
 /// Nodes inside the (grown) box, sorted.
-template <int dim>
-std::vector<int> nodes_in_box(const Mesh<dim>& mesh, const Box<dim>& box);
+template <int dim> std::vector<int> nodes_in_box(const Mesh<dim> &mesh, const Box<dim> &box);
 
 /// The node nearest to p (lowest index on ties).
-template <int dim>
-int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<double, dim, 1>& p);
+template <int dim> int nearest_node(const Mesh<dim> &mesh, const Eigen::Matrix<double, dim, 1> &p);
 
 /// Resolves a region against a mesh. A box selects nodes inside it and the boundary facets
 /// whose vertices all lie inside it; a group selects its nodes and facets; a point selects
 /// its nearest node and no facet. Throws InputError (naming `what`) if the group is unknown.
-template <int dim>
-Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what);
+template <int dim> Selection<dim> select(const Mesh<dim> &mesh, const RegionSpec<dim> &spec, const std::string &what);
 
 } // namespace vtb
