@@ -9,7 +9,7 @@ VTB_BUILD=${VTB_BUILD:-$VTB_ROOT/build}
 # Everything the project uses, including what later modules (deal.II reference, CGAL meshes,
 # SUNDIALS, benchmarks) need, so that set-up never changes under a user's feet.
 VTB_PACKAGES=(
-  g++ cmake ninja-build pkg-config
+  g++ clang libclang-rt-14-dev cmake ninja-build pkg-config
   libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev

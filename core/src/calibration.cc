@@ -5,10 +5,10 @@
 
 namespace vtb {
 
-template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim> &mesh, double density, double thickness) {
+template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim>& mesh, double density, double thickness) {
   Eigen::VectorXd m = Eigen::VectorXd::Zero(mesh.num_nodes());
   const double scale = density * (dim == 2 ? thickness : 1.0) / (dim + 1);
-  for (const auto &c : mesh.cells) {
+  for (const auto& c : mesh.cells) {
     const double share = scale * std::abs(signed_measure(mesh, c));
     for (int v : c) m[v] += share;
   }
@@ -18,12 +18,12 @@ template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim> &mesh, double d
 namespace {
 
 /// Index of edge (a, b) in the sorted unique edge list.
-int edge_index(const std::vector<std::array<int, 2>> &edges, int a, int b) {
+int edge_index(const std::vector<std::array<int, 2>>& edges, int a, int b) {
   const std::array<int, 2> key{std::min(a, b), std::max(a, b)};
   return static_cast<int>(std::lower_bound(edges.begin(), edges.end(), key) - edges.begin());
 }
 
-template <int dim> Eigen::Matrix<double, dim *(dim + 1) / 2, dim *(dim + 1) / 2> elasticity(double E, double nu) {
+template <int dim> Eigen::Matrix<double, dim*(dim + 1) / 2, dim*(dim + 1) / 2> elasticity(double E, double nu) {
   constexpr int nv = dim * (dim + 1) / 2;
   Eigen::Matrix<double, nv, nv> D = Eigen::Matrix<double, nv, nv>::Zero();
   if constexpr (dim == 2) { // plane stress, engineering shear strain
@@ -44,7 +44,7 @@ template <int dim> Eigen::Matrix<double, dim *(dim + 1) / 2, dim *(dim + 1) / 2>
 } // namespace
 
 template <int dim>
-Eigen::MatrixXd fem_element_stiffness(const Mesh<dim> &mesh, const typename Mesh<dim>::Cell &cell, double E, double nu,
+Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell, double E, double nu,
                                       double thickness) {
   constexpr int nv = dim * (dim + 1) / 2;
   Mat<dim> J;
@@ -53,7 +53,7 @@ Eigen::MatrixXd fem_element_stiffness(const Mesh<dim> &mesh, const typename Mesh
   Eigen::Matrix<double, dim, dim + 1> grad; // column a = grad of barycentric a
   for (int a = 1; a <= dim; ++a) grad.col(a) = Jinv.row(a - 1).transpose();
   grad.col(0) = -grad.rightCols(dim).rowwise().sum();
-  Eigen::Matrix<double, nv, dim *(dim + 1)> B = Eigen::Matrix<double, nv, dim *(dim + 1)>::Zero();
+  Eigen::Matrix<double, nv, dim*(dim + 1)> B = Eigen::Matrix<double, nv, dim*(dim + 1)>::Zero();
   for (int a = 0; a <= dim; ++a) {
     const int c = a * dim;
     if constexpr (dim == 2) {
@@ -75,11 +75,11 @@ Eigen::MatrixXd fem_element_stiffness(const Mesh<dim> &mesh, const typename Mesh
   return V * B.transpose() * elasticity<dim>(E, nu) * B;
 }
 
-template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim> &mesh, double E, double thickness) {
+template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, double E, double thickness) {
   const auto edges = unique_edges(mesh);
   Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
   const double t = dim == 2 ? thickness : 1.0;
-  for (const auto &c : mesh.cells) {
+  for (const auto& c : mesh.cells) {
     const double measure = std::abs(signed_measure(mesh, c));
     for (int a = 0; a <= dim; ++a)
       for (int b = a + 1; b <= dim; ++b) {
@@ -90,14 +90,14 @@ template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim> &mesh, d
   return k;
 }
 
-template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim> &mesh, double E, double nu, double thickness) {
+template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness) {
   constexpr int ne = dim * (dim + 1) / 2; // edges per simplex
   constexpr int n = dim * (dim + 1);      // element dofs
   const auto edges = unique_edges(mesh);
   Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
   std::array<Eigen::Matrix<double, n, n>, ne> S;
   std::array<std::array<int, 2>, ne> local{};
-  for (const auto &c : mesh.cells) {
+  for (const auto& c : mesh.cells) {
     const Eigen::MatrixXd K = fem_element_stiffness(mesh, c, E, nu, thickness);
     int e = 0;
     for (int a = 0; a <= dim; ++a)
@@ -148,10 +148,10 @@ template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim> &mesh, double
 }
 
 #define VTB_INSTANTIATE(D)                                                                                             \
-  template Eigen::VectorXd lumped_masses<D>(const Mesh<D> &, double, double);                                          \
-  template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D> &, double, double);                                   \
-  template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D> &, double, double, double);                                \
-  template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D> &, const Mesh<D>::Cell &, double, double, double);
+  template Eigen::VectorXd lumped_masses<D>(const Mesh<D>&, double, double);                                           \
+  template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D>&, double, double);                                    \
+  template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D>&, double, double, double);                                 \
+  template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

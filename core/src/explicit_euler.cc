@@ -6,10 +6,10 @@
 namespace vtb {
 
 template <int dim>
-ExplicitEuler<dim>::ExplicitEuler(const Model<dim> &model, double dt)
+ExplicitEuler<dim>::ExplicitEuler(const Model<dim>& model, double dt)
     : Integrator<dim>(dt), m_model(model), m_force(dim, model.num_nodes()), m_ext(dim, model.num_nodes()) {}
 
-template <int dim> void ExplicitEuler<dim>::step(State<dim> &s) {
+template <int dim> void ExplicitEuler<dim>::step(State<dim>& s) {
   const double dt = this->dt();
   m_model.external_forces(s.t, m_ext);
   m_force = m_ext;
@@ -22,9 +22,9 @@ template <int dim> void ExplicitEuler<dim>::step(State<dim> &s) {
   m_model.apply_constraints(s.t, s.u, s.v);
 }
 
-template <int dim> double max_omega_squared(const Model<dim> &model, bool exact) {
+template <int dim> double max_omega_squared(const Model<dim>& model, bool exact) {
   // S = M^-1/2 K M^-1/2 on free dofs, K from the rest-state spring Jacobians.
-  const auto &net = model.net;
+  const auto& net = model.net;
   const int nf = static_cast<int>(model.free_nodes.size());
   std::vector<Eigen::Triplet<double>> trip;
   for (int s = 0; s < net.num_springs(); ++s) {
@@ -66,7 +66,7 @@ double explicit_critical_dt(double w2, double tau, double gamma) {
 
 template class ExplicitEuler<2>;
 template class ExplicitEuler<3>;
-template double max_omega_squared<2>(const Model<2> &, bool);
-template double max_omega_squared<3>(const Model<3> &, bool);
+template double max_omega_squared<2>(const Model<2>&, bool);
+template double max_omega_squared<3>(const Model<3>&, bool);
 
 } // namespace vtb

@@ -6,8 +6,8 @@
 
 namespace vtb {
 
-template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim> &model, double dt) {
-  const auto &net = model.net;
+template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt) {
+  const auto& net = model.net;
   const int nf = static_cast<int>(model.free_nodes.size());
   std::vector<Eigen::Triplet<double>> trip;
   trip.reserve(static_cast<std::size_t>(nf + 4 * net.num_springs()));
@@ -31,7 +31,7 @@ template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<
   return H;
 }
 
-template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim> &model, double dt) {
+template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim>& model, double dt) {
   const Eigen::MatrixXd H(filter_system_matrix(model, dt));
   const Eigen::Index nf = H.rows();
   Eigen::VectorXd m(nf);
@@ -43,7 +43,7 @@ template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim> &model, d
 }
 
 template <int dim>
-Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim> &model, double dt) {
+Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim>& model, double dt) {
   Eigen::SparseMatrix<double> Z = selected_inverse(filter_system_matrix(model, dt));
   // W_ab = Z_ab m_b: scale column b.
   for (int b = 0; b < Z.outerSize(); ++b)
@@ -53,7 +53,7 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model
 }
 
 template <int dim>
-FilteredImplicit<dim>::FilteredImplicit(const Model<dim> &model, const IntegratorOptions &o)
+FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
     : Integrator<dim>(o.dt), m_model(model), m_full(o.filter == "full"),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
   if (o.filter != "full" && o.filter != "neighbors")
@@ -72,10 +72,10 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim> &model, const Integrato
   m_dv.resize(dim, nf);
 }
 
-template <int dim> void FilteredImplicit<dim>::step(State<dim> &s) {
+template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   const double dt = this->dt();
-  const auto &net = m_model.net;
-  const auto &free = m_model.free_nodes;
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
   const auto nf = static_cast<Eigen::Index>(free.size());
 
   // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
@@ -93,9 +93,9 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim> &s) {
     m_h->solve_in_place(m_rhs);
     for (Eigen::Index a = 0; a < nf; ++a) m_dv.col(a) = dt * m_rhs.row(m_h->ordered(static_cast<int>(a))).transpose();
   } else {
-    const int *ptr = m_sparse.outerIndexPtr();
-    const int *col = m_sparse.innerIndexPtr();
-    const double *val = m_sparse.valuePtr();
+    const int* ptr = m_sparse.outerIndexPtr();
+    const int* col = m_sparse.innerIndexPtr();
+    const double* val = m_sparse.valuePtr();
     for (Eigen::Index a = 0; a < nf; ++a) {
       Vec<dim> acc = Vec<dim>::Zero();
       for (int p = ptr[a]; p < ptr[a + 1]; ++p) acc += val[p] * m_acc.col(col[p]);
@@ -113,11 +113,11 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim> &s) {
   if (m_strain_limit > 0) limit_strain(s);
 }
 
-template <int dim> void FilteredImplicit<dim>::correct_momentum(const State<dim> &s) {
+template <int dim> void FilteredImplicit<dim>::correct_momentum(const State<dim>& s) {
   // The unfiltered impulse dt F carries exactly the right linear and angular impulse
   // (internal forces are central pairs); remove what the filter changed.
-  const auto &net = m_model.net;
-  const auto &free = m_model.free_nodes;
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
   const auto nf = static_cast<Eigen::Index>(free.size());
   const double dt = this->dt();
   double mtot = 0;
@@ -165,8 +165,8 @@ template <int dim> void FilteredImplicit<dim>::correct_momentum(const State<dim>
   }
 }
 
-template <int dim> void FilteredImplicit<dim>::limit_strain(State<dim> &s) const {
-  const auto &net = m_model.net;
+template <int dim> void FilteredImplicit<dim>::limit_strain(State<dim>& s) const {
+  const auto& net = m_model.net;
   const double inv_dt = 1.0 / this->dt();
   const double limit = 1.0 + m_strain_limit;
   for (int sp = 0; sp < net.num_springs(); ++sp) {
@@ -189,11 +189,11 @@ template <int dim> void FilteredImplicit<dim>::limit_strain(State<dim> &s) const
 
 template class FilteredImplicit<2>;
 template class FilteredImplicit<3>;
-template Eigen::SparseMatrix<double> filter_system_matrix<2>(const Model<2> &, double);
-template Eigen::SparseMatrix<double> filter_system_matrix<3>(const Model<3> &, double);
-template Eigen::MatrixXd filter_matrix_full<2>(const Model<2> &, double);
-template Eigen::MatrixXd filter_matrix_full<3>(const Model<3> &, double);
-template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<2>(const Model<2> &, double);
-template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<3>(const Model<3> &, double);
+template Eigen::SparseMatrix<double> filter_system_matrix<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double> filter_system_matrix<3>(const Model<3>&, double);
+template Eigen::MatrixXd filter_matrix_full<2>(const Model<2>&, double);
+template Eigen::MatrixXd filter_matrix_full<3>(const Model<3>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<3>(const Model<3>&, double);
 
 } // namespace vtb

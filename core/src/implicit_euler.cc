@@ -8,8 +8,8 @@ namespace {
 
 /// The pattern of the free-dof system: full dim x dim blocks for each node and each spring
 /// between free nodes.
-template <int dim> Eigen::SparseMatrix<double> block_pattern(const Model<dim> &model) {
-  const auto &net = model.net;
+template <int dim> Eigen::SparseMatrix<double> block_pattern(const Model<dim>& model) {
+  const auto& net = model.net;
   const int n = static_cast<int>(model.free_nodes.size()) * dim;
   std::vector<Eigen::Triplet<double>> trip;
   auto block = [&](int a, int b) {
@@ -32,9 +32,9 @@ template <int dim> Eigen::SparseMatrix<double> block_pattern(const Model<dim> &m
 } // namespace
 
 template <int dim>
-ImplicitEuler<dim>::ImplicitEuler(const Model<dim> &model, double dt)
+ImplicitEuler<dim>::ImplicitEuler(const Model<dim>& model, double dt)
     : Integrator<dim>(dt), m_model(model), m_solver(block_pattern(model)) {
-  const auto &net = model.net;
+  const auto& net = model.net;
   const int n = static_cast<int>(m_solver.size());
   // Each stored (upper, ordered) entry is reached exactly once: diagonal blocks add the
   // entries whose ordered row <= column; the off-diagonal block (a, b) owns the pair
@@ -45,7 +45,7 @@ ImplicitEuler<dim>::ImplicitEuler(const Model<dim> &model, double dt)
     const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][1])];
     for (int p = 0; p < dim; ++p)
       for (int q = 0; q < dim; ++q) {
-        auto &slot = m_slot[static_cast<std::size_t>((s * dim + p) * dim + q)];
+        auto& slot = m_slot[static_cast<std::size_t>((s * dim + p) * dim + q)];
         auto diag = [&](int x) {
           const int r = m_solver.ordered(x * dim + p), c = m_solver.ordered(x * dim + q);
           return r <= c ? m_solver.offset(r, c) : -1;
@@ -62,11 +62,11 @@ ImplicitEuler<dim>::ImplicitEuler(const Model<dim> &model, double dt)
   m_rhs.resize(n, 1);
 }
 
-template <int dim> void ImplicitEuler<dim>::step(State<dim> &s) {
+template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {
   const double dt = this->dt();
-  const auto &net = m_model.net;
-  const auto &fi = m_model.free_index;
-  double *A = m_solver.values();
+  const auto& net = m_model.net;
+  const auto& fi = m_model.free_index;
+  double* A = m_solver.values();
   std::fill(A, A + m_solver.nonzeros(), 0.0);
   const auto nf = static_cast<int>(m_model.free_nodes.size());
   for (int a = 0; a < nf; ++a) {
@@ -85,11 +85,11 @@ template <int dim> void ImplicitEuler<dim>::step(State<dim> &s) {
     const Vec<dim> kv = dt * (K * (s.v.col(j) - s.v.col(i)));
     m_force.col(i) += kv;
     m_force.col(j) -= kv;
-    const auto *slot = &m_slot[static_cast<std::size_t>(sp * dim * dim)];
+    const auto* slot = &m_slot[static_cast<std::size_t>(sp * dim * dim)];
     const bool both_free = fi[static_cast<std::size_t>(i)] >= 0 && fi[static_cast<std::size_t>(j)] >= 0;
     for (int p = 0; p < dim; ++p)
       for (int q = 0; q < dim; ++q) {
-        const auto &sl = slot[p * dim + q];
+        const auto& sl = slot[p * dim + q];
         if (sl[0] >= 0) A[sl[0]] += B(p, q);
         if (sl[1] >= 0) A[sl[1]] += B(p, q);
         if (both_free) A[sl[2]] -= B(p, q);

@@ -6,7 +6,7 @@
 
 namespace vtb {
 
-template <int dim> State<dim> initial_state(const Model<dim> &model) {
+template <int dim> State<dim> initial_state(const Model<dim>& model) {
   State<dim> s;
   s.u = Nodal<dim>::Zero(dim, model.num_nodes());
   s.v = model.initial_velocity;
@@ -15,7 +15,7 @@ template <int dim> State<dim> initial_state(const Model<dim> &model) {
 }
 
 template <int dim>
-std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim> &model, const IntegratorOptions &o) {
+std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& o) {
   if (!(o.dt > 0)) throw InputError("[solver].dt must be > 0");
   if (o.kind == "explicit") return std::make_unique<ExplicitEuler<dim>>(model, o.dt);
   if (o.kind == "filtered") return std::make_unique<FilteredImplicit<dim>>(model, o);
@@ -25,9 +25,9 @@ std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim> &model, const 
   throw InputError("[solver].kind = \"" + o.kind + "\": must be explicit, filtered or implicit-euler");
 }
 
-template State<2> initial_state<2>(const Model<2> &);
-template State<3> initial_state<3>(const Model<3> &);
-template std::unique_ptr<Integrator<2>> make_integrator<2>(const Model<2> &, const IntegratorOptions &);
-template std::unique_ptr<Integrator<3>> make_integrator<3>(const Model<3> &, const IntegratorOptions &);
+template State<2> initial_state<2>(const Model<2>&);
+template State<3> initial_state<3>(const Model<3>&);
+template std::unique_ptr<Integrator<2>> make_integrator<2>(const Model<2>&, const IntegratorOptions&);
+template std::unique_ptr<Integrator<3>> make_integrator<3>(const Model<3>&, const IntegratorOptions&);
 
 } // namespace vtb

@@ -9,17 +9,17 @@
 
 namespace vtb {
 
-template <int dim> void Model<dim>::external_forces(double t, Nodal<dim> &f) const {
+template <int dim> void Model<dim>::external_forces(double t, Nodal<dim>& f) const {
   f.setZero();
-  for (const auto &l : loads) {
+  for (const auto& l : loads) {
     const double s = ramp_factor(t, l.start, l.ramp);
     if (s == 0) continue;
     for (std::size_t a = 0; a < l.nodes.size(); ++a) f.col(l.nodes[a]) += s * l.force.col(static_cast<Eigen::Index>(a));
   }
 }
 
-template <int dim> void Model<dim>::apply_constraints(double t, Nodal<dim> &u, Nodal<dim> &v) const {
-  for (const auto &s : supports) {
+template <int dim> void Model<dim>::apply_constraints(double t, Nodal<dim>& u, Nodal<dim>& v) const {
+  for (const auto& s : supports) {
     const Vec<dim> d = s.driven ? Vec<dim>(ramp_factor(t, s.start, s.ramp) * s.displacement) : Vec<dim>::Zero();
     const Vec<dim> dv = s.driven ? Vec<dim>(ramp_rate(t, s.start, s.ramp) * s.displacement) : Vec<dim>::Zero();
     for (int i : s.nodes) {
@@ -31,14 +31,14 @@ template <int dim> void Model<dim>::apply_constraints(double t, Nodal<dim> &u, N
 
 namespace {
 
-template <int dim> Vec<dim> as_vec(const Eigen::VectorXd &v, const std::string &what, const std::string &file) {
+template <int dim> Vec<dim> as_vec(const Eigen::VectorXd& v, const std::string& what, const std::string& file) {
   if (v.size() != dim)
     throw InputError(file + ": " + what + " has " + std::to_string(v.size()) + " components; the mesh is " +
                      std::to_string(dim) + "D");
   return v;
 }
 
-template <int dim> Selection<dim> resolve(const Mesh<dim> &mesh, const RegionDesc &r, const std::string &file) {
+template <int dim> Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDesc& r, const std::string& file) {
   RegionSpec<dim> spec;
   const std::string what = file + ": " + r.label;
   if (r.box)
@@ -53,12 +53,12 @@ template <int dim> Selection<dim> resolve(const Mesh<dim> &mesh, const RegionDes
 
 } // namespace
 
-AnyMesh load_mesh(const Scene &scene) {
-  const auto &m = scene.mesh;
+AnyMesh load_mesh(const Scene& scene) {
+  const auto& m = scene.mesh;
   if (!m.generated()) {
     try {
       return read_msh(m.file);
-    } catch (const InputError &e) {
+    } catch (const InputError& e) {
       throw InputError(scene.file.string() + ": [mesh].file: " + e.what());
     }
   }
@@ -66,7 +66,7 @@ AnyMesh load_mesh(const Scene &scene) {
   return generate_box(m.size, m.divisions);
 }
 
-template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
+template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   const std::string file = scene.file.string();
   Model<dim> model;
   model.duration = scene.duration;
@@ -77,9 +77,9 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
   // A node may sit in two fixes (both hold it at zero) but in no drive shared with anything.
   std::vector<int> owner(static_cast<std::size_t>(n), -1);
   auto claim = [&](int idx) {
-    const Support<dim> &s = model.supports[static_cast<std::size_t>(idx)];
+    const Support<dim>& s = model.supports[static_cast<std::size_t>(idx)];
     for (int i : s.nodes) {
-      int &o = owner[static_cast<std::size_t>(i)];
+      int& o = owner[static_cast<std::size_t>(i)];
       if (o >= 0 && (s.driven || model.supports[static_cast<std::size_t>(o)].driven)) {
         std::string at;
         for (int a = 0; a < dim; ++a) at += (a ? ", " : "") + std::to_string(mesh.points(a, i));
@@ -90,14 +90,14 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
       model.constrained[static_cast<std::size_t>(i)] = 1;
     }
   };
-  for (const auto &f : scene.fixes) {
+  for (const auto& f : scene.fixes) {
     Support<dim> s;
     s.name = f.region.label;
     s.nodes = resolve(mesh, f.region, file).nodes;
     model.supports.push_back(s);
     claim(static_cast<int>(model.supports.size()) - 1);
   }
-  for (const auto &d : scene.drives) {
+  for (const auto& d : scene.drives) {
     Support<dim> s;
     s.name = d.region.label;
     s.nodes = resolve(mesh, d.region, file).nodes;
@@ -108,7 +108,7 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
     model.supports.push_back(s);
     claim(static_cast<int>(model.supports.size()) - 1);
   }
-  for (const auto &l : scene.loads) {
+  for (const auto& l : scene.loads) {
     const Selection<dim> sel = resolve(mesh, l.region, file);
     const Vec<dim> total = as_vec<dim>(l.total_force, l.region.label + ".total_force", file);
     Load<dim> load;
@@ -121,11 +121,11 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
       return static_cast<Eigen::Index>(std::lower_bound(sel.nodes.begin(), sel.nodes.end(), node) - sel.nodes.begin());
     };
     double measure = 0;
-    for (const auto &f : sel.facets) measure += facet_measure(mesh, f);
+    for (const auto& f : sel.facets) measure += facet_measure(mesh, f);
     if (!sel.facets.empty() && measure > 0) {
       // Uniform traction: each facet carries total * |facet| / |region|, split equally
       // among its vertices (exact lumping of a constant traction on linear facets).
-      for (const auto &f : sel.facets) {
+      for (const auto& f : sel.facets) {
         const Vec<dim> share = total * (facet_measure(mesh, f) / measure) / dim;
         for (int v : f) load.force.col(slot(v)) += share;
       }
@@ -175,7 +175,7 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
       }
     }
   }
-  for (const auto &p : scene.probes)
+  for (const auto& p : scene.probes)
     model.probes.push_back({p.name, nearest_node(mesh, as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file))});
   model.mesh = std::move(mesh);
   return model;
@@ -183,7 +183,7 @@ template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh) {
 
 template struct Model<2>;
 template struct Model<3>;
-template Model<2> build_model<2>(const Scene &, Mesh<2>);
-template Model<3> build_model<3>(const Scene &, Mesh<3>);
+template Model<2> build_model<2>(const Scene&, Mesh<2>);
+template Model<3> build_model<3>(const Scene&, Mesh<3>);
 
 } // namespace vtb

@@ -5,7 +5,7 @@
 
 namespace vtb {
 
-OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double> &A) {
+OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A) {
   const auto n = A.rows();
   // AMD returns the inverse permutation (as Eigen's own Cholesky uses it).
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> Pinv;
@@ -27,10 +27,10 @@ OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double> &A) {
 
 int OrderedLDLT::offset(int r, int c) const {
   if (r > c) std::swap(r, c);
-  const int *inner = m_upper.innerIndexPtr();
-  const int *first = inner + m_upper.outerIndexPtr()[c];
-  const int *last = inner + m_upper.outerIndexPtr()[c + 1];
-  const int *it = std::lower_bound(first, last, r);
+  const int* inner = m_upper.innerIndexPtr();
+  const int* first = inner + m_upper.outerIndexPtr()[c];
+  const int* last = inner + m_upper.outerIndexPtr()[c + 1];
+  const int* it = std::lower_bound(first, last, r);
   return (it != last && *it == r) ? static_cast<int>(it - inner) : -1;
 }
 

@@ -8,7 +8,7 @@
 
 namespace vtb {
 
-std::string summary_json(const RunReport &r, const std::string &scene_name) {
+std::string summary_json(const RunReport& r, const std::string& scene_name) {
   nlohmann::ordered_json j;
   j["scene"] = scene_name;
   j["solver"] = r.solver;
@@ -41,7 +41,7 @@ std::string summary_json(const RunReport &r, const std::string &scene_name) {
 
 namespace {
 
-void write_file(const std::filesystem::path &path, const std::string &text) {
+void write_file(const std::filesystem::path& path, const std::string& text) {
   std::ofstream f(path, std::ios::binary | std::ios::trunc);
   if (!f) throw InputError(path.string() + ": cannot write");
   f << text;
@@ -51,8 +51,8 @@ void write_file(const std::filesystem::path &path, const std::string &text) {
 } // namespace
 
 template <int dim>
-void write_run_outputs(const std::filesystem::path &dir, const Model<dim> &model, const Trajectory<dim> &traj,
-                       const RunReport &report, const std::string &scene_name) {
+void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
+                       const RunReport& report, const std::string& scene_name) {
   std::error_code ec;
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
@@ -61,26 +61,26 @@ void write_run_outputs(const std::filesystem::path &dir, const Model<dim> &model
   reactions << std::setprecision(10) << "t,region,fx,fy,fz\n";
   for (std::size_t k = 0; k < traj.t.size(); ++k) {
     for (std::size_t p = 0; p < model.probes.size(); ++p) {
-      const auto &u = traj.probe_u[k][p];
+      const auto& u = traj.probe_u[k][p];
       probes << traj.t[k] << ',' << model.probes[p].first << ',' << u[0] << ',' << u[1] << ','
              << (dim == 3 ? u[dim - 1] : 0.0) << '\n';
     }
     for (std::size_t q = 0; q < model.supports.size(); ++q) {
-      const auto &f = traj.reaction[k][q];
+      const auto& f = traj.reaction[k][q];
       reactions << traj.t[k] << ',' << model.supports[q].name << ',' << f[0] << ',' << f[1] << ','
                 << (dim == 3 ? f[dim - 1] : 0.0) << '\n';
     }
   }
-  const std::pair<const char *, std::string> files[] = {{"probes.csv", probes.str()},
-                                                        {"reactions.csv", reactions.str()},
-                                                        {"summary.json", summary_json(report, scene_name)}};
-  for (const auto &[name, text] : files) write_file(dir / (std::string(name) + ".part"), text);
-  for (const auto &[name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+  const std::pair<const char*, std::string> files[] = {{"probes.csv", probes.str()},
+                                                       {"reactions.csv", reactions.str()},
+                                                       {"summary.json", summary_json(report, scene_name)}};
+  for (const auto& [name, text] : files) write_file(dir / (std::string(name) + ".part"), text);
+  for (const auto& [name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
 }
 
-template void write_run_outputs<2>(const std::filesystem::path &, const Model<2> &, const Trajectory<2> &,
-                                   const RunReport &, const std::string &);
-template void write_run_outputs<3>(const std::filesystem::path &, const Model<3> &, const Trajectory<3> &,
-                                   const RunReport &, const std::string &);
+template void write_run_outputs<2>(const std::filesystem::path&, const Model<2>&, const Trajectory<2>&,
+                                   const RunReport&, const std::string&);
+template void write_run_outputs<3>(const std::filesystem::path&, const Model<3>&, const Trajectory<3>&,
+                                   const RunReport&, const std::string&);
 
 } // namespace vtb

@@ -13,17 +13,17 @@ using detail::positive;
 using detail::TableReader;
 
 /// Reads the region keys (box | group | point) of a fix, load, drive entry.
-RegionDesc read_region(const TableReader &r, std::string label) {
+RegionDesc read_region(const TableReader& r, std::string label) {
   RegionDesc d;
   d.label = std::move(label);
   int count = 0;
   if (r.has("box")) {
     ++count;
-    const toml::array *a = r.node("box")->as_array();
+    const toml::array* a = r.node("box")->as_array();
     if (!a || a->size() != 2 || !a->get(0)->is_array() || !a->get(1)->is_array())
       r.fail("box", "must be [[min...], [max...]]");
     auto corner = [&](std::size_t i) {
-      const toml::array &c = *a->get(i)->as_array();
+      const toml::array& c = *a->get(i)->as_array();
       if (c.size() < 2 || c.size() > 3) r.fail("box", "corners must have 2 or 3 coordinates");
       Eigen::VectorXd v(static_cast<Eigen::Index>(c.size()));
       for (std::size_t k = 0; k < c.size(); ++k) {
@@ -57,11 +57,11 @@ std::string check_poisson(double v) {
 
 } // namespace
 
-Scene parse_scene(std::string_view text, const std::string &name, const std::filesystem::path &base_dir) {
+Scene parse_scene(std::string_view text, const std::string& name, const std::filesystem::path& base_dir) {
   toml::table root;
   try {
     root = toml::parse(text, name);
-  } catch (const toml::parse_error &e) {
+  } catch (const toml::parse_error& e) {
     throw InputError(name + ":" + std::to_string(e.source().begin.line) +
                      ": TOML syntax: " + std::string(e.description()));
   }
@@ -70,7 +70,7 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
   const TableReader top(root, "", name,
                         {"scene", "mesh", "material", "fix", "load", "drive", "initial", "probe", "solver", "haptics"});
 
-  const toml::table *t = top.table("scene");
+  const toml::table* t = top.table("scene");
   if (!t) top.fail("scene", "missing (required table)");
   {
     const TableReader r(*t, "[scene]", name, {"name", "duration", "output_interval"});
@@ -88,7 +88,7 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
     if (r.has("file")) {
       s.mesh.file = base_dir / r.string("file", std::nullopt);
     } else {
-      const toml::table *g = r.table("generate");
+      const toml::table* g = r.table("generate");
       const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions"});
       s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box"});
       const std::size_t d = s.mesh.shape == "rectangle" ? 2 : 3;
@@ -114,7 +114,7 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
     s.material.mass_damping = r.number("mass_damping", 0.0, non_negative);
   }
 
-  auto label = [](const TableReader &r, const char *kind, std::size_t i) {
+  auto label = [](const TableReader& r, const char* kind, std::size_t i) {
     return r.has("name") ? r.string("name", std::nullopt) : std::string(kind) + "[" + std::to_string(i) + "]";
   };
   const auto fixes = top.tables("fix");
@@ -162,7 +162,7 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
     ProbeDesc p;
     p.name = r.string("name", "probe" + std::to_string(i));
     p.point = r.vector("point", 2, 3);
-    for (const auto &q : s.probes)
+    for (const auto& q : s.probes)
       if (q.name == p.name) r.fail("name", "probe name \"" + p.name + "\" is used twice");
     s.probes.push_back(std::move(p));
   }
@@ -193,13 +193,13 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
     h.coupling_stiffness = r.number("coupling_stiffness", 400.0, positive);
     h.coupling_damping = r.number("coupling_damping", 2.0, non_negative);
     h.max_force = r.number("max_force", 4.0, positive);
-    if (const toml::table *ht = r.table("hand")) {
+    if (const toml::table* ht = r.table("hand")) {
       const TableReader hr(*ht, "[haptics.hand]", name, {"waypoints", "duration", "grip_stiffness"});
       HandDesc hand;
-      const toml::array *w = hr.node("waypoints") ? hr.node("waypoints")->as_array() : nullptr;
+      const toml::array* w = hr.node("waypoints") ? hr.node("waypoints")->as_array() : nullptr;
       if (!w || w->empty()) hr.fail("waypoints", "must be a non-empty array of [x, y] points");
       for (std::size_t i = 0; i < w->size(); ++i) {
-        const toml::array *p = w->get(i)->as_array();
+        const toml::array* p = w->get(i)->as_array();
         if (!p || p->size() != 2) hr.fail("waypoints", "entry " + std::to_string(i) + " must be [x, y]");
         Eigen::VectorXd q(2);
         for (std::size_t k = 0; k < 2; ++k) {
@@ -219,7 +219,7 @@ Scene parse_scene(std::string_view text, const std::string &name, const std::fil
   return s;
 }
 
-Scene read_scene(const std::filesystem::path &file) {
+Scene read_scene(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string() + ": cannot open scene file");
   std::ostringstream text;

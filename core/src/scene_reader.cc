@@ -31,10 +31,10 @@ std::string non_negative(double v) {
   return v >= 0 ? "" : "must be >= 0";
 }
 
-TableReader::TableReader(const toml::table &table, std::string path, std::string file,
+TableReader::TableReader(const toml::table& table, std::string path, std::string file,
                          std::initializer_list<std::string_view> allowed)
     : m_table(table), m_path(std::move(path)), m_file(std::move(file)) {
-  for (auto &&[k, v] : table) {
+  for (auto&& [k, v] : table) {
     const std::string_view key = k.str();
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
     std::string_view best;
@@ -57,7 +57,7 @@ TableReader::TableReader(const toml::table &table, std::string path, std::string
   }
 }
 
-std::string TableReader::where(const toml::node *n, std::string_view key) const {
+std::string TableReader::where(const toml::node* n, std::string_view key) const {
   std::string s = m_file;
   if (n && n->source().begin.line > 0) s += ":" + std::to_string(n->source().begin.line);
   s += ": " + m_path;
@@ -65,17 +65,17 @@ std::string TableReader::where(const toml::node *n, std::string_view key) const 
   return s;
 }
 
-void TableReader::fail(std::string_view key, const std::string &what) const {
+void TableReader::fail(std::string_view key, const std::string& what) const {
   fail_node(m_table.get(key), key, what);
 }
 
-void TableReader::fail_node(const toml::node *n, std::string_view key, const std::string &what) const {
+void TableReader::fail_node(const toml::node* n, std::string_view key, const std::string& what) const {
   throw InputError(where(n ? n : &m_table, key) + ": " + what);
 }
 
 double TableReader::number(std::string_view key, std::optional<double> fallback,
-                           const std::function<std::string(double)> &check) const {
-  const toml::node *n = m_table.get(key);
+                           const std::function<std::string(double)>& check) const {
+  const toml::node* n = m_table.get(key);
   if (!n) {
     if (!fallback) fail(key, "missing (required)");
     return *fallback;
@@ -93,7 +93,7 @@ double TableReader::number(std::string_view key, std::optional<double> fallback,
 }
 
 int TableReader::integer(std::string_view key, std::optional<int> fallback, int min, int max) const {
-  const toml::node *n = m_table.get(key);
+  const toml::node* n = m_table.get(key);
   if (!n) {
     if (!fallback) fail(key, "missing (required)");
     return *fallback;
@@ -106,7 +106,7 @@ int TableReader::integer(std::string_view key, std::optional<int> fallback, int 
 }
 
 bool TableReader::boolean(std::string_view key, std::optional<bool> fallback) const {
-  const toml::node *n = m_table.get(key);
+  const toml::node* n = m_table.get(key);
   if (!n) {
     if (!fallback) fail(key, "missing (required)");
     return *fallback;
@@ -117,7 +117,7 @@ bool TableReader::boolean(std::string_view key, std::optional<bool> fallback) co
 
 std::string TableReader::string(std::string_view key, std::optional<std::string> fallback,
                                 std::initializer_list<std::string_view> choices) const {
-  const toml::node *n = m_table.get(key);
+  const toml::node* n = m_table.get(key);
   std::string v;
   if (!n) {
     if (!fallback) fail(key, "missing (required)");
@@ -135,9 +135,9 @@ std::string TableReader::string(std::string_view key, std::optional<std::string>
 }
 
 Eigen::VectorXd TableReader::vector(std::string_view key, std::size_t min_len, std::size_t max_len) const {
-  const toml::node *n = m_table.get(key);
+  const toml::node* n = m_table.get(key);
   if (!n) fail(key, "missing (required)");
-  const toml::array *a = n->as_array();
+  const toml::array* a = n->as_array();
   if (!a) fail(key, "must be an array of numbers");
   if (a->size() < min_len || a->size() > max_len)
     fail(key, "must have " +
@@ -146,7 +146,7 @@ Eigen::VectorXd TableReader::vector(std::string_view key, std::size_t min_len, s
                   " entries, has " + std::to_string(a->size()));
   Eigen::VectorXd v(static_cast<Eigen::Index>(a->size()));
   for (std::size_t i = 0; i < a->size(); ++i) {
-    const toml::node &e = *a->get(i);
+    const toml::node& e = *a->get(i);
     if (!e.is_number()) fail(key, "entry " + std::to_string(i) + " must be a number");
     v[static_cast<Eigen::Index>(i)] = e.value<double>().value();
     if (!std::isfinite(v[static_cast<Eigen::Index>(i)])) fail(key, "entry " + std::to_string(i) + " must be finite");
@@ -154,20 +154,20 @@ Eigen::VectorXd TableReader::vector(std::string_view key, std::size_t min_len, s
   return v;
 }
 
-const toml::table *TableReader::table(std::string_view key) const {
-  const toml::node *n = m_table.get(key);
+const toml::table* TableReader::table(std::string_view key) const {
+  const toml::node* n = m_table.get(key);
   if (!n) return nullptr;
   if (!n->is_table()) fail(key, "must be a table");
   return n->as_table();
 }
 
-std::vector<const toml::table *> TableReader::tables(std::string_view key) const {
-  std::vector<const toml::table *> out;
-  const toml::node *n = m_table.get(key);
+std::vector<const toml::table*> TableReader::tables(std::string_view key) const {
+  std::vector<const toml::table*> out;
+  const toml::node* n = m_table.get(key);
   if (!n) return out;
-  const toml::array *a = n->as_array();
+  const toml::array* a = n->as_array();
   if (!a || !a->is_array_of_tables()) fail(key, "must be an array of tables ([[" + std::string(key) + "]])");
-  for (const auto &e : *a) out.push_back(e.as_table());
+  for (const auto& e : *a) out.push_back(e.as_table());
   return out;
 }
 

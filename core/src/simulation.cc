@@ -12,8 +12,8 @@
 namespace vtb {
 
 template <int dim>
-void support_reactions(const Model<dim> &model, const State<dim> &s, Nodal<dim> &scratch, Nodal<dim> &ext,
-                       std::vector<Vec<dim>> &out) {
+void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
+                       std::vector<Vec<dim>>& out) {
   model.external_forces(s.t, ext);
   scratch = ext;
   add_internal_forces(model.net, s.u, s.v, scratch);
@@ -47,7 +47,7 @@ StepStats stats(std::vector<double> t) {
 } // namespace
 
 template <int dim>
-RunReport simulate(const Model<dim> &model, const IntegratorOptions &o, Trajectory<dim> &traj, bool record_field) {
+RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
   using clock = std::chrono::steady_clock;
   RunReport rep;
   rep.solver = o.kind;
@@ -91,7 +91,7 @@ RunReport simulate(const Model<dim> &model, const IntegratorOptions &o, Trajecto
   auto record = [&]() {
     traj.t.push_back(s.t);
     std::vector<Vec<dim>> pu;
-    for (const auto &[name, node] : model.probes) pu.push_back(s.u.col(node));
+    for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
     traj.probe_u.push_back(std::move(pu));
     support_reactions(model, s, scratch, ext, reactions);
     traj.reaction.push_back(reactions);
@@ -127,7 +127,7 @@ RunReport simulate(const Model<dim> &model, const IntegratorOptions &o, Trajecto
   return rep;
 }
 
-RunReport run_scene(const Scene &scene_in, const RunOverrides &ov, const std::filesystem::path &out_dir) {
+RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
   Scene scene = scene_in;
   if (ov.solver) scene.solver.kind = *ov.solver;
   if (ov.dt) {
@@ -149,7 +149,7 @@ RunReport run_scene(const Scene &scene_in, const RunOverrides &ov, const std::fi
   o.strain_limit = scene.solver.strain_limit;
   AnyMesh mesh = load_mesh(scene);
   return std::visit(
-      [&](auto &m) {
+      [&](auto& m) {
         constexpr int dim = std::decay_t<decltype(m)>::points_dim;
         const Model<dim> model = build_model<dim>(scene, std::move(m));
         Trajectory<dim> traj;
@@ -160,9 +160,9 @@ RunReport run_scene(const Scene &scene_in, const RunOverrides &ov, const std::fi
       mesh);
 }
 
-template RunReport simulate<2>(const Model<2> &, const IntegratorOptions &, Trajectory<2> &, bool);
-template RunReport simulate<3>(const Model<3> &, const IntegratorOptions &, Trajectory<3> &, bool);
-template void support_reactions<2>(const Model<2> &, const State<2> &, Nodal<2> &, Nodal<2> &, std::vector<Vec<2>> &);
-template void support_reactions<3>(const Model<3> &, const State<3> &, Nodal<3> &, Nodal<3> &, std::vector<Vec<3>> &);
+template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
+template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
+template void support_reactions<2>(const Model<2>&, const State<2>&, Nodal<2>&, Nodal<2>&, std::vector<Vec<2>>&);
+template void support_reactions<3>(const Model<3>&, const State<3>&, Nodal<3>&, Nodal<3>&, std::vector<Vec<3>>&);
 
 } // namespace vtb

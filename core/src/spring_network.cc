@@ -8,7 +8,7 @@
 namespace vtb {
 
 template <int dim>
-SpringNetwork<dim> build_network(const Mesh<dim> &mesh, const MaterialDesc &mat, std::string_view calibration) {
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat, std::string_view calibration) {
   SpringNetwork<dim> net;
   net.rest = mesh.points;
   net.mass = lumped_masses(mesh, mat.density, mat.thickness);
@@ -37,9 +37,9 @@ SpringNetwork<dim> build_network(const Mesh<dim> &mesh, const MaterialDesc &mat,
     adj[static_cast<std::size_t>(j)].push_back({i, s});
   }
   net.adj_ptr.assign(1, 0);
-  for (auto &a : adj) {
+  for (auto& a : adj) {
     std::sort(a.begin(), a.end());
-    for (const auto &[j, s] : a) {
+    for (const auto& [j, s] : a) {
       net.adj_node.push_back(j);
       net.adj_spring.push_back(s);
     }
@@ -49,10 +49,10 @@ SpringNetwork<dim> build_network(const Mesh<dim> &mesh, const MaterialDesc &mat,
 }
 
 template <int dim>
-void add_internal_forces(const SpringNetwork<dim> &net, const Nodal<dim> &u, const Nodal<dim> &v, Nodal<dim> &f,
+void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
                          double extra_damping_per_k) {
   const int ns = net.num_springs();
-  const auto *e = net.edge.data();
+  const auto* e = net.edge.data();
   for (int s = 0; s < ns; ++s) {
     const int i = e[s][0], j = e[s][1];
     const Vec<dim> xi = net.rest.col(i) + u.col(i);
@@ -66,7 +66,7 @@ void add_internal_forces(const SpringNetwork<dim> &net, const Nodal<dim> &u, con
   if (net.mass_damping != 0) f.noalias() -= net.mass_damping * (v * net.mass.asDiagonal());
 }
 
-template <int dim> double max_strain(const SpringNetwork<dim> &net, const Nodal<dim> &u) {
+template <int dim> double max_strain(const SpringNetwork<dim>& net, const Nodal<dim>& u) {
   double m = 0;
   for (int s = 0; s < net.num_springs(); ++s) {
     const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
@@ -77,7 +77,7 @@ template <int dim> double max_strain(const SpringNetwork<dim> &net, const Nodal<
   return m;
 }
 
-template <int dim> double elastic_energy(const SpringNetwork<dim> &net, const Nodal<dim> &u) {
+template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u) {
   double e = 0;
   for (int s = 0; s < net.num_springs(); ++s) {
     const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
@@ -87,17 +87,16 @@ template <int dim> double elastic_energy(const SpringNetwork<dim> &net, const No
   return e;
 }
 
-template <int dim> double kinetic_energy(const SpringNetwork<dim> &net, const Nodal<dim> &v) {
+template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v) {
   return 0.5 * (v.colwise().squaredNorm().transpose().array() * net.mass.array()).sum();
 }
 
 #define VTB_INSTANTIATE(D)                                                                                             \
-  template SpringNetwork<D> build_network<D>(const Mesh<D> &, const MaterialDesc &, std::string_view);                 \
-  template void add_internal_forces<D>(const SpringNetwork<D> &, const Nodal<D> &, const Nodal<D> &, Nodal<D> &,       \
-                                       double);                                                                        \
-  template double max_strain<D>(const SpringNetwork<D> &, const Nodal<D> &);                                           \
-  template double elastic_energy<D>(const SpringNetwork<D> &, const Nodal<D> &);                                       \
-  template double kinetic_energy<D>(const SpringNetwork<D> &, const Nodal<D> &);
+  template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view);                   \
+  template void add_internal_forces<D>(const SpringNetwork<D>&, const Nodal<D>&, const Nodal<D>&, Nodal<D>&, double);  \
+  template double max_strain<D>(const SpringNetwork<D>&, const Nodal<D>&);                                             \
+  template double elastic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);                                         \
+  template double kinetic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -13,7 +13,7 @@ namespace vtb {
 namespace {
 
 /// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max.
-template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1> &div) {
+template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div) {
   Scene s;
   s.file = "bench";
   s.duration = 1.0;
@@ -37,7 +37,7 @@ template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1> &div)
 }
 
 template <int dim>
-void run_steps(benchmark::State &st, const Model<dim> &model, const std::string &kind, const std::string &filter) {
+void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter) {
   IntegratorOptions o;
   o.kind = kind;
   o.filter = filter;
@@ -60,25 +60,25 @@ void run_steps(benchmark::State &st, const Model<dim> &model, const std::string 
   st.counters["dt"] = o.dt;
 }
 
-const Model<2> &plate126() {
+const Model<2>& plate126() {
   static const Model<2> m = bench_model<2>(Eigen::Vector2i(20, 5));
   return m;
 }
-const Model<2> &plate517() {
+const Model<2>& plate517() {
   static const Model<2> m = bench_model<2>(Eigen::Vector2i(46, 10));
   return m;
 }
-const Model<3> &box275() {
+const Model<3>& box275() {
   static const Model<3> m = bench_model<3>(Eigen::Vector3i(10, 4, 4));
   return m;
 }
-const Model<3> &box1701() {
+const Model<3>& box1701() {
   static const Model<3> m = bench_model<3>(Eigen::Vector3i(20, 8, 8));
   return m;
 }
 
 #define VTB_STEP_BENCH(MESH, KIND, FILTER, NAME)                                                                       \
-  void BM_step_##MESH##_##NAME(benchmark::State &st) {                                                                 \
+  void BM_step_##MESH##_##NAME(benchmark::State& st) {                                                                 \
     run_steps(st, MESH(), KIND, FILTER);                                                                               \
   }                                                                                                                    \
   BENCHMARK(BM_step_##MESH##_##NAME)->Unit(benchmark::kMicrosecond);
@@ -99,12 +99,12 @@ VTB_STEP_BENCH(box1701, "filtered", "neighbors", filtered_neighbors)
 VTB_STEP_BENCH(box1701, "filtered", "full", filtered_full)
 VTB_STEP_BENCH(box1701, "implicit-euler", "", implicit_euler)
 
-void BM_precompute_plate517_neighbors(benchmark::State &st) {
+void BM_precompute_plate517_neighbors(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));
 }
 BENCHMARK(BM_precompute_plate517_neighbors)->Unit(benchmark::kMillisecond);
 
-void BM_precompute_plate517_full_factor(benchmark::State &st) {
+void BM_precompute_plate517_full_factor(benchmark::State& st) {
   IntegratorOptions o;
   o.kind = "filtered";
   o.filter = "full";

@@ -1,8 +1,11 @@
 #include "commands.hh"
 
+#include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
+#include "vtb/meshes/quality.hh"
+#include "vtb/meshes/vtu_io.hh"
 
 #include <iostream>
 #include <memory>
@@ -11,9 +14,9 @@ namespace vtb::cli {
 
 namespace {
 
-template <int dim> void print_info(const Mesh<dim> &m) {
+template <int dim> void print_info(const Mesh<dim>& m) {
   double vmin = 1e300, vmax = 0;
-  for (const auto &c : m.cells) {
+  for (const auto& c : m.cells) {
     const double v = signed_measure(m, c);
     vmin = std::min(vmin, v);
     vmax = std::max(vmax, v);
@@ -27,34 +30,74 @@ template <int dim> void print_info(const Mesh<dim> &m) {
             << (dim == 2 ? "area" : "volume") << " min/max: " << vmin << " / " << vmax << "\n"
             << "bounding box: [" << m.points.rowwise().minCoeff().transpose() << "] - ["
             << m.points.rowwise().maxCoeff().transpose() << "]\n";
-  for (const auto &[name, g] : m.groups)
+  const MeshQuality q = mesh_quality(m);
+  std::cout << (dim == 2 ? "angle" : "dihedral angle") << " min/max: " << q.min_angle << " / " << q.max_angle
+            << " deg\n"
+            << "radius-edge ratio max: " << q.max_radius_edge << "\n"
+            << "inverted: " << q.inverted << "\n"
+            << "degenerate: " << q.degenerate << "\n";
+  for (const auto& [name, g] : m.groups)
     std::cout << "group " << name << ": " << g.nodes.size() << " nodes, " << g.facets.size() << " facets\n";
 }
 
 } // namespace
 
-Action add_mesh(CLI::App &app) {
+Action add_mesh(CLI::App& app) {
   struct Opts {
-    std::string file, shape, out;
+    std::string file, shape, out, in;
     std::vector<double> size;
     std::vector<int> divisions;
+    int nodes = 0;
   };
   auto o = std::make_shared<Opts>();
-  CLI::App *cmd = app.add_subcommand("mesh", "Generate or inspect meshes");
+  CLI::App* cmd = app.add_subcommand("mesh", "Generate or inspect meshes");
   cmd->require_subcommand(1);
-  CLI::App *info = cmd->add_subcommand("info", "Print counts, groups and sizes of a .msh file");
+  CLI::App* info = cmd->add_subcommand("info", "Print counts, groups and sizes of a .msh file");
   info->add_option("file", o->file, "Mesh file (.msh)")->required();
-  CLI::App *gen = cmd->add_subcommand("generate", "Write a structured rectangle (2D) or box (3D) as .msh 4.1");
-  gen->add_option("shape", o->shape, "rectangle | box")->required()->check(CLI::IsMember({"rectangle", "box"}));
-  gen->add_option("--size", o->size, "Extent per axis (m)")->required();
-  gen->add_option("--divisions", o->divisions, "Cells per axis")->required();
+  CLI::App* gen = cmd->add_subcommand(
+      "generate", "Write a mesh as .msh 4.1: structured rectangle/box (--size, --divisions), the paper's plate "
+                  "(CGAL, exact --nodes), or a CGAL Mesh_3 slab/sphere (about --nodes)");
+  gen->add_option("shape", o->shape, "rectangle | box | plate | slab | sphere")
+      ->required()
+      ->check(CLI::IsMember({"rectangle", "box", "plate", "slab", "sphere"}));
+  gen->add_option("--size", o->size, "Extent per axis (m), rectangle and box");
+  gen->add_option("--divisions", o->divisions, "Cells per axis, rectangle and box");
+  gen->add_option("--nodes", o->nodes, "Node count: exact for plate, approximate (15 %) for slab and sphere");
   gen->add_option("-o,--out", o->out, "Output .msh file")->required();
-  return [o, info, gen]() {
+  CLI::App* conv = cmd->add_subcommand("convert", "Convert a .msh (2.2 or 4.x) to .msh 4.1 or .vtu");
+  conv->add_option("in", o->in, "Input .msh")->required();
+  conv->add_option("out", o->out, "Output .msh or .vtu")->required();
+  return [o, info, gen, conv]() {
+    if (conv->parsed()) {
+      const std::filesystem::path out(o->out);
+      if (out.extension() != ".msh" && out.extension() != ".vtu")
+        throw InputError("vtb mesh convert: output " + o->out + " must end in .msh or .vtu");
+      const AnyMesh m = read_msh(o->in);
+      std::visit(
+          [&](const auto& mesh) {
+            if (out.extension() == ".vtu")
+              write_vtu(mesh, out);
+            else
+              write_msh(mesh, out);
+          },
+          m);
+      std::cout << "wrote " << o->out << "\n";
+      return 0;
+    }
     if (info->parsed()) {
-      std::visit([](const auto &m) { print_info(m); }, read_msh(o->file));
+      std::visit([](const auto& m) { print_info(m); }, read_msh(o->file));
       return 0;
     }
     if (gen->parsed()) {
+      if (o->shape == "plate" || o->shape == "slab" || o->shape == "sphere") {
+        if (o->nodes <= 0) throw InputError("vtb mesh generate " + o->shape + ": --nodes N (N > 0) is required");
+        if (o->shape == "plate")
+          write_msh(mesh_polygon(paper_plate(), o->nodes), o->out);
+        else
+          write_msh(mesh_solid(o->shape, o->nodes), o->out);
+        std::cout << "wrote " << o->out << "\n";
+        return 0;
+      }
       const std::size_t d = o->shape == "rectangle" ? 2 : 3;
       if (o->size.size() != d || o->divisions.size() != d)
         throw InputError("vtb mesh generate " + o->shape + ": --size and --divisions need " + std::to_string(d) +

@@ -7,13 +7,13 @@
 
 namespace vtb::cli {
 
-Action add_run(CLI::App &app) {
+Action add_run(CLI::App& app) {
   struct Opts {
     std::string scene, solver, out;
     double dt = 0, duration = 0;
   };
   auto o = std::make_shared<Opts>();
-  CLI::App *cmd =
+  CLI::App* cmd =
       app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
   cmd->add_option("--solver", o->solver, "Override [solver].kind: explicit | filtered | implicit-euler");

@@ -11,7 +11,7 @@ namespace vtb::cli {
 
 using Action = std::function<int()>;
 
-Action add_run(CLI::App &app);
-Action add_mesh(CLI::App &app);
+Action add_run(CLI::App& app);
+Action add_mesh(CLI::App& app);
 
 } // namespace vtb::cli

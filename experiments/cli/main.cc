@@ -5,23 +5,23 @@
 
 #include <iostream>
 
-int main(int argc, char **argv) {
+int main(int argc, char** argv) {
   CLI::App app{"vtb: the Voigt deformation testbed (Cai, Dill, Payandeh mass-spring model and references)"};
   app.require_subcommand(1);
   vtb::cli::Action run = vtb::cli::add_run(app);
   vtb::cli::Action mesh = vtb::cli::add_mesh(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ParseError &e) {
+  } catch (const CLI::ParseError& e) {
     return app.exit(e);
   }
   try {
     if (app.got_subcommand("run")) return run();
     if (app.got_subcommand("mesh")) return mesh();
-  } catch (const vtb::InputError &e) {
+  } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;
-  } catch (const std::exception &e) {
+  } catch (const std::exception& e) {
     std::cerr << "vtb: internal error: " << e.what() << "\n";
     return 70;
   }

@@ -7,19 +7,19 @@
 namespace vtb {
 namespace {
 
-template <int dim> void add_face_group(Mesh<dim> &mesh, const std::string &name, int axis, double value) {
+template <int dim> void add_face_group(Mesh<dim>& mesh, const std::string& name, int axis, double value) {
   MeshGroup<dim> g;
   const double tol = 1e-12 * bounding_diagonal(mesh);
   for (int i = 0; i < mesh.num_nodes(); ++i)
     if (std::abs(mesh.points(axis, i) - value) <= tol) g.nodes.push_back(i);
-  for (const auto &f : boundary_facets(mesh))
+  for (const auto& f : boundary_facets(mesh))
     if (std::all_of(f.begin(), f.end(), [&](int v) { return std::abs(mesh.points(axis, v) - value) <= tol; }))
       g.facets.push_back(f);
   mesh.groups[name] = std::move(g);
 }
 
 template <int dim>
-void check_request(const Eigen::Matrix<double, dim, 1> &size, const Eigen::Matrix<int, dim, 1> &div, const char *what) {
+void check_request(const Eigen::Matrix<double, dim, 1>& size, const Eigen::Matrix<int, dim, 1>& div, const char* what) {
   if (!(size.array() > 0).all() || !size.allFinite())
     throw InputError(std::string(what) + ": size must be positive and finite");
   if (!(div.array() >= 1).all()) throw InputError(std::string(what) + ": divisions must be >= 1");
@@ -28,7 +28,7 @@ void check_request(const Eigen::Matrix<double, dim, 1> &size, const Eigen::Matri
 
 } // namespace
 
-Mesh2 generate_rectangle(const Eigen::Vector2d &size, const Eigen::Vector2i &div) {
+Mesh2 generate_rectangle(const Eigen::Vector2d& size, const Eigen::Vector2i& div) {
   check_request<2>(size, div, "rectangle");
   Mesh2 m;
   m.source = "generated rectangle";
@@ -58,7 +58,7 @@ Mesh2 generate_rectangle(const Eigen::Vector2d &size, const Eigen::Vector2i &div
   return m;
 }
 
-Mesh3 generate_box(const Eigen::Vector3d &size, const Eigen::Vector3i &div) {
+Mesh3 generate_box(const Eigen::Vector3d& size, const Eigen::Vector3i& div) {
   check_request<3>(size, div, "box");
   Mesh3 m;
   m.source = "generated box";
@@ -75,12 +75,12 @@ Mesh3 generate_box(const Eigen::Vector3d &size, const Eigen::Vector3i &div) {
     for (int j = 0; j < div.y(); ++j)
       for (int i = 0; i < div.x(); ++i) {
         const int cell[3] = {i, j, k};
-        auto corner = [&](const std::array<int, 3> &local) {
+        auto corner = [&](const std::array<int, 3>& local) {
           std::array<int, 3> g{};
           for (int a = 0; a < 3; ++a) g[a] = cell[a] + ((cell[a] % 2 == 1) ? 1 - local[a] : local[a]);
           return id(g[0], g[1], g[2]);
         };
-        for (const auto &p : perms) {
+        for (const auto& p : perms) {
           std::array<int, 3> l{0, 0, 0};
           Mesh3::Cell t{};
           t[0] = corner(l);

@@ -9,13 +9,13 @@
 
 namespace vtb {
 
-template <int dim> double signed_measure(const Mesh<dim> &mesh, const typename Mesh<dim>::Cell &cell) {
+template <int dim> double signed_measure(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell) {
   Eigen::Matrix<double, dim, dim> d;
   for (int k = 0; k < dim; ++k) d.col(k) = mesh.points.col(cell[k + 1]) - mesh.points.col(cell[0]);
   return d.determinant() / (dim == 2 ? 2.0 : 6.0);
 }
 
-template <int dim> double facet_measure(const Mesh<dim> &mesh, const typename Mesh<dim>::Facet &f) {
+template <int dim> double facet_measure(const Mesh<dim>& mesh, const typename Mesh<dim>::Facet& f) {
   if constexpr (dim == 2) {
     return (mesh.points.col(f[1]) - mesh.points.col(f[0])).norm();
   } else {
@@ -25,10 +25,10 @@ template <int dim> double facet_measure(const Mesh<dim> &mesh, const typename Me
   }
 }
 
-template <int dim> std::vector<std::array<int, 2>> unique_edges(const Mesh<dim> &mesh) {
+template <int dim> std::vector<std::array<int, 2>> unique_edges(const Mesh<dim>& mesh) {
   std::vector<std::array<int, 2>> edges;
   edges.reserve(mesh.cells.size() * (dim == 2 ? 3 : 6));
-  for (const auto &c : mesh.cells)
+  for (const auto& c : mesh.cells)
     for (int a = 0; a <= dim; ++a)
       for (int b = a + 1; b <= dim; ++b) edges.push_back({std::min(c[a], c[b]), std::max(c[a], c[b])});
   std::sort(edges.begin(), edges.end());
@@ -36,13 +36,13 @@ template <int dim> std::vector<std::array<int, 2>> unique_edges(const Mesh<dim> 
   return edges;
 }
 
-template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const Mesh<dim> &mesh) {
+template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const Mesh<dim>& mesh) {
   using Facet = typename Mesh<dim>::Facet;
   // Facet k of a cell is the cell without vertex k, ordered so that it is outward oriented
   // for a positively oriented cell.
   std::vector<std::pair<Facet, Facet>> all; // (sorted key, oriented facet)
   all.reserve(mesh.cells.size() * (dim + 1));
-  for (const auto &c : mesh.cells) {
+  for (const auto& c : mesh.cells) {
     for (int k = 0; k <= dim; ++k) {
       Facet f{};
       if constexpr (dim == 2) {
@@ -56,7 +56,7 @@ template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const 
       all.push_back({key, f});
     }
   }
-  std::sort(all.begin(), all.end(), [](const auto &a, const auto &b) { return a.first < b.first; });
+  std::sort(all.begin(), all.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<Facet> out;
   for (std::size_t i = 0; i < all.size();) {
     std::size_t j = i + 1;
@@ -67,14 +67,14 @@ template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const 
   return out;
 }
 
-template <int dim> double bounding_diagonal(const Mesh<dim> &mesh) {
+template <int dim> double bounding_diagonal(const Mesh<dim>& mesh) {
   if (mesh.num_nodes() == 0) return 0.0;
   return (mesh.points.rowwise().maxCoeff() - mesh.points.rowwise().minCoeff()).norm();
 }
 
-template <int dim> int check_and_orient(Mesh<dim> &mesh) {
+template <int dim> int check_and_orient(Mesh<dim>& mesh) {
   const int n = mesh.num_nodes();
-  const std::string &src = mesh.source;
+  const std::string& src = mesh.source;
   if (n == 0) throw InputError(src + ": mesh has no nodes");
   if (mesh.cells.empty()) throw InputError(src + ": mesh has no " + (dim == 2 ? "triangles" : "tetrahedra"));
   for (int i = 0; i < n; ++i)
@@ -87,7 +87,7 @@ template <int dim> int check_and_orient(Mesh<dim> &mesh) {
   int flipped = 0;
   std::set<typename Mesh<dim>::Cell> seen;
   for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
-    auto &cell = mesh.cells[c];
+    auto& cell = mesh.cells[c];
     const std::string name = src + ": cell " + std::to_string(c);
     for (int v : cell)
       if (v < 0 || v >= n)
@@ -117,12 +117,12 @@ template <int dim> int check_and_orient(Mesh<dim> &mesh) {
 }
 
 #define VTB_INSTANTIATE(D)                                                                                             \
-  template double signed_measure<D>(const Mesh<D> &, const Mesh<D>::Cell &);                                           \
-  template double facet_measure<D>(const Mesh<D> &, const Mesh<D>::Facet &);                                           \
-  template std::vector<std::array<int, 2>> unique_edges<D>(const Mesh<D> &);                                           \
-  template std::vector<Mesh<D>::Facet> boundary_facets<D>(const Mesh<D> &);                                            \
-  template double bounding_diagonal<D>(const Mesh<D> &);                                                               \
-  template int check_and_orient<D>(Mesh<D> &);
+  template double signed_measure<D>(const Mesh<D>&, const Mesh<D>::Cell&);                                             \
+  template double facet_measure<D>(const Mesh<D>&, const Mesh<D>::Facet&);                                             \
+  template std::vector<std::array<int, 2>> unique_edges<D>(const Mesh<D>&);                                            \
+  template std::vector<Mesh<D>::Facet> boundary_facets<D>(const Mesh<D>&);                                             \
+  template double bounding_diagonal<D>(const Mesh<D>&);                                                                \
+  template int check_and_orient<D>(Mesh<D>&);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -1,11 +1,23 @@
 #include "vtb/meshes/msh_io.hh"
 
 #include "vtb/meshes/input_error.hh"
+#include "vtb/meshes/mesh_serialize.hh"
+#include "vtb/meshes/msh_prescan.hh"
 
 #include <gmsh.h>
 
+#include <poll.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <chrono>
+#include <csignal>
+#include <cstring>
 #include <fstream>
+#include <iostream>
+#include <sstream>
 #include <unordered_map>
 
 namespace vtb {
@@ -21,8 +33,8 @@ public:
     gmsh::option::setNumber("General.Verbosity", 1);
   }
   ~GmshSession() { gmsh::finalize(); }
-  GmshSession(const GmshSession &) = delete;
-  GmshSession &operator=(const GmshSession &) = delete;
+  GmshSession(const GmshSession&) = delete;
+  GmshSession& operator=(const GmshSession&) = delete;
 
   /// The last error gmsh logged, or "" if none.
   static std::string last_error() {
@@ -46,7 +58,7 @@ std::string element_name(int type) {
   return name + " (type " + std::to_string(type) + ")";
 }
 
-template <int dim> AnyMesh read_dim(const std::string &src) {
+template <int dim> AnyMesh read_dim(const std::string& src) {
   using Cell = typename Mesh<dim>::Cell;
   using Facet = typename Mesh<dim>::Facet;
   std::vector<std::size_t> node_tags;
@@ -67,7 +79,7 @@ template <int dim> AnyMesh read_dim(const std::string &src) {
     if (dim == 2 && coords[3 * i + 2] != 0.0)
       throw InputError(src + ": node tag " + std::to_string(node_tags[i]) + " has z != 0 in a 2D mesh");
   }
-  auto node = [&](std::size_t tag, const std::string &where) {
+  auto node = [&](std::size_t tag, const std::string& where) {
     const auto it = index.find(tag);
     if (it == index.end())
       throw InputError(src + ": " + where + " refers to node tag " + std::to_string(tag) + ", which does not exist");
@@ -93,24 +105,22 @@ template <int dim> AnyMesh read_dim(const std::string &src) {
   }
   // Nodes that belong to no cell of the top dimension (e.g. geometry points) are dropped.
   std::vector<int> remap(static_cast<std::size_t>(mesh.num_nodes()), -1);
-  for (const auto &c : mesh.cells)
+  for (const auto& c : mesh.cells)
     for (int v : c) remap[static_cast<std::size_t>(v)] = 0;
   int kept = 0;
-  for (auto &r : remap)
+  for (auto& r : remap)
     if (r == 0) r = kept++;
   if (kept != mesh.num_nodes()) {
     Eigen::Matrix<double, dim, Eigen::Dynamic> pts(dim, kept);
     for (std::size_t i = 0; i < remap.size(); ++i)
       if (remap[i] >= 0) pts.col(remap[i]) = mesh.points.col(static_cast<Eigen::Index>(i));
     mesh.points = std::move(pts);
-    for (auto &c : mesh.cells)
-      for (int &v : c) v = remap[static_cast<std::size_t>(v)];
+    for (auto& c : mesh.cells)
+      for (int& v : c) v = remap[static_cast<std::size_t>(v)];
   }
-  check_and_orient(mesh);
-
   gmsh::vectorpair groups;
   gmsh::model::getPhysicalGroups(groups, -1);
-  for (const auto &[gdim, gtag] : groups) {
+  for (const auto& [gdim, gtag] : groups) {
     if (gdim == dim) continue; // the domain itself
     std::string name;
     gmsh::model::getPhysicalName(gdim, gtag, name);
@@ -145,7 +155,7 @@ template <int dim> AnyMesh read_dim(const std::string &src) {
     }
     std::sort(g.nodes.begin(), g.nodes.end());
     g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
-    auto &slot = mesh.groups[name];
+    auto& slot = mesh.groups[name];
     slot.nodes.insert(slot.nodes.end(), g.nodes.begin(), g.nodes.end());
     std::sort(slot.nodes.begin(), slot.nodes.end());
     slot.nodes.erase(std::unique(slot.nodes.begin(), slot.nodes.end()), slot.nodes.end());
@@ -154,14 +164,8 @@ template <int dim> AnyMesh read_dim(const std::string &src) {
   return mesh;
 }
 
-} // namespace
-
-AnyMesh read_msh(const std::filesystem::path &file) {
-  const std::string src = file.string();
-  {
-    std::ifstream probe(file);
-    if (!probe) throw InputError(src + ": cannot open mesh file");
-  }
+/// Reads with gmsh in this process (no isolation).
+AnyMesh read_msh_in_process(const std::string& src) {
   GmshSession session;
   // The gmsh API reports errors by throwing std::string (and logging them).
   try {
@@ -174,7 +178,7 @@ AnyMesh read_msh(const std::filesystem::path &file) {
     if (!t3.empty()) return read_dim<3>(src);
     gmsh::model::mesh::getElements(t2, a, b, 2, -1);
     if (!t2.empty()) return read_dim<2>(src);
-  } catch (const std::string &e) {
+  } catch (const std::string& e) {
     throw InputError(src + ": gmsh cannot read it: " + e);
   } catch (int) {
     const std::string e = GmshSession::last_error();
@@ -183,7 +187,99 @@ AnyMesh read_msh(const std::filesystem::path &file) {
   throw InputError(src + ": no triangles or tetrahedra in the file");
 }
 
-template <int dim> void write_msh(const Mesh<dim> &mesh, const std::filesystem::path &file) {
+/// Runs read_msh_in_process in a child process, so that a reader that crashes, hangs or
+/// exhausts memory on a hostile file costs a clean refusal, not the caller. The child sends
+/// 'M' + the serialised mesh, or 'E' + the error message.
+AnyMesh read_msh_isolated(const std::string& src, std::chrono::seconds limit) {
+  int fds[2];
+  if (pipe(fds) != 0) throw InputError(src + ": cannot create a pipe for the mesh reader");
+  std::cout.flush();
+  std::cerr.flush();
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(fds[0]);
+    close(fds[1]);
+    throw InputError(src + ": cannot start the mesh reader");
+  }
+  if (pid == 0) {
+    close(fds[0]);
+    std::string out;
+    try {
+      out = "M" + serialize(read_msh_in_process(src));
+    } catch (const std::exception& e) {
+      out = std::string("E") + e.what();
+    }
+    for (std::size_t done = 0; done < out.size();) {
+      const ssize_t w = write(fds[1], out.data() + done, out.size() - done);
+      if (w <= 0) _exit(3);
+      done += static_cast<std::size_t>(w);
+    }
+    _exit(0);
+  }
+  close(fds[1]);
+  std::string data;
+  char buf[1 << 16];
+  const auto deadline = std::chrono::steady_clock::now() + limit;
+  bool timed_out = false;
+  for (;;) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fds[0], POLLIN, 0};
+    const int r = poll(&p, 1, static_cast<int>(left.count()));
+    if (r < 0 && errno == EINTR) continue;
+    if (r == 0) {
+      timed_out = true;
+      break;
+    }
+    const ssize_t n = read(fds[0], buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    data.append(buf, static_cast<std::size_t>(n));
+  }
+  close(fds[0]);
+  if (timed_out) kill(pid, SIGKILL);
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+  }
+  if (timed_out)
+    throw InputError(src + ": reading the mesh took longer than " + std::to_string(limit.count()) + " s; refused");
+  if (WIFSIGNALED(status))
+    throw InputError(src + ": the mesh reader crashed on this file (signal " + std::to_string(WTERMSIG(status)) +
+                     "); the file is malformed");
+  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || data.empty())
+    throw InputError(src + ": the mesh reader failed on this file");
+  if (data[0] == 'E') throw InputError(data.substr(1));
+  return deserialize(std::string_view(data).substr(1), src);
+}
+
+} // namespace
+
+AnyMesh read_msh(const std::filesystem::path& file) {
+  const std::string src = file.string();
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec) throw InputError(src + ": cannot open mesh file");
+  if (size > (std::uintmax_t{1} << 30)) throw InputError(src + ": mesh file larger than 1 GiB; refused");
+  std::string content;
+  {
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw InputError(src + ": cannot open mesh file");
+    std::ostringstream ss;
+    ss << in.rdbuf();
+    content = ss.str();
+  }
+  prescan_msh(content, src);
+  AnyMesh mesh = read_msh_isolated(src, std::chrono::seconds(8));
+  const int flipped = std::visit([](auto& m) { return check_and_orient(m); }, mesh);
+  if (flipped > 0) std::cerr << "vtb: warning: " << src << ": " << flipped << " inverted cells re-oriented\n";
+  return mesh;
+}
+
+template <int dim> void write_msh(const Mesh<dim>& mesh, const std::filesystem::path& file) {
   // gmsh picks the format from the extension, so the temporary name ends in .msh too.
   const std::filesystem::path tmp = file.parent_path() / ("." + file.filename().string() + ".part.msh");
   try {
@@ -201,18 +297,18 @@ template <int dim> void write_msh(const Mesh<dim> &mesh, const std::filesystem::
     gmsh::model::mesh::addNodes(dim, domain, tags, xyz);
     std::vector<std::size_t> etags, enodes;
     std::size_t next = 1;
-    for (const auto &c : mesh.cells) {
+    for (const auto& c : mesh.cells) {
       etags.push_back(next++);
       for (int v : c) enodes.push_back(static_cast<std::size_t>(v) + 1);
     }
     gmsh::model::mesh::addElementsByType(domain, dim == 2 ? kTriangle : kTetrahedron, etags, enodes);
     gmsh::model::setPhysicalName(dim, gmsh::model::addPhysicalGroup(dim, {domain}), "domain");
     int entity = 1;
-    for (const auto &[name, g] : mesh.groups) {
+    for (const auto& [name, g] : mesh.groups) {
       if (g.facets.empty()) continue; // node-only groups are not representable as facets
       const int ent = gmsh::model::addDiscreteEntity(dim - 1, entity++);
       std::vector<std::size_t> ft, fn;
-      for (const auto &f : g.facets) {
+      for (const auto& f : g.facets) {
         ft.push_back(next++);
         for (int v : f) fn.push_back(static_cast<std::size_t>(v) + 1);
       }
@@ -220,14 +316,14 @@ template <int dim> void write_msh(const Mesh<dim> &mesh, const std::filesystem::
       gmsh::model::setPhysicalName(dim - 1, gmsh::model::addPhysicalGroup(dim - 1, {ent}), name);
     }
     gmsh::write(tmp.string());
-  } catch (const std::string &e) {
+  } catch (const std::string& e) {
     std::filesystem::remove(tmp);
     throw InputError(file.string() + ": cannot write: " + e);
   }
   std::filesystem::rename(tmp, file);
 }
 
-template void write_msh<2>(const Mesh<2> &, const std::filesystem::path &);
-template void write_msh<3>(const Mesh<3> &, const std::filesystem::path &);
+template void write_msh<2>(const Mesh<2>&, const std::filesystem::path&);
+template void write_msh<3>(const Mesh<3>&, const std::filesystem::path&);
 
 } // namespace vtb

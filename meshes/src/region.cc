@@ -7,7 +7,7 @@
 
 namespace vtb {
 
-template <int dim> std::vector<int> nodes_in_box(const Mesh<dim> &mesh, const Box<dim> &box) {
+template <int dim> std::vector<int> nodes_in_box(const Mesh<dim>& mesh, const Box<dim>& box) {
   const double grow = 1e-9 * bounding_diagonal(mesh);
   const auto lo = (box.min.array() - grow).matrix().eval();
   const auto hi = (box.max.array() + grow).matrix().eval();
@@ -19,7 +19,7 @@ template <int dim> std::vector<int> nodes_in_box(const Mesh<dim> &mesh, const Bo
   return out;
 }
 
-template <int dim> int nearest_node(const Mesh<dim> &mesh, const Eigen::Matrix<double, dim, 1> &p) {
+template <int dim> int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<double, dim, 1>& p) {
   int best = -1;
   double best_d = std::numeric_limits<double>::infinity();
   for (int i = 0; i < mesh.num_nodes(); ++i) {
@@ -32,20 +32,20 @@ template <int dim> int nearest_node(const Mesh<dim> &mesh, const Eigen::Matrix<d
   return best;
 }
 
-template <int dim> Selection<dim> select(const Mesh<dim> &mesh, const RegionSpec<dim> &spec, const std::string &what) {
+template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what) {
   Selection<dim> s;
   if (spec.box) {
     s.nodes = nodes_in_box(mesh, *spec.box);
     std::vector<char> inside(static_cast<std::size_t>(mesh.num_nodes()), 0);
     for (int i : s.nodes) inside[static_cast<std::size_t>(i)] = 1;
-    for (const auto &f : boundary_facets(mesh))
+    for (const auto& f : boundary_facets(mesh))
       if (std::all_of(f.begin(), f.end(), [&](int v) { return inside[static_cast<std::size_t>(v)] != 0; }))
         s.facets.push_back(f);
   } else if (!spec.group.empty()) {
     const auto it = mesh.groups.find(spec.group);
     if (it == mesh.groups.end()) {
       std::string known;
-      for (const auto &[name, g] : mesh.groups) known += (known.empty() ? "" : ", ") + name;
+      for (const auto& [name, g] : mesh.groups) known += (known.empty() ? "" : ", ") + name;
       throw InputError(what + ": group \"" + spec.group + "\" is not in mesh " + mesh.source +
                        " (groups: " + (known.empty() ? "none" : known) + ")");
     }
@@ -58,9 +58,9 @@ template <int dim> Selection<dim> select(const Mesh<dim> &mesh, const RegionSpec
 }
 
 #define VTB_INSTANTIATE(D)                                                                                             \
-  template std::vector<int> nodes_in_box<D>(const Mesh<D> &, const Box<D> &);                                          \
-  template int nearest_node<D>(const Mesh<D> &, const Eigen::Matrix<double, D, 1> &);                                  \
-  template Selection<D> select<D>(const Mesh<D> &, const RegionSpec<D> &, const std::string &);
+  template std::vector<int> nodes_in_box<D>(const Mesh<D>&, const Box<D>&);                                            \
+  template int nearest_node<D>(const Mesh<D>&, const Eigen::Matrix<double, D, 1>&);                                    \
+  template Selection<D> select<D>(const Mesh<D>&, const RegionSpec<D>&, const std::string&);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

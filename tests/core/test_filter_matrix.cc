@@ -10,7 +10,7 @@
 namespace vtb {
 namespace {
 
-Eigen::VectorXd free_masses(const Model<2> &m) {
+Eigen::VectorXd free_masses(const Model<2>& m) {
   Eigen::VectorXd v(static_cast<Eigen::Index>(m.free_nodes.size()));
   for (Eigen::Index a = 0; a < v.size(); ++a) v[a] = m.net.mass[m.free_nodes[static_cast<std::size_t>(a)]];
   return v;

@@ -15,7 +15,7 @@
 namespace vtb {
 namespace {
 
-IntegratorOptions opts(const std::string &kind, double dt, const std::string &filter = "full", bool correct = true) {
+IntegratorOptions opts(const std::string& kind, double dt, const std::string& filter = "full", bool correct = true) {
   IntegratorOptions o;
   o.kind = kind;
   o.dt = dt;
@@ -26,7 +26,7 @@ IntegratorOptions opts(const std::string &kind, double dt, const std::string &fi
 }
 
 /// Max over [0, T] of |x(t) - F/k (1 - exp(-k t / c))| for the single element.
-double creep_error(const std::string &kind, const std::string &filter, double dt) {
+double creep_error(const std::string& kind, const std::string& filter, double dt) {
   const double k = 100.0, c = 10.0, m = 1e-6, F = 2.0, T = 0.5; // creep time c/k = 0.1 s
   Model<2> model = test::single_element(k, c, m, F);
   auto integ = make_integrator(model, opts(kind, dt, filter));
@@ -47,7 +47,7 @@ TEST_P(Creep, SingleVoigtElementFollowsTheCreepLaw) {
   // is x = F/k (1 - exp(-t/tau)), tau = c/k. Backward Euler's global error is first order:
   // |e| <= dt/(2 tau) * max_t (t/tau) e^(-t/tau) * F/k * (1 + O(dt/tau)) <= dt/(2 e tau) F/k;
   // we allow dt/tau * F/k, and check the order by halving dt (ratio 2 within 10 %).
-  const auto &[kind, filter] = GetParam();
+  const auto& [kind, filter] = GetParam();
   const double tau = 0.1, Fk = 0.02;
   const double e1 = creep_error(kind, filter, 1e-3), e2 = creep_error(kind, filter, 5e-4);
   EXPECT_LT(e1, 1e-3 / tau * Fk);
@@ -57,14 +57,14 @@ TEST_P(Creep, SingleVoigtElementFollowsTheCreepLaw) {
 INSTANTIATE_TEST_SUITE_P(ImplicitSchemes, Creep,
                          ::testing::Values(std::make_pair("implicit-euler", "full"), std::make_pair("filtered", "full"),
                                            std::make_pair("filtered", "neighbors")),
-                         [](const auto &pinfo) {
+                         [](const auto& pinfo) {
                            std::string n = pinfo.param.first + "_" + pinfo.param.second;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });
 
 /// Static tip stretch (mean x displacement of the loaded end) of a clamped strip.
-double strip_stretch(double length, double width, double force, const std::string &springs, double *e_eff_t) {
+double strip_stretch(double length, double width, double force, const std::string& springs, double* e_eff_t) {
   const double h = 0.005; // square cells
   const std::string text =
       test::plate_scene(static_cast<int>(std::lround(length / h)), static_cast<int>(std::lround(width / h)), R"(
@@ -84,13 +84,13 @@ springs = ")" + springs + "\"\n",
   const RunReport r = simulate(model, opts("implicit-euler", 0.05), tr, true);
   EXPECT_TRUE(r.stable);
   double tip = 0;
-  const auto &right = model.mesh.groups.at("right").nodes;
+  const auto& right = model.mesh.groups.at("right").nodes;
   for (int i : right) tip += tr.field.back()(0, i) / static_cast<double>(right.size());
   // The union-jack lattice (square cells, one diagonal each) deforms affinely under uniform
   // strain (every node is a centre of symmetry), so its bulk moduli follow from the interior
   // spring constants: C11 = C22 = k_axis + k_diag / 2, C12 = k_diag / 2 (per thickness:
   // N/m), and the uniaxial modulus is E_eff t = C11 - C12^2 / C22.
-  const auto &net = model.net;
+  const auto& net = model.net;
   double k_axis = 0, k_diag = 0;
   for (int sp = 0; sp < net.num_springs(); ++sp) {
     const Eigen::Vector2d d = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
@@ -135,7 +135,7 @@ TEST_P(Strip, StretchesByFLOverEffectiveEA) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Calibrations, Strip, ::testing::Values("lloyd", "van-gelder"), [](const auto &pinfo) {
+INSTANTIATE_TEST_SUITE_P(Calibrations, Strip, ::testing::Values("lloyd", "van-gelder"), [](const auto& pinfo) {
   return pinfo.param == "lloyd" ? std::string("lloyd") : std::string("van_gelder");
 });
 
@@ -144,7 +144,7 @@ struct MomentumCase {
   bool correct;
 };
 
-std::ostream &operator<<(std::ostream &os, const MomentumCase &c) {
+std::ostream& operator<<(std::ostream& os, const MomentumCase& c) {
   return os << c.kind << " " << c.filter << (c.correct ? " corrected" : "");
 }
 
@@ -153,7 +153,7 @@ class FreeBody : public ::testing::TestWithParam<MomentumCase> {};
 TEST_P(FreeBody, KeepsLinearAndAngularMomentum) {
   // A free plate thrown with velocity and spin, no loads. Internal forces are central pairs,
   // so the exact discrete dynamics keep both momenta; see each integrator's expectation.
-  const auto &c = GetParam();
+  const auto& c = GetParam();
   Model<2> model =
       test::model_from(test::plate_scene(8, 2, "[initial]\nvelocity = [0.1, -0.05]\nangular_velocity = 2.0\n"));
   // Explicit and the neighbour filter run at half the explicit limit, the full filter at 1 ms.
@@ -179,7 +179,7 @@ INSTANTIATE_TEST_SUITE_P(Schemes, FreeBody,
                          ::testing::Values(MomentumCase{"explicit", "", false}, MomentumCase{"filtered", "full", true},
                                            MomentumCase{"filtered", "neighbors", true},
                                            MomentumCase{"filtered", "neighbors", false}),
-                         [](const auto &pinfo) {
+                         [](const auto& pinfo) {
                            std::string n =
                                pinfo.param.kind + "_" + pinfo.param.filter + (pinfo.param.correct ? "_corrected" : "");
                            std::replace(n.begin(), n.end(), '-', '_');
@@ -206,7 +206,7 @@ TEST(Integrators, ImplicitEulerAngularMomentumDriftIsFirstOrder) {
 
 /// Runs the explicit scheme on a clamped plate from a small random velocity and reports
 /// whether it stayed bounded.
-bool explicit_bounded(const Model<2> &model, double dt, int steps) {
+bool explicit_bounded(const Model<2>& model, double dt, int steps) {
   auto integ = make_integrator(model, opts("explicit", dt));
   State<2> s = initial_state(model);
   s.v.setRandom();
@@ -231,7 +231,7 @@ TEST_P(Courant, ExplicitIsStableJustBelowThePredictedStepAndUnstableJustAbove) {
 }
 
 INSTANTIATE_TEST_SUITE_P(UndampedAndDamped, Courant, ::testing::Values(0.0, 1e-4),
-                         [](const auto &pinfo) { return pinfo.param == 0.0 ? "undamped" : "damped"; });
+                         [](const auto& pinfo) { return pinfo.param == 0.0 ? "undamped" : "damped"; });
 
 TEST(Integrators, FilteredIsStableAtAHundredTimesTheExplicitStep) {
   // The full filter is linearised backward Euler with a scalar Laplacian: unconditionally
@@ -302,7 +302,7 @@ angular_velocity = [1.0, 2.0, 3.0]
 )",
                         "box.toml", ".");
   const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
-  auto momenta = [&](const State<3> &st, Eigen::Vector3d &p, Eigen::Vector3d &l, double &scale) {
+  auto momenta = [&](const State<3>& st, Eigen::Vector3d& p, Eigen::Vector3d& l, double& scale) {
     p.setZero();
     l.setZero();
     scale = 0;

@@ -13,7 +13,7 @@ namespace {
 constexpr double kH = 1e-6;
 constexpr double kTol = 1e-7;
 
-double spring_energy(const Eigen::Vector3d &xi, const Eigen::Vector3d &xj, double L0, double k) {
+double spring_energy(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj, double L0, double k) {
   const double l = (xj - xi).norm();
   return 0.5 * k * (l - L0) * (l - L0);
 }
@@ -85,7 +85,7 @@ TEST(Kernels, DashpotCarriesNoTorqueAndIgnoresRigidRotation) {
   // Relative velocity of a rigid rotation is perpendicular to the element: no dashpot force.
   const Eigen::Vector2d xi(0.1, 0.2), xj(0.5, -0.1);
   const double w = 3.0;
-  auto rot = [w](const Eigen::Vector2d &x) { return Eigen::Vector2d(-w * x.y(), w * x.x()); };
+  auto rot = [w](const Eigen::Vector2d& x) { return Eigen::Vector2d(-w * x.y(), w * x.x()); };
   const Eigen::Vector2d f = voigt_force<2>(xi, xj, rot(xi), rot(xj), (xj - xi).norm(), 10.0, 4.0);
   EXPECT_LT(f.norm(), 1e-14);
 }

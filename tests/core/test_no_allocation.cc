@@ -10,9 +10,9 @@
 #include <ostream>
 
 extern "C" {
-void *__libc_malloc(std::size_t);
-void *__libc_calloc(std::size_t, std::size_t);
-void *__libc_realloc(void *, std::size_t);
+void* __libc_malloc(std::size_t);
+void* __libc_calloc(std::size_t, std::size_t);
+void* __libc_realloc(void*, std::size_t);
 }
 
 namespace {
@@ -20,15 +20,15 @@ thread_local bool g_counting = false;
 thread_local long g_allocations = 0;
 } // namespace
 
-extern "C" void *malloc(std::size_t n) {
+extern "C" void* malloc(std::size_t n) {
   if (g_counting) ++g_allocations;
   return __libc_malloc(n);
 }
-extern "C" void *calloc(std::size_t a, std::size_t b) {
+extern "C" void* calloc(std::size_t a, std::size_t b) {
   if (g_counting) ++g_allocations;
   return __libc_calloc(a, b);
 }
-extern "C" void *realloc(void *p, std::size_t n) {
+extern "C" void* realloc(void* p, std::size_t n) {
   if (g_counting) ++g_allocations;
   return __libc_realloc(p, n);
 }
@@ -40,7 +40,7 @@ struct Case {
   std::string kind, filter;
 };
 
-std::ostream &operator<<(std::ostream &os, const Case &c) {
+std::ostream& operator<<(std::ostream& os, const Case& c) {
   return os << c.kind << " " << c.filter;
 }
 
@@ -65,7 +65,7 @@ total_force = [0.2, 0.1]
   integ->step(s); // warm up
   // Sanity: the counter sees allocations at all.
   g_counting = true;
-  void *p = std::malloc(64);
+  void* p = std::malloc(64);
   g_counting = false;
   std::free(p);
   ASSERT_EQ(g_allocations, 1);
@@ -79,7 +79,7 @@ total_force = [0.2, 0.1]
 INSTANTIATE_TEST_SUITE_P(Integrators, NoAllocation,
                          ::testing::Values(Case{"explicit", ""}, Case{"filtered", "full"},
                                            Case{"filtered", "neighbors"}, Case{"implicit-euler", ""}),
-                         [](const auto &pinfo) {
+                         [](const auto& pinfo) {
                            std::string n = pinfo.param.kind + pinfo.param.filter;
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;

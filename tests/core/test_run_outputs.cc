@@ -12,7 +12,7 @@
 namespace vtb {
 namespace {
 
-std::string slurp(const std::filesystem::path &p) {
+std::string slurp(const std::filesystem::path& p) {
   std::ifstream f(p);
   std::stringstream s;
   s << f.rdbuf();
@@ -46,7 +46,7 @@ dt = 2e-3
   EXPECT_EQ(reactions.substr(0, reactions.find('\n')), "t,region,fx,fy,fz");
   EXPECT_EQ(std::count(probes.begin(), probes.end(), '\n'), 1 + 101) << "header + samples at 0, 0.01, ..., 1";
   const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
-  for (const char *key :
+  for (const char* key :
        {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds", "stable", "max_strain"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["steps"], 500);

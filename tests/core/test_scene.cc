@@ -24,7 +24,7 @@ dt = 1e-3
 )");
 
 /// Replaces the first occurrence of `from` in the good scene.
-std::string with(const std::string &from, const std::string &to) {
+std::string with(const std::string& from, const std::string& to) {
   std::string s = kGood;
   const auto pos = s.find(from);
   EXPECT_NE(pos, std::string::npos) << from;
@@ -32,11 +32,11 @@ std::string with(const std::string &from, const std::string &to) {
 }
 
 /// The message of the InputError that parsing and building throw, or "" if none.
-std::string error_of(const std::string &text) {
+std::string error_of(const std::string& text) {
   try {
     const Scene s = parse_scene(text, "bad.toml", ".");
     build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
-  } catch (const InputError &e) {
+  } catch (const InputError& e) {
     const std::string msg = e.what();
     EXPECT_EQ(msg.find('\n'), std::string::npos) << "one line: " << msg;
     return msg;
@@ -56,14 +56,14 @@ struct BadCase {
   std::string from, to, expect;
 };
 
-std::ostream &operator<<(std::ostream &os, const BadCase &c) {
+std::ostream& operator<<(std::ostream& os, const BadCase& c) {
   return os << "'" << c.from << "' -> '" << c.to << "'";
 }
 
 class BadScene : public ::testing::TestWithParam<BadCase> {};
 
 TEST_P(BadScene, IsRefusedWithAPreciseMessage) {
-  const auto &c = GetParam();
+  const auto& c = GetParam();
   const std::string msg = error_of(with(c.from, c.to));
   EXPECT_NE(msg.find("bad.toml"), std::string::npos) << msg;
   EXPECT_NE(msg.find(c.expect), std::string::npos) << "got: " << msg;
@@ -95,13 +95,13 @@ INSTANTIATE_TEST_SUITE_P(
                 "both constrain node"},
         BadCase{"output_interval = 0.01", "output_interval = 5.0", "must not exceed [scene].duration"},
         BadCase{"[solver]", "[solvr]", "unknown key; did you mean 'solver'?"}),
-    [](const auto &pinfo) { return "case" + std::to_string(pinfo.index); });
+    [](const auto& pinfo) { return "case" + std::to_string(pinfo.index); });
 
 TEST(Scene, ReadSceneNamesAMissingFile) {
   try {
     read_scene("/nonexistent/scene.toml");
     FAIL();
-  } catch (const InputError &e) {
+  } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.toml: cannot open scene file"), std::string::npos);
   }
 }
@@ -117,7 +117,7 @@ TEST(Scene, TractionIsLumpedByBoundaryLengthAndPointLoadIsNodal) {
   // half the share of the middle ones, and the total is the requested force.
   const Model<2> m = test::model_from(kGood);
   ASSERT_EQ(m.loads.size(), 1u);
-  const auto &l = m.loads[0];
+  const auto& l = m.loads[0];
   ASSERT_EQ(l.nodes.size(), 3u);
   EXPECT_NEAR(l.force.row(0).sum(), 1.0, 1e-14);
   EXPECT_NEAR(l.force(0, 0), 0.25, 1e-14);

@@ -13,7 +13,7 @@ TEST(Generate, RectangleCountsAreaOrientationAndGroups) {
   EXPECT_EQ(m.num_nodes(), 9 * 4);
   EXPECT_EQ(m.num_cells(), 2 * 8 * 3);
   double area = 0;
-  for (const auto &c : m.cells) {
+  for (const auto& c : m.cells) {
     EXPECT_GT(signed_measure(m, c), 0.0);
     area += signed_measure(m, c);
   }
@@ -29,7 +29,7 @@ TEST(Generate, RectangleDiagonalsAlternate) {
   // appear equally often on an even grid.
   const Mesh2 m = generate_rectangle({1, 1}, {4, 4});
   int rising = 0, falling = 0;
-  for (const auto &e : unique_edges(m)) {
+  for (const auto& e : unique_edges(m)) {
     const Eigen::Vector2d d = m.points.col(e[1]) - m.points.col(e[0]);
     if (std::abs(d.x()) > 1e-12 && std::abs(d.y()) > 1e-12) (d.x() * d.y() > 0 ? rising : falling)++;
   }
@@ -42,7 +42,7 @@ TEST(Generate, BoxIsConformingWithPositiveTetrahedra) {
   EXPECT_EQ(m.num_nodes(), 4 * 3 * 3);
   EXPECT_EQ(m.num_cells(), 6 * 3 * 2 * 2);
   double vol = 0;
-  for (const auto &c : m.cells) {
+  for (const auto& c : m.cells) {
     EXPECT_GT(signed_measure(m, c), 0.0);
     vol += signed_measure(m, c);
   }
@@ -69,7 +69,7 @@ Mesh2 two_triangles() {
 std::string check_message(Mesh2 m) {
   try {
     check_and_orient(m);
-  } catch (const InputError &e) {
+  } catch (const InputError& e) {
     return e.what();
   }
   return "";

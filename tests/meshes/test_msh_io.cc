@@ -12,13 +12,13 @@
 namespace vtb {
 namespace {
 
-std::filesystem::path temp(const std::string &name) {
+std::filesystem::path temp(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() / "vtb_tests";
   std::filesystem::create_directories(dir);
   return dir / name;
 }
 
-template <int dim> void expect_same(const Mesh<dim> &a, const Mesh<dim> &b) {
+template <int dim> void expect_same(const Mesh<dim>& a, const Mesh<dim>& b) {
   ASSERT_EQ(a.num_nodes(), b.num_nodes());
   ASSERT_EQ(a.num_cells(), b.num_cells());
   // gmsh prints 16 significant digits: a round trip may move a coordinate by one unit in the
@@ -27,7 +27,7 @@ template <int dim> void expect_same(const Mesh<dim> &a, const Mesh<dim> &b) {
             4 * std::numeric_limits<double>::epsilon() * a.points.cwiseAbs().maxCoeff());
   EXPECT_EQ(a.cells, b.cells);
   ASSERT_EQ(a.groups.size(), b.groups.size());
-  for (const auto &[name, g] : a.groups) {
+  for (const auto& [name, g] : a.groups) {
     ASSERT_TRUE(b.groups.count(name)) << name;
     EXPECT_EQ(g.nodes, b.groups.at(name).nodes) << name;
     EXPECT_EQ(g.facets.size(), b.groups.at(name).facets.size()) << name;
@@ -43,25 +43,80 @@ TEST(MshIo, RoundTripsTrianglesAndTetrahedraWithGroups) {
   expect_same(box, std::get<Mesh3>(read_msh(temp("box.msh"))));
 }
 
-std::string read_error(const std::string &name, const std::string &text) {
+std::string read_error(const std::string& name, const std::string& text) {
   const auto path = temp(name);
   std::ofstream(path) << text;
   try {
     read_msh(path);
-  } catch (const InputError &e) {
+  } catch (const InputError& e) {
     return e.what();
   }
   return "";
+}
+
+const std::string kHeader = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n";
+const std::string kNodes = "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n$EndNodes\n";
+
+struct Broken {
+  std::string name, text, expect;
+};
+
+class BrokenMsh : public ::testing::TestWithParam<Broken> {};
+
+TEST_P(BrokenMsh, IsRefusedWithOneLineNamingFileAndProblem) {
+  const auto& b = GetParam();
+  const std::string msg = read_error(b.name + ".msh", b.text);
+  EXPECT_EQ(msg.rfind(temp(b.name + ".msh").string() + ": ", 0), 0u) << msg;
+  EXPECT_NE(msg.find(b.expect), std::string::npos) << msg;
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Classes, BrokenMsh,
+    ::testing::Values(
+        Broken{"empty", "", "no $MeshFormat header"},
+        Broken{"garbage", "this is not a mesh\n", "no $MeshFormat header"},
+        Broken{"version", "$MeshFormat\n3.0 0 8\n$EndMeshFormat\n", "unsupported .msh version \"3.0\""},
+        Broken{"no_nodes", kHeader, "missing $Nodes section"},
+        Broken{"huge_nodes", kHeader + "$Nodes\n1000000000000000\n1 0 0 0\n$EndNodes\n$Elements\n0\n$EndElements\n",
+               "$Nodes declares 1000000000000000 entries"},
+        Broken{"huge_elements", kHeader + kNodes + "$Elements\n99999999999\n$EndElements\n",
+               "$Elements declares 99999999999"},
+        Broken{"sparse_tags",
+               "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n1 3 1 999999999999\n2 1 0 3\n1\n2\n999999999999\n0 0 "
+               "0\n1 0 0\n0 1 0\n"
+               "$EndNodes\n$Elements\n1 1 1 1\n2 1 2 1\n1 1 2 999999999999\n$EndElements\n",
+               "tag range"},
+        Broken{"bad_header", kHeader + "$Nodes\nfour\n$EndNodes\n$Elements\n0\n$EndElements\n",
+               "malformed header line"},
+        Broken{"out_of_range", kHeader + kNodes + "$Elements\n1\n1 2 2 0 1 1 2 9\n$EndElements\n",
+               "gmsh cannot read it"},
+        Broken{"repeated_vertex", kHeader + kNodes + "$Elements\n1\n1 2 2 0 1 1 2 2\n$EndElements\n",
+               "repeats a vertex"},
+        Broken{"duplicate", kHeader + kNodes + "$Elements\n2\n1 2 2 0 1 1 2 3\n2 2 2 0 1 2 3 1\n$EndElements\n",
+               "cell 1 duplicates an earlier cell"},
+        Broken{"nan",
+               kHeader +
+                   "$Nodes\n3\n1 0 0 0\n2 nan 0 0\n3 0 1 0\n$EndNodes\n$Elements\n1\n1 2 2 0 1 1 2 3\n$EndElements\n",
+               "non-finite"},
+        Broken{"quad", kHeader + kNodes + "$Elements\n1\n1 3 2 0 1 1 2 3 4\n$EndElements\n", "unsupported element"},
+        Broken{"truncated", kHeader + "$Nodes\n4\n1 0 0 0\n2 1 0", "missing $Elements section"}),
+    [](const auto& pinfo) { return pinfo.param.name; });
+
+TEST(MshIo, ReorientsInvertedCellsWithAWarning) {
+  const auto path = temp("inverted.msh");
+  std::ofstream(path) << kHeader << kNodes << "$Elements\n2\n1 2 2 0 1 1 3 2\n2 2 2 0 1 1 3 4\n$EndElements\n";
+  const Mesh2 m = std::get<Mesh2>(read_msh(path));
+  for (const auto& c : m.cells) EXPECT_GT(signed_measure(m, c), 0.0);
 }
 
 TEST(MshIo, RefusesMissingAndBrokenFiles) {
   try {
     read_msh("/nonexistent/x.msh");
     FAIL();
-  } catch (const InputError &e) {
+  } catch (const InputError& e) {
     EXPECT_STREQ(e.what(), "/nonexistent/x.msh: cannot open mesh file");
   }
-  EXPECT_NE(read_error("garbage.msh", "this is not a mesh\n").find("garbage.msh"), std::string::npos);
   const std::string quad =
       "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0\n$EndNodes\n"
       "$Elements\n1\n1 3 2 0 1 1 2 3 4\n$EndElements\n";

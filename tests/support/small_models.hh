@@ -13,7 +13,7 @@ namespace vtb::test {
 /// pulled by a step force F along x. The mesh is a placeholder triangle (unused).
 inline Model<2> single_element(double k, double c, double m, double F, double L = 1.0) {
   Model<2> model;
-  auto &net = model.net;
+  auto& net = model.net;
   net.rest.resize(2, 2);
   net.rest << 0, L, 0, 0;
   net.mass = Eigen::Vector2d(m, m);
@@ -45,8 +45,8 @@ inline Model<2> single_element(double k, double c, double m, double F, double L 
 }
 
 /// A scene text for a plate [0, 0.2] x [0, 0.05] (or `size`) with the given extra TOML appended.
-inline std::string plate_scene(int nx, int ny, const std::string &extra, double tau = 0.05,
-                               const std::string &size = "0.2, 0.05", double mass_damping = 0.0) {
+inline std::string plate_scene(int nx, int ny, const std::string& extra, double tau = 0.05,
+                               const std::string& size = "0.2, 0.05", double mass_damping = 0.0) {
   return "[scene]\nname = \"plate\"\nduration = 1.0\noutput_interval = 0.01\n"
          "[mesh]\ngenerate = { shape = \"rectangle\", size = [" +
          size + "], divisions = [" + std::to_string(nx) + ", " + std::to_string(ny) +
@@ -57,18 +57,18 @@ inline std::string plate_scene(int nx, int ny, const std::string &extra, double 
 }
 
 /// Builds a 2D model from scene text.
-inline Model<2> model_from(const std::string &text) {
+inline Model<2> model_from(const std::string& text) {
   const Scene s = parse_scene(text, "test.toml", ".");
   return build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
 }
 
 /// Total linear momentum sum m v and angular momentum sum m (x x v) (2D scalar).
-inline Eigen::Vector2d momentum(const Model<2> &m, const State<2> &s) {
+inline Eigen::Vector2d momentum(const Model<2>& m, const State<2>& s) {
   return s.v * m.net.mass;
 }
 /// Angular momentum about the origin, and its natural scale sum m |x| |v| (to judge a change
 /// of it relative to the terms that make it up, which may cancel).
-inline double angular_momentum(const Model<2> &m, const State<2> &s, double *scale = nullptr) {
+inline double angular_momentum(const Model<2>& m, const State<2>& s, double* scale = nullptr) {
   double l = 0, sc = 0;
   for (int i = 0; i < m.num_nodes(); ++i) {
     const Eigen::Vector2d x = m.net.rest.col(i) + s.u.col(i);

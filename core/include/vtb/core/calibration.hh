@@ -12,12 +12,12 @@ namespace vtb {
 
 /// Lumped nodal masses: density x area x thickness / 3 per triangle vertex (2D, plane
 /// stress), density x volume / 4 per tetrahedron vertex (3D).
-template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim> &mesh, double density, double thickness);
+template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim>& mesh, double density, double thickness);
 
 /// Van Gelder (1998): k_c = E t sum_{e ∋ c} A_e / |c|^2 in 2D (t = thickness) and, by the
 /// same construction, k_c = E sum_{e ∋ c} V_e / |c|^2 in 3D. Does not use nu; exact for the
 /// equilateral lattice with nu = 1/3 in 2D. Returned per edge of unique_edges(mesh).
-template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim> &mesh, double young_modulus, double thickness);
+template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, double young_modulus, double thickness);
 
 /// Lloyd, Szekely and Harders (2007): per element, the spring constants that make the
 /// element's spring stiffness matrix closest (Frobenius norm) to the linear FEM stiffness
@@ -25,7 +25,7 @@ template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim> &mesh, d
 /// that would be negative is held at zero and the rest refitted. Summed over the elements
 /// sharing an edge. For an equilateral triangle with nu = 1/3 it is the exact k = sqrt(3)/4 E t.
 template <int dim>
-Eigen::VectorXd lloyd_stiffness(const Mesh<dim> &mesh, double young_modulus, double poisson_ratio, double thickness);
+Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness);
 
 /// The Poisson ratio that a network of central springs implies on a regular lattice
 /// (Cauchy relation): 1/3 for triangles, 1/4 for tetrahedra. Reported in summary.json; the
@@ -37,7 +37,7 @@ constexpr double spring_poisson_ratio(int dim) {
 /// Linear FEM element stiffness matrix of a simplex, (dim+1)*dim square, nodes-major
 /// ordering (node a, component i) -> a*dim + i. Plane stress with thickness in 2D.
 template <int dim>
-Eigen::MatrixXd fem_element_stiffness(const Mesh<dim> &mesh, const typename Mesh<dim>::Cell &cell, double young_modulus,
+Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell, double young_modulus,
                                       double poisson_ratio, double thickness);
 
 } // namespace vtb

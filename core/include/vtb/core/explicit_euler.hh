@@ -9,19 +9,19 @@ namespace vtb {
 
 template <int dim> class ExplicitEuler final : public Integrator<dim> {
 public:
-  ExplicitEuler(const Model<dim> &model, double dt);
-  void step(State<dim> &s) override;
+  ExplicitEuler(const Model<dim>& model, double dt);
+  void step(State<dim>& s) override;
   std::string_view name() const override { return "explicit"; }
 
 private:
-  const Model<dim> &m_model;
+  const Model<dim>& m_model;
   Nodal<dim> m_force, m_ext;
 };
 
 /// Largest eigenvalue omega^2 of M^-1 K on the free nodes, K the stiffness at rest.
 /// `exact` uses a dense symmetric eigensolver (small meshes); otherwise 400 power iterations
 /// (a lower bound that is usually within a few percent).
-template <int dim> double max_omega_squared(const Model<dim> &model, bool exact);
+template <int dim> double max_omega_squared(const Model<dim>& model, bool exact);
 
 /// Stability limit of symplectic Euler for a mode with omega^2 = w2 and Voigt damping
 /// rate tau w2 + gamma: the step where dt^2 w2 + 2 (gamma + tau w2) dt = 4.

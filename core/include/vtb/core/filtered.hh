@@ -32,26 +32,26 @@
 namespace vtb {
 
 /// H on the free nodes (index = position in model.free_nodes), both triangles stored.
-template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim> &model, double dt);
+template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt);
 
 /// W = H^-1 M (dense). For tests and the `full` filter.
-template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim> &model, double dt);
+template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim>& model, double dt);
 
 /// W = H^-1 M on the pattern of H (node and its free neighbours), row-compressed.
 template <int dim>
-Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim> &model, double dt);
+Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim>& model, double dt);
 
 template <int dim> class FilteredImplicit final : public Integrator<dim> {
 public:
-  FilteredImplicit(const Model<dim> &model, const IntegratorOptions &options);
-  void step(State<dim> &s) override;
+  FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
+  void step(State<dim>& s) override;
   std::string_view name() const override { return "filtered"; }
 
 private:
-  void correct_momentum(const State<dim> &s);
-  void limit_strain(State<dim> &s) const;
+  void correct_momentum(const State<dim>& s);
+  void limit_strain(State<dim>& s) const;
 
-  const Model<dim> &m_model;
+  const Model<dim>& m_model;
   bool m_full;
   bool m_correct;
   double m_strain_limit;

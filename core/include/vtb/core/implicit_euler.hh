@@ -15,12 +15,12 @@ namespace vtb {
 
 template <int dim> class ImplicitEuler final : public Integrator<dim> {
 public:
-  ImplicitEuler(const Model<dim> &model, double dt);
-  void step(State<dim> &s) override;
+  ImplicitEuler(const Model<dim>& model, double dt);
+  void step(State<dim>& s) override;
   std::string_view name() const override { return "implicit-euler"; }
 
 private:
-  const Model<dim> &m_model;
+  const Model<dim>& m_model;
   OrderedLDLT m_solver;
   /// Per spring and block entry (p, q): value offsets of blocks ii, jj, ij, or -1 where the
   /// node is constrained or the entry lies in the other triangle.

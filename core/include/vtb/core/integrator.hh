@@ -18,17 +18,17 @@ template <int dim> struct State {
 };
 
 /// Initial state of a model: zero displacement, the scene's initial velocity, constraints.
-template <int dim> State<dim> initial_state(const Model<dim> &model);
+template <int dim> State<dim> initial_state(const Model<dim>& model);
 
 template <int dim> class Integrator {
 public:
   explicit Integrator(double dt) : m_dt(dt) {}
   virtual ~Integrator() = default;
-  Integrator(const Integrator &) = delete;
-  Integrator &operator=(const Integrator &) = delete;
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
 
   /// Advances `s` from s.t to s.t + dt. Allocates nothing.
-  virtual void step(State<dim> &s) = 0;
+  virtual void step(State<dim>& s) = 0;
   virtual std::string_view name() const = 0;
   double dt() const { return m_dt; }
 
@@ -47,6 +47,6 @@ struct IntegratorOptions {
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
 template <int dim>
-std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim> &model, const IntegratorOptions &options);
+std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& options);
 
 } // namespace vtb

@@ -53,17 +53,17 @@ template <int dim> struct Model {
   bool has_constraints() const { return free_nodes.size() != constrained.size(); }
 
   /// f = external load at time t (f is overwritten; allocates nothing).
-  void external_forces(double t, Nodal<dim> &f) const;
+  void external_forces(double t, Nodal<dim>& f) const;
   /// Sets displacement and velocity of every constrained node for time t.
-  void apply_constraints(double t, Nodal<dim> &u, Nodal<dim> &v) const;
+  void apply_constraints(double t, Nodal<dim>& u, Nodal<dim>& v) const;
 };
 
 /// Resolves a scene against its mesh. Throws InputError naming the scene key when a vector
 /// has the wrong dimension, a region selects no node, regions conflict (a node both fixed
 /// and driven, or in two drives), or the body is a mechanism that a solver cannot integrate.
-template <int dim> Model<dim> build_model(const Scene &scene, Mesh<dim> mesh);
+template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
 
 /// Loads the scene's mesh (file or generator).
-AnyMesh load_mesh(const Scene &scene);
+AnyMesh load_mesh(const Scene& scene);
 
 } // namespace vtb

@@ -12,14 +12,14 @@ namespace vtb {
 class OrderedLDLT {
 public:
   /// Takes the pattern (and values) of a symmetric matrix with both triangles stored.
-  explicit OrderedLDLT(const Eigen::SparseMatrix<double> &A);
+  explicit OrderedLDLT(const Eigen::SparseMatrix<double>& A);
 
   /// Row of the ordered matrix that holds original row i.
   int ordered(int i) const { return m_perm[static_cast<std::size_t>(i)]; }
   /// Offset into values() of the ordered entry (r, c), r and c already ordered, any triangle.
   int offset(int r, int c) const;
   /// The ordered upper triangle's values, to be filled before factorize().
-  double *values() { return m_upper.valuePtr(); }
+  double* values() { return m_upper.valuePtr(); }
   Eigen::Index nonzeros() const { return m_upper.nonZeros(); }
   Eigen::Index size() const { return m_upper.rows(); }
 
@@ -32,9 +32,9 @@ private:
   class Factor : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> {
   public:
     /// Eigen's factorize() builds a temporary matrix; the pre-ordered path does not.
-    void refactorize(const Eigen::SparseMatrix<double> &upper) { this->template factorize_preordered<true>(upper); }
+    void refactorize(const Eigen::SparseMatrix<double>& upper) { this->template factorize_preordered<true>(upper); }
     /// D of L D L^T by reference (vectorD() returns a copy).
-    const Eigen::VectorXd &diagonal() const { return this->m_diag; }
+    const Eigen::VectorXd& diagonal() const { return this->m_diag; }
   };
   std::vector<int> m_perm;
   Eigen::SparseMatrix<double> m_upper;

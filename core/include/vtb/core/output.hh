@@ -10,10 +10,10 @@
 namespace vtb {
 
 template <int dim>
-void write_run_outputs(const std::filesystem::path &dir, const Model<dim> &model, const Trajectory<dim> &traj,
-                       const RunReport &report, const std::string &scene_name);
+void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
+                       const RunReport& report, const std::string& scene_name);
 
 /// The summary as JSON text (for tests).
-std::string summary_json(const RunReport &report, const std::string &scene_name);
+std::string summary_json(const RunReport& report, const std::string& scene_name);
 
 } // namespace vtb

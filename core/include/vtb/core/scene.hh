@@ -113,11 +113,11 @@ struct Scene {
 /// Reads and validates a scene file. Throws InputError with "FILE:LINE: [table].key: problem"
 /// for a syntax error, an unknown key (with the nearest known key suggested), a missing
 /// required key, a wrong type or a value out of range.
-Scene read_scene(const std::filesystem::path &file);
+Scene read_scene(const std::filesystem::path& file);
 
 /// Same, from text (for tests and fuzzing); `name` stands for the file in messages and
 /// relative paths resolve against `base_dir`.
-Scene parse_scene(std::string_view text, const std::string &name, const std::filesystem::path &base_dir);
+Scene parse_scene(std::string_view text, const std::string& name, const std::filesystem::path& base_dir);
 
 /// Levenshtein distance, for "did you mean" suggestions.
 std::size_t edit_distance(std::string_view a, std::string_view b);

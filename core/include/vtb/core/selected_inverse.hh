@@ -13,6 +13,6 @@ namespace vtb {
 ///   Z_ij = -sum_{k in L(:,j)} Z_ik L_kj  (i in L(:,j)),   Z_jj = 1/d_j - sum_k L_kj Z_kj,
 /// from the last column to the first. Cost is sum_j |L(:,j)|^2, far below a full inverse.
 /// Throws std::runtime_error if A is not positive definite.
-Eigen::SparseMatrix<double> selected_inverse(const Eigen::SparseMatrix<double> &A);
+Eigen::SparseMatrix<double> selected_inverse(const Eigen::SparseMatrix<double>& A);
 
 } // namespace vtb

@@ -48,13 +48,13 @@ inline constexpr double kRunawayStrain = 10.0;
 /// step at or after each sample time). Never throws for a numerical blow-up: it stops the run
 /// and reports stable = false.
 template <int dim>
-RunReport simulate(const Model<dim> &model, const IntegratorOptions &options, Trajectory<dim> &out,
+RunReport simulate(const Model<dim>& model, const IntegratorOptions& options, Trajectory<dim>& out,
                    bool record_field = false);
 
 /// Support reactions at a state: minus the internal and external forces at its nodes.
 template <int dim>
-void support_reactions(const Model<dim> &model, const State<dim> &s, Nodal<dim> &scratch, Nodal<dim> &ext,
-                       std::vector<Vec<dim>> &out);
+void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
+                       std::vector<Vec<dim>>& out);
 
 /// Options of `vtb run` that override the scene.
 struct RunOverrides {
@@ -65,6 +65,6 @@ struct RunOverrides {
 
 /// Everything `vtb run` does: load mesh, build model, simulate, write probes.csv,
 /// reactions.csv and summary.json into `out_dir` (all or nothing). Returns the report.
-RunReport run_scene(const Scene &scene, const RunOverrides &overrides, const std::filesystem::path &out_dir);
+RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
 
 } // namespace vtb

@@ -16,7 +16,7 @@ template <int dim> using Nodal = Eigen::Matrix<double, dim, Eigen::Dynamic>; ///
 /// Node j receives -f_i. The dashpot acts along the element (a true Voigt unit), so the pair
 /// carries no torque and a rigid rotation is not damped. Returns zero for l = 0.
 template <int dim>
-inline Vec<dim> voigt_force(const Vec<dim> &xi, const Vec<dim> &xj, const Vec<dim> &vi, const Vec<dim> &vj,
+inline Vec<dim> voigt_force(const Vec<dim>& xi, const Vec<dim>& xj, const Vec<dim>& vi, const Vec<dim>& vj,
                             double rest_length, double k, double c) {
   const Vec<dim> d = xj - xi;
   const double l = d.norm();
@@ -30,7 +30,7 @@ inline Vec<dim> voigt_force(const Vec<dim> &xi, const Vec<dim> &xj, const Vec<di
 /// With `clamp_compression`, the transverse factor is max(0, 1 - L0/l), which keeps the
 /// assembled matrix positive semidefinite for a compressed spring (Choi and Ko 2002).
 template <int dim>
-inline Mat<dim> spring_jacobian(const Vec<dim> &xi, const Vec<dim> &xj, double rest_length, double k,
+inline Mat<dim> spring_jacobian(const Vec<dim>& xi, const Vec<dim>& xj, double rest_length, double k,
                                 bool clamp_compression) {
   const Vec<dim> d = xj - xi;
   const double l = d.norm();
@@ -44,7 +44,7 @@ inline Mat<dim> spring_jacobian(const Vec<dim> &xi, const Vec<dim> &xj, double r
 
 /// Damping block of the dashpot, d f_i / d v_j = c n n^T (the dependence of n on x is the
 /// usual omitted term).
-template <int dim> inline Mat<dim> dashpot_jacobian(const Vec<dim> &xi, const Vec<dim> &xj, double c) {
+template <int dim> inline Mat<dim> dashpot_jacobian(const Vec<dim>& xi, const Vec<dim>& xj, double c) {
   const Vec<dim> d = xj - xi;
   const double l = d.norm();
   if (!(l > 0)) return Mat<dim>::Zero();

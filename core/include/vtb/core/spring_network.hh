@@ -28,20 +28,20 @@ template <int dim> struct SpringNetwork {
 
 /// Builds the network of a mesh with the scene's material and calibration.
 template <int dim>
-SpringNetwork<dim> build_network(const Mesh<dim> &mesh, const MaterialDesc &material, std::string_view calibration);
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration);
 
 /// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
 /// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt
 /// for its k dt (v_j - v_i) term), and -gamma m v. Allocates nothing.
 template <int dim>
-void add_internal_forces(const SpringNetwork<dim> &net, const Nodal<dim> &u, const Nodal<dim> &v, Nodal<dim> &f,
+void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
                          double extra_damping_per_k = 0.0);
 
 /// Largest |l / L0 - 1| over all springs at X + u.
-template <int dim> double max_strain(const SpringNetwork<dim> &net, const Nodal<dim> &u);
+template <int dim> double max_strain(const SpringNetwork<dim>& net, const Nodal<dim>& u);
 
 /// Elastic energy sum 1/2 k (l - L0)^2 and kinetic energy sum 1/2 m |v|^2.
-template <int dim> double elastic_energy(const SpringNetwork<dim> &net, const Nodal<dim> &u);
-template <int dim> double kinetic_energy(const SpringNetwork<dim> &net, const Nodal<dim> &v);
+template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u);
+template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v);
 
 } // namespace vtb

@@ -8,7 +8,7 @@ namespace vtb {
 /// file, the key or element, and what is wrong; the CLI prints it and exits non-zero.
 class InputError : public std::runtime_error {
 public:
-  explicit InputError(const std::string &what) : std::runtime_error(what) {}
+  explicit InputError(const std::string& what) : std::runtime_error(what) {}
 };
 
 } // namespace vtb

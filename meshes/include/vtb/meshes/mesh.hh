@@ -43,29 +43,29 @@ using Mesh3 = Mesh<3>;
 /// A mesh whose dimension is known only at run time (read from a file, chosen by a scene).
 using AnyMesh = std::variant<Mesh2, Mesh3>;
 
-inline int dimension(const AnyMesh &m) {
+inline int dimension(const AnyMesh& m) {
   return m.index() == 0 ? 2 : 3;
 }
 
 /// Signed measure of a cell: area (2D) or volume (3D); positive when well oriented.
-template <int dim> double signed_measure(const Mesh<dim> &mesh, const typename Mesh<dim>::Cell &cell);
+template <int dim> double signed_measure(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell);
 
 /// Measure of a facet: length (2D) or area (3D).
-template <int dim> double facet_measure(const Mesh<dim> &mesh, const typename Mesh<dim>::Facet &facet);
+template <int dim> double facet_measure(const Mesh<dim>& mesh, const typename Mesh<dim>::Facet& facet);
 
 /// Unique undirected edges (i < j), sorted lexicographically.
-template <int dim> std::vector<std::array<int, 2>> unique_edges(const Mesh<dim> &mesh);
+template <int dim> std::vector<std::array<int, 2>> unique_edges(const Mesh<dim>& mesh);
 
 /// Facets that belong to exactly one cell (the boundary), oriented as in their cell.
-template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const Mesh<dim> &mesh);
+template <int dim> std::vector<typename Mesh<dim>::Facet> boundary_facets(const Mesh<dim>& mesh);
 
 /// Length of the bounding-box diagonal.
-template <int dim> double bounding_diagonal(const Mesh<dim> &mesh);
+template <int dim> double bounding_diagonal(const Mesh<dim>& mesh);
 
 /// Validates an untrusted mesh and orients its cells in place. Throws vtb::InputError
 /// naming `mesh.source`, the cell or node and the problem for: an index out of range, a
 /// non-finite coordinate, a repeated vertex, a zero-measure cell, a duplicate cell, a node
 /// used by no cell. Inverted cells are re-oriented; the count is returned.
-template <int dim> int check_and_orient(Mesh<dim> &mesh);
+template <int dim> int check_and_orient(Mesh<dim>& mesh);
 
 } // namespace vtb

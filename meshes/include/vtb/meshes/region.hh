@@ -28,14 +28,14 @@ template <int dim> struct Selection {
 };
 
 /// Nodes inside the (grown) box, sorted.
-template <int dim> std::vector<int> nodes_in_box(const Mesh<dim> &mesh, const Box<dim> &box);
+template <int dim> std::vector<int> nodes_in_box(const Mesh<dim>& mesh, const Box<dim>& box);
 
 /// The node nearest to p (lowest index on ties).
-template <int dim> int nearest_node(const Mesh<dim> &mesh, const Eigen::Matrix<double, dim, 1> &p);
+template <int dim> int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<double, dim, 1>& p);
 
 /// Resolves a region against a mesh. A box selects nodes inside it and the boundary facets
 /// whose vertices all lie inside it; a group selects its nodes and facets; a point selects
 /// its nearest node and no facet. Throws InputError (naming `what`) if the group is unknown.
-template <int dim> Selection<dim> select(const Mesh<dim> &mesh, const RegionSpec<dim> &spec, const std::string &what);
+template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what);
 
 } // namespace vtb

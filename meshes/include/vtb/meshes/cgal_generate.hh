@@ -1,0 +1,40 @@
+#pragma once
+/// \file
+/// Unstructured meshes from CGAL: the paper's polygonal plate (2D constrained Delaunay
+/// refinement + smoothing, exact node count) and 3D tetrahedral solids (Mesh_3).
+
+#include "vtb/meshes/mesh.hh"
+
+#include <map>
+
+namespace vtb {
+
+/// A simple polygon (counter-clockwise) with named boundary edges: edge k runs from vertex
+/// k to vertex k + 1 (mod n).
+struct Polygon {
+  std::vector<Eigen::Vector2d> vertices;
+  std::map<std::string, std::vector<int>> edge_groups;
+};
+
+/// The plate of the paper's Fig. 3 as vtb models it: a thin hexagonal plate 0.2 m x 0.05 m
+/// whose right end is chamfered (x from 0.15 to 0.2); group "clamp" is the left edge x = 0,
+/// group "load" the right edge x = 0.2 (where the horizontal step force acts).
+Polygon paper_plate();
+
+/// Meshes a polygon with exactly `nodes` nodes and every angle >= min_angle_deg (<= 20.7,
+/// the bound Delaunay refinement guarantees): refinement with a size bound chosen by a
+/// deterministic scan, the missing nodes inserted at the centroids of the largest
+/// triangles, then a smart Laplacian smoothing of interior nodes (a move is kept only if it
+/// raises the smallest angle around the node). CGAL's own Lloyd optimiser is not used: it
+/// visits vertices in memory-address order, so its output changes in the last digits from
+/// one build to the next, and the canonical meshes must regenerate bit for bit.
+/// Throws InputError if no mesh with that count and quality is found. Deterministic.
+Mesh2 mesh_polygon(const Polygon& polygon, int nodes, double min_angle_deg = 20.0);
+
+/// 3D solids meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %): shape "slab"
+/// (0.2 x 0.05 x 0.02 box, sharp edges protected; groups left/right/bottom/top/front/back)
+/// or "sphere" (radius 0.05 at the origin; group "surface"). Cells have radius-edge ratio
+/// <= 2 and slivers are exuded (target dihedral >= 10 degrees). Deterministic.
+Mesh3 mesh_solid(const std::string& shape, int nodes);
+
+} // namespace vtb

@@ -1,0 +1,233 @@
+// 2D unstructured plates: CGAL constrained Delaunay refinement with an exact node count.
+#include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/input_error.hh"
+#include "vtb/meshes/quality.hh"
+
+#include <CGAL/Constrained_Delaunay_triangulation_2.h>
+#include <CGAL/Delaunay_mesh_face_base_2.h>
+#include <CGAL/Delaunay_mesh_size_criteria_2.h>
+#include <CGAL/Delaunay_mesh_vertex_base_2.h>
+#include <CGAL/Delaunay_mesher_2.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace vtb {
+namespace {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Vb = CGAL::Delaunay_mesh_vertex_base_2<K>;
+using Fb = CGAL::Delaunay_mesh_face_base_2<K>;
+using Tds = CGAL::Triangulation_data_structure_2<Vb, Fb>;
+using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds>;
+using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
+using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
+
+void insert_polygon(CDT& cdt, const Polygon& poly) {
+  const auto n = poly.vertices.size();
+  std::vector<CDT::Vertex_handle> v;
+  for (const auto& p : poly.vertices) v.push_back(cdt.insert(K::Point_2(p.x(), p.y())));
+  for (std::size_t k = 0; k < n; ++k) cdt.insert_constraint(v[k], v[(k + 1) % n]);
+}
+
+/// Marks the faces inside the constrained polygon: those that cannot be reached from the
+/// infinite face without crossing a constraint. (A centroid test would misclassify the flat
+/// faces that round-off leaves between the hull and points inserted on a slanted edge.)
+void mark_domain(CDT& cdt) {
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(true);
+  std::vector<CDT::Face_handle> stack{cdt.infinite_face()};
+  cdt.infinite_face()->set_in_domain(false);
+  while (!stack.empty()) {
+    const CDT::Face_handle f = stack.back();
+    stack.pop_back();
+    for (int i = 0; i < 3; ++i) {
+      const CDT::Face_handle n = f->neighbor(i);
+      if (n->is_in_domain() && !cdt.is_constrained(CDT::Edge(f, i))) {
+        n->set_in_domain(false);
+        stack.push_back(n);
+      }
+    }
+  }
+}
+
+/// Refines with a size bound; returns the vertex count.
+int refine(CDT& cdt, const Polygon& poly, double size, int capacity) {
+  cdt.clear();
+  // One block each for vertices and faces: CGAL's refinement queue breaks ties by handle
+  // address, which must not depend on the heap's history for reproducible output.
+  cdt.tds().vertices().reserve(static_cast<std::size_t>(capacity));
+  cdt.tds().faces().reserve(static_cast<std::size_t>(2 * capacity));
+  insert_polygon(cdt, poly);
+  Mesher mesher(cdt);
+  mesher.set_criteria(Criteria(0.125, size)); // B = sin^2(20.7 deg)
+  mesher.refine_mesh();
+  return static_cast<int>(cdt.number_of_vertices());
+}
+
+/// Adds `count` nodes at the centroids of the largest domain triangles (deterministic order).
+void add_nodes(CDT& cdt, int count) {
+  for (int added = 0; added < count; ++added) {
+    CDT::Face_handle best;
+    double best_area = -1;
+    K::Point_2 best_c;
+    for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f) {
+      if (!f->is_in_domain()) continue;
+      const double a = std::abs(cdt.triangle(f).area());
+      const K::Point_2 c = CGAL::centroid(cdt.triangle(f));
+      if (a > best_area * (1 + 1e-12) ||
+          (a >= best_area * (1 - 1e-12) && (c.x() < best_c.x() || (c.x() == best_c.x() && c.y() < best_c.y())))) {
+        best_area = a;
+        best = f;
+        best_c = c;
+      }
+    }
+    cdt.insert(best_c);
+    mark_domain(cdt);
+  }
+}
+
+Mesh2 to_mesh(const CDT& cdt, const Polygon& poly) {
+  Mesh2 m;
+  m.source = "CGAL plate";
+  std::map<CDT::Vertex_handle, int> id;
+  std::vector<Eigen::Vector2d> pts;
+  // Number vertices in a geometric order (by x, then y) so that output is reproducible.
+  std::vector<CDT::Vertex_handle> verts;
+  for (auto v = cdt.finite_vertices_begin(); v != cdt.finite_vertices_end(); ++v) verts.push_back(v);
+  std::sort(verts.begin(), verts.end(), [](const auto& a, const auto& b) {
+    return a->point().x() < b->point().x() || (a->point().x() == b->point().x() && a->point().y() < b->point().y());
+  });
+  m.points.resize(2, static_cast<Eigen::Index>(verts.size()));
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    id[verts[i]] = static_cast<int>(i);
+    m.points.col(static_cast<Eigen::Index>(i)) << verts[i]->point().x(), verts[i]->point().y();
+  }
+  for (auto f = cdt.finite_faces_begin(); f != cdt.finite_faces_end(); ++f)
+    if (f->is_in_domain()) m.cells.push_back({id[f->vertex(0)], id[f->vertex(1)], id[f->vertex(2)]});
+  std::sort(m.cells.begin(), m.cells.end());
+  check_and_orient(m);
+  // Boundary groups: facets on the named polygon edges.
+  const double tol = 1e-9 * bounding_diagonal(m);
+  auto on_edge = [&](int node, int k) {
+    const Eigen::Vector2d a = poly.vertices[static_cast<std::size_t>(k)];
+    const Eigen::Vector2d b = poly.vertices[(static_cast<std::size_t>(k) + 1) % poly.vertices.size()];
+    const Eigen::Vector2d p = m.points.col(node);
+    const Eigen::Vector2d d = b - a;
+    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+    return (a + t * d - p).norm() <= tol;
+  };
+  const auto boundary = boundary_facets(m);
+  for (const auto& [name, edges] : poly.edge_groups) {
+    MeshGroup<2> g;
+    for (const auto& f : boundary)
+      for (int k : edges)
+        if (on_edge(f[0], k) && on_edge(f[1], k)) {
+          g.facets.push_back(f);
+          g.nodes.insert(g.nodes.end(), f.begin(), f.end());
+          break;
+        }
+    std::sort(g.nodes.begin(), g.nodes.end());
+    g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+    m.groups[name] = std::move(g);
+  }
+  return m;
+}
+
+/// Smallest angle (degrees) of the triangles around node i, with i placed at p.
+double min_angle_around(const Mesh2& m, const std::vector<int>& cells, int i, const Eigen::Vector2d& p) {
+  double worst = 180;
+  for (int c : cells) {
+    const auto& t = m.cells[static_cast<std::size_t>(c)];
+    Eigen::Vector2d x[3];
+    for (int k = 0; k < 3; ++k)
+      x[k] = t[static_cast<std::size_t>(k)] == i ? p : Eigen::Vector2d(m.points.col(t[static_cast<std::size_t>(k)]));
+    const double area = 0.5 * ((x[1] - x[0]).x() * (x[2] - x[0]).y() - (x[1] - x[0]).y() * (x[2] - x[0]).x());
+    if (area <= 0) return -1; // would invert
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector2d u = x[(k + 1) % 3] - x[k], v = x[(k + 2) % 3] - x[k];
+      worst =
+          std::min(worst, std::acos(std::clamp(u.dot(v) / (u.norm() * v.norm()), -1.0, 1.0)) * 180 / std::numbers::pi);
+    }
+  }
+  return worst;
+}
+
+/// Smart Laplacian smoothing on fixed connectivity: each interior node moves to the mean of
+/// its neighbours when that raises the smallest angle around it. Deterministic (node order),
+/// unlike CGAL's Lloyd optimiser, which visits vertices in memory-address order and so
+/// changes the last digits of the output from one build to the next.
+void smooth(Mesh2& m, int sweeps) {
+  const int n = m.num_nodes();
+  std::vector<std::vector<int>> cells_of(static_cast<std::size_t>(n)), nbrs(static_cast<std::size_t>(n));
+  for (std::size_t c = 0; c < m.cells.size(); ++c)
+    for (int k = 0; k < 3; ++k) {
+      const int i = m.cells[c][static_cast<std::size_t>(k)];
+      cells_of[static_cast<std::size_t>(i)].push_back(static_cast<int>(c));
+      for (int l = 0; l < 3; ++l)
+        if (l != k) nbrs[static_cast<std::size_t>(i)].push_back(m.cells[c][static_cast<std::size_t>(l)]);
+    }
+  std::vector<char> fixed(static_cast<std::size_t>(n), 0);
+  for (const auto& f : boundary_facets(m))
+    for (int v : f) fixed[static_cast<std::size_t>(v)] = 1;
+  for (int sweep = 0; sweep < sweeps; ++sweep)
+    for (int i = 0; i < n; ++i) {
+      if (fixed[static_cast<std::size_t>(i)]) continue;
+      auto& nb = nbrs[static_cast<std::size_t>(i)];
+      std::sort(nb.begin(), nb.end());
+      nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+      Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+      for (int j : nb) mean += m.points.col(j);
+      mean /= static_cast<double>(nb.size());
+      const auto& cs = cells_of[static_cast<std::size_t>(i)];
+      if (min_angle_around(m, cs, i, mean) > min_angle_around(m, cs, i, m.points.col(i))) m.points.col(i) = mean;
+    }
+}
+
+} // namespace
+
+Polygon paper_plate() {
+  Polygon p;
+  p.vertices = {{0.0, 0.0}, {0.15, 0.0}, {0.2, 0.0125}, {0.2, 0.0375}, {0.15, 0.05}, {0.0, 0.05}};
+  p.edge_groups = {{"clamp", {5}}, {"load", {2}}, {"free", {0, 1, 3, 4}}};
+  return p;
+}
+
+Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
+  if (poly.vertices.size() < 3) throw InputError("polygon: needs at least 3 vertices");
+  if (nodes < static_cast<int>(poly.vertices.size()) || nodes > 2'000'000)
+    throw InputError("polygon: node count " + std::to_string(nodes) + " out of range");
+  double area = 0;
+  for (std::size_t i = 0, j = poly.vertices.size() - 1; i < poly.vertices.size(); j = i++)
+    area += poly.vertices[j].x() * poly.vertices[i].y() - poly.vertices[i].x() * poly.vertices[j].y();
+  area = std::abs(area) / 2;
+  // Scan size bounds around the estimate h0 (equilateral cells of edge h have sqrt(3)/2 h^2
+  // per node) and keep the candidates closest below the target.
+  const double h0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * nodes));
+  CDT cdt;
+  std::vector<std::pair<int, double>> candidates; // (missing nodes, size)
+  for (int s = 0; s <= 400; ++s) {
+    const double size = h0 * std::pow(4.0, s / 400.0) * 0.7;
+    const int n = refine(cdt, poly, size, 4 * nodes);
+    if (n <= nodes) candidates.push_back({nodes - n, size});
+  }
+  std::sort(candidates.begin(), candidates.end());
+  for (const auto& [missing, size] : candidates) {
+    if (missing > std::max(3, nodes / 20)) break; // too far: quality would suffer
+    refine(cdt, poly, size, 4 * nodes);
+    mark_domain(cdt);
+    add_nodes(cdt, missing);
+    mark_domain(cdt);
+    Mesh2 m = to_mesh(cdt, poly);
+    smooth(m, 10);
+    if (m.num_nodes() == nodes && mesh_quality(m).min_angle >= min_angle_deg) {
+      m.source = "CGAL plate (" + std::to_string(nodes) + " nodes)";
+      return m;
+    }
+  }
+  throw InputError("polygon: no mesh with exactly " + std::to_string(nodes) +
+                   " nodes and angles >= " + std::to_string(min_angle_deg) + " degrees was found");
+}
+
+} // namespace vtb
