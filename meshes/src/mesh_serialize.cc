@@ -10,7 +10,9 @@ namespace {
 class Writer {
 public:
   template <typename T> void put(const T& v) { m_out.append(reinterpret_cast<const char*>(&v), sizeof(T)); }
-  void put_bytes(const void* p, std::size_t n) { m_out.append(static_cast<const char*>(p), n); }
+  void put_bytes(const void* p, std::size_t n) {
+    if (n > 0) m_out.append(static_cast<const char*>(p), n);
+  }
   std::string take() { return std::move(m_out); }
 
 private:
@@ -27,6 +29,7 @@ public:
   }
   void get_bytes(void* p, std::size_t n) {
     if (n > m_in.size() - m_pos) throw InputError(m_src + ": truncated mesh data from the reader");
+    if (n == 0) return; // p may be the null data() of an empty vector: memcpy must not see it
     std::memcpy(p, m_in.data() + m_pos, n);
     m_pos += n;
   }
