@@ -93,14 +93,22 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   for (const auto& f : scene.fixes) {
     Support<dim> s;
     s.name = f.region.label;
-    s.nodes = resolve(mesh, f.region, file).nodes;
+    Selection<dim> sel = resolve(mesh, f.region, file);
+    s.nodes = std::move(sel.nodes);
+    s.facets = std::move(sel.facets);
+    if (f.region.box)
+      s.box = Box<dim>{as_vec<dim>(f.region.box->first, "", file), as_vec<dim>(f.region.box->second, "", file)};
     model.supports.push_back(s);
     claim(static_cast<int>(model.supports.size()) - 1);
   }
   for (const auto& d : scene.drives) {
     Support<dim> s;
     s.name = d.region.label;
-    s.nodes = resolve(mesh, d.region, file).nodes;
+    Selection<dim> sel = resolve(mesh, d.region, file);
+    s.nodes = std::move(sel.nodes);
+    s.facets = std::move(sel.facets);
+    if (d.region.box)
+      s.box = Box<dim>{as_vec<dim>(d.region.box->first, "", file), as_vec<dim>(d.region.box->second, "", file)};
     s.driven = true;
     s.displacement = as_vec<dim>(d.displacement, d.region.label + ".displacement", file);
     s.start = d.start;
@@ -116,6 +124,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
     load.start = l.start;
     load.ramp = l.ramp;
     load.nodes = sel.nodes;
+    load.total = total;
     load.force = Nodal<dim>::Zero(dim, static_cast<Eigen::Index>(sel.nodes.size()));
     auto slot = [&](int node) {
       return static_cast<Eigen::Index>(std::lower_bound(sel.nodes.begin(), sel.nodes.end(), node) - sel.nodes.begin());
@@ -123,6 +132,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
     double measure = 0;
     for (const auto& f : sel.facets) measure += facet_measure(mesh, f);
     if (!sel.facets.empty() && measure > 0) {
+      load.facets = sel.facets;
       // Uniform traction: each facet carries total * |facet| / |region|, split equally
       // among its vertices (exact lumping of a constant traction on linear facets).
       for (const auto& f : sel.facets) {

@@ -14,8 +14,10 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   j["solver"] = r.solver;
   j["dim"] = r.dim;
   j["nodes"] = r.nodes;
-  j["free_nodes"] = r.free_nodes;
-  j["springs"] = r.springs;
+  if (r.solver != "fem") {
+    j["free_nodes"] = r.free_nodes;
+    j["springs"] = r.springs;
+  }
   j["dt"] = r.dt;
   j["duration"] = r.duration;
   j["steps"] = r.steps_taken;
@@ -28,9 +30,12 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["failure_time"] = r.failure_time;
   }
   j["max_strain"] = r.max_strain;
-  j["courant_dt_estimate"] = r.courant_dt;
-  j["calibration"] = r.calibration;
-  j["effective_poisson_ratio"] = r.effective_poisson_ratio;
+  if (r.solver != "fem") {
+    j["courant_dt_estimate"] = r.courant_dt;
+    j["calibration"] = r.calibration;
+    j["effective_poisson_ratio"] = r.effective_poisson_ratio;
+  }
+  for (const auto& [key, value] : r.extra) j[key] = value;
   if (r.solver == "filtered") {
     j["filter"] = r.filter;
     j["momentum_correction"] = r.momentum_correction;

@@ -170,7 +170,7 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
   if ((t = top.table("solver"))) {
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
-                         "degree", "refinements"});
+                         "degree", "refinements", "scheme", "static"});
     s.solver.kind = r.string("kind", "filtered", {"explicit", "filtered", "implicit-euler", "cvode", "fem"});
     s.solver.dt = r.number("dt", 1e-3, positive);
     s.solver.filter = r.string("filter", "full", {"neighbors", "full"});
@@ -181,6 +181,8 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     s.solver.atol = r.number("atol", 1e-12, positive);
     s.solver.degree = r.integer("degree", 1, 1, 2);
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
+    s.solver.scheme = r.string("scheme", "newmark", {"newmark", "backward-euler"});
+    s.solver.static_solve = r.boolean("static", false);
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }
 

@@ -1,6 +1,7 @@
 #include "commands.hh"
 
 #include "vtb/core/simulation.hh"
+#include "vtb/fem/kelvin_voigt.hh"
 
 #include <iostream>
 #include <memory>
@@ -16,7 +17,7 @@ Action add_run(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
-  cmd->add_option("--solver", o->solver, "Override [solver].kind: explicit | filtered | implicit-euler");
+  cmd->add_option("--solver", o->solver, "Override [solver].kind: explicit | filtered | implicit-euler | fem");
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
@@ -28,7 +29,8 @@ Action add_run(CLI::App& app) {
     if (o->duration != 0) ov.duration = o->duration;
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
-    const RunReport r = run_scene(scene, ov, out);
+    const std::string kind = ov.solver ? *ov.solver : scene.solver.kind;
+    const RunReport r = kind == "fem" ? fem::run_scene(scene, ov, out) : run_scene(scene, ov, out);
     std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
               << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "

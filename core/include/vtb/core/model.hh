@@ -24,6 +24,8 @@ inline double ramp_rate(double t, double start, double ramp) {
 template <int dim> struct Support {
   std::string name;
   std::vector<int> nodes;
+  std::vector<std::array<int, dim>> facets; ///< boundary facets the region covers (for higher-order FEM)
+  std::optional<Box<dim>> box;              ///< the region's box, if it was given by one
   bool driven = false;
   Vec<dim> displacement = Vec<dim>::Zero();
   double start = 0, ramp = 0;
@@ -34,6 +36,9 @@ template <int dim> struct Load {
   std::string name;
   std::vector<int> nodes;
   Nodal<dim> force; ///< column per entry of `nodes`
+  /// A uniform traction: the facets and the total force (empty facets: a nodal load).
+  std::vector<std::array<int, dim>> facets;
+  Vec<dim> total = Vec<dim>::Zero();
   double start = 0, ramp = 0;
 };
 

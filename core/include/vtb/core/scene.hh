@@ -76,6 +76,8 @@ struct SolverDesc {
   double atol = 1e-12;
   int degree = 1;
   int refinements = 0;
+  std::string scheme = "newmark"; ///< fem: newmark (average acceleration) | backward-euler
+  bool static_solve = false;      ///< fem: `static = true` solves K u = f at the final load
 };
 
 struct HandDesc {

@@ -39,6 +39,8 @@ struct RunReport {
   std::string filter;
   bool momentum_correction = false;
   double strain_limit = 0;
+  /// Solver-specific figures for summary.json (e.g. the FEM's cells, dofs, phase times).
+  std::vector<std::pair<std::string, double>> extra;
 };
 
 /// A run stops as unstable when the state is non-finite or a spring's strain exceeds this.

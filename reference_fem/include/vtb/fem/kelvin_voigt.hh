@@ -1,0 +1,33 @@
+#pragma once
+/// \file
+/// The continuum reference: a linear Kelvin-Voigt solid, sigma = C : (eps + tau d eps / dt),
+/// plus mass damping, discretised with deal.II simplex finite elements on the very mesh the
+/// spring model uses. The public interface carries no deal.II type.
+
+#include "vtb/core/simulation.hh"
+
+namespace vtb::fem {
+
+struct FemOptions {
+  int degree = 1;                 ///< FE_SimplexP degree: 1 or 2
+  int refinements = 0;            ///< uniform refinements of the scene's mesh
+  std::string scheme = "newmark"; ///< newmark (average acceleration, order 2) | backward-euler (order 1)
+  bool static_solve = false;      ///< solve K u = f(t_end) once instead of stepping
+  double dt = 1e-3;
+};
+
+FemOptions options_from(const SolverDesc& solver);
+
+/// Simulates the model's scene with the FEM and records, at every sample time, the probe
+/// displacements, the support reactions (from the residual: the force each support exerts
+/// on the body) and, if asked, the displacement at every node of the scene's mesh (for
+/// node-by-node comparison with the spring model; the original nodes stay nodes under
+/// refinement and for P2). RunReport.extra holds cells, dofs and the phase times.
+template <int dim>
+RunReport simulate(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+                   Trajectory<dim>& out, bool record_field = false);
+
+/// `vtb run SCENE --solver fem`: same files as the spring solvers.
+RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
+
+} // namespace vtb::fem

@@ -1,0 +1,31 @@
+#include "vtb/core/output.hh"
+#include "vtb/fem/kelvin_voigt.hh"
+
+namespace vtb::fem {
+
+RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
+  Scene scene = scene_in;
+  if (ov.dt) {
+    if (!(*ov.dt > 0)) throw InputError("--dt must be a positive number");
+    scene.solver.dt = *ov.dt;
+  }
+  if (ov.duration) {
+    if (!(*ov.duration > 0)) throw InputError("--duration must be a positive number");
+    scene.duration = *ov.duration;
+    scene.output_interval = std::min(scene.output_interval, scene.duration);
+  }
+  const FemOptions o = options_from(scene.solver);
+  AnyMesh mesh = load_mesh(scene);
+  return std::visit(
+      [&](auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        const Model<dim> model = build_model<dim>(scene, std::move(m));
+        Trajectory<dim> traj;
+        const RunReport rep = simulate<dim>(model, scene.material, o, traj);
+        write_run_outputs(out_dir, model, traj, rep, scene.name);
+        return rep;
+      },
+      mesh);
+}
+
+} // namespace vtb::fem
