@@ -415,8 +415,17 @@ template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
     return;
   }
   if (m_opt.scheme == "newmark") {
-    // a+ = 4 (u+ - u - dt v) / dt^2 - a ;  v+ = 2 (u+ - u) / dt - v.
+    // a+ = 4 (u+ - u - dt v) / dt^2 - a ;  v+ = 2 (u+ - u) / dt - v. On prescribed dofs the
+    // motion is known: its rate and (piecewise linear ramps) zero acceleration. The Newmark
+    // update would instead ring there forever after a kink of the prescribed motion (it
+    // does not damp), and the ringing would enter the reactions through M a.
     for (types::global_dof_index d = 0; d < n; ++d) {
+      if (m_support_of[d] >= 0) {
+        const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of[d])];
+        m_v[d] = s.driven ? ramp_rate(t_new, s.start, s.ramp) * s.displacement[m_component[d]] : 0.0;
+        m_a[d] = 0;
+        continue;
+      }
       const double du = u_new[d] - m_u[d];
       const double a_new = 4 * (du - dt * m_v[d]) / (dt * dt) - m_a[d];
       m_v[d] = 2 * du / dt - m_v[d];

@@ -246,3 +246,52 @@ TEST(KelvinVoigtFem, CantileverMatchesTimoshenkoBeamTheoryAndConverges) {
 
 } // namespace
 } // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(KelvinVoigtFem, ClampedSlabIn3DBalancesItsLoadAndIsNoSofterThanTheUniaxialBar) {
+  // The committed CGAL slab (0.2 x 0.05 x 0.02), clamped at x = 0, pulled by F = 1 N at
+  // x = 0.2, static. Reactions come from the residual, so they balance the load to solver
+  // precision. By minimum potential energy, the clamp (extra constraint) and the conforming
+  // discretisation can only stiffen: the mean end displacement is at most F L / (E A).
+  const auto file = std::filesystem::path(VTB_SOURCE_DIR) / "meshes" / "data" / "slab_500.msh";
+  const Scene s = parse_scene(R"(
+[scene]
+duration = 1.0
+output_interval = 1.0
+[mesh]
+file = ")" + file.string() + R"("
+[material]
+young_modulus = 5.0e4
+poisson_ratio = 0.25
+density = 1000.0
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [1.0, 0.0, 0.0]
+[solver]
+static = true
+)",
+                              "slab.toml", ".");
+  const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
+  for (int degree : {1, 2}) {
+    fem::FemOptions o;
+    o.degree = degree;
+    o.static_solve = true;
+    Trajectory<3> tr;
+    fem::simulate<3>(model, s.material, o, tr, true);
+    EXPECT_LT((tr.reaction.back()[0] + Eigen::Vector3d(1, 0, 0)).norm(), 1e-9);
+    double tip = 0;
+    const auto& right = model.mesh.groups.at("right").nodes;
+    for (int i : right) tip += tr.field.back()(0, i) / static_cast<double>(right.size());
+    const double uniaxial = 1.0 * 0.2 / (5.0e4 * 0.05 * 0.02);
+    std::cout << "P" << degree << ": mean end displacement / (F L / E A) = " << tip / uniaxial << "\n";
+    EXPECT_LE(tip, uniaxial);
+    EXPECT_GT(tip, 0.0);
+  }
+}
+
+} // namespace
+} // namespace vtb
