@@ -181,7 +181,7 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     s.solver.atol = r.number("atol", 1e-12, positive);
     s.solver.degree = r.integer("degree", 1, 1, 2);
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
-    s.solver.scheme = r.string("scheme", "newmark", {"newmark", "backward-euler"});
+    s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});
     s.solver.static_solve = r.boolean("static", false);
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }

@@ -1,6 +1,7 @@
 #include "vtb/core/simulation.hh"
 
 #include "vtb/core/calibration.hh"
+#include "vtb/core/cvode_solver.hh"
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
 #include "vtb/core/output.hh"
@@ -49,6 +50,7 @@ StepStats stats(std::vector<double> t) {
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
   using clock = std::chrono::steady_clock;
+  if (o.kind == "cvode") return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
   RunReport rep;
   rep.solver = o.kind;
   rep.dim = dim;
@@ -147,6 +149,8 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
   o.filter = scene.solver.filter;
   o.momentum_correction = scene.solver.momentum_correction;
   o.strain_limit = scene.solver.strain_limit;
+  o.rtol = scene.solver.rtol;
+  o.atol = scene.solver.atol;
   AnyMesh mesh = load_mesh(scene);
   return std::visit(
       [&](auto& m) {

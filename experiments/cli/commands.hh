@@ -13,5 +13,8 @@ using Action = std::function<int()>;
 
 Action add_run(CLI::App& app);
 Action add_mesh(CLI::App& app);
+Action add_compare(CLI::App& app);
+Action add_sweep(CLI::App& app);
+Action add_reproduce(CLI::App& app);
 
 } // namespace vtb::cli

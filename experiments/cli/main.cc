@@ -10,6 +10,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   vtb::cli::Action run = vtb::cli::add_run(app);
   vtb::cli::Action mesh = vtb::cli::add_mesh(app);
+  vtb::cli::Action compare = vtb::cli::add_compare(app);
+  vtb::cli::Action sweep = vtb::cli::add_sweep(app);
+  vtb::cli::Action reproduce = vtb::cli::add_reproduce(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -18,6 +21,9 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("run")) return run();
     if (app.got_subcommand("mesh")) return mesh();
+    if (app.got_subcommand("compare")) return compare();
+    if (app.got_subcommand("sweep")) return sweep();
+    if (app.got_subcommand("reproduce")) return reproduce();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

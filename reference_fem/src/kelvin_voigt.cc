@@ -5,10 +5,18 @@
 // The semi-discrete problem is  M a + C v + K u = f(t),  with K the linear elasticity
 // stiffness (plane stress with thickness t in 2D), M the consistent mass, and the Voigt
 // damping C = tau K + gamma M (sigma = C : (eps + tau eps_dot), mass damping gamma).
-// Both time schemes solve for the new displacement with one constant matrix:
+// Every time scheme solves for the new displacement with one constant matrix:
 //   backward Euler:  (M / dt^2 + C / dt + K) u+ = f+ + M (u / dt^2 + v / dt) + C u / dt
-//   Newmark (beta = 1/4, gamma = 1/2, average acceleration):
-//                    (4 M / dt^2 + 2 C / dt + K) u+ = f+ + M (4 (u + dt v) / dt^2 + a) + C (2 u / dt + v)
+//   Newmark family with generalized-alpha weights (Chung and Hulbert 1993):
+//     (1 - am) M a+ + am M a + (1 - af) (C v+ + K u+) + af (C v + K u) = f(t + (1 - af) dt),
+//     u+ = u + dt v + dt^2 ((1/2 - beta) a + beta a+),  v+ = v + dt ((1 - gamma) a + gamma a+),
+//   so that a+ = c1 u+ + d_a, v+ = c2 u+ + d_v with c1 = 1 / (beta dt^2), c2 = gamma / (beta dt),
+//   and ((1 - am) c1 M + (1 - af) c2 C + (1 - af) K) u+ = the rest.
+//   `newmark` is average acceleration (am = af = 0, beta = 1/4, gamma = 1/2: second order,
+//   no numerical damping); `generalized-alpha` uses rho_inf = 0 (asymptotic annihilation: second order, removes the
+//   highest modes, which a step load or a kink of a drive excites and average acceleration
+//   keeps ringing: on the 123-node plate its clamp reaction lagged the step load by 0.2 s;
+//   with rho_inf = 0.8 it still lagged 0.1 s, with 0 it is right after one step).
 // Prescribed displacements (fixes, drives) are imposed by lifting: u+ = u_bar + delta, with
 // u_bar holding the prescribed values, and A0 delta = b - A u_bar, where A0 is A with the
 // constrained rows and columns replaced by the identity (factorised once, UMFPACK).
@@ -89,7 +97,10 @@ private:
   std::vector<std::array<types::global_dof_index, dim>> m_node; ///< original node -> its dofs
   std::vector<std::vector<types::global_dof_index>> m_point_load_dofs;
 
-  Vector<double> m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta;
+  Vector<double> m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
+  /// Newmark-family weights (unused by backward Euler and the static solve).
+  double m_am = 0, m_af = 0, m_beta = 0.25, m_gamma = 0.5;
+  bool newmark_family() const { return !m_opt.static_solve && m_opt.scheme != "backward-euler"; }
 
   std::ostringstream m_timer_stream;
   TimerOutput m_timer;
@@ -141,7 +152,7 @@ template <int dim> void KelvinVoigtProblem<dim>::setup_system() {
   DoFTools::make_sparsity_pattern(m_dofs, dsp);
   m_pattern.copy_from(dsp);
   for (auto* A : {&m_K, &m_M, &m_C, &m_A, &m_A0}) A->reinit(m_pattern);
-  for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta}) v->reinit(n);
+  for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta, &m_da, &m_dv}) v->reinit(n);
 
   // Support points and components of every dof; the dofs of the original nodes.
   m_support.assign(n, Point<dim>());
@@ -347,9 +358,13 @@ template <int dim> void KelvinVoigtProblem<dim>::initial_state() {
       m_u[d] = prescribed(d, 0.0);
       m_v[d] = s.driven ? ramp_rate(0.0, s.start, s.ramp) * s.displacement[m_component[d]] : 0.0;
     }
-  // Newmark needs a(0) = M^-1 (f(0) - C v - K u) on the free dofs.
-  if (m_opt.scheme == "newmark" && !m_opt.static_solve) {
-    load_vector(0.0, m_f);
+  // Newmark needs a(0) = M^-1 (f(0-) - C v - K u) on the free dofs.
+  if (newmark_family()) {
+    // The loads as they are just before t = 0: a step at t = 0 acts from the first step on. Its
+    // instantaneous acceleration M^-1 F is an impulse that a one-step scheme cannot represent;
+    // taken as a(0) it throws the first steps of Newmark (beta = 1/4) and generalized-alpha
+    // (beta = 1) far off the solution.
+    load_vector(-1e-12 * m_opt.dt, m_f);
     m_rhs = m_f;
     m_C.vmult(m_tmp, m_v);
     m_rhs -= m_tmp;
@@ -377,21 +392,30 @@ template <int dim> void KelvinVoigtProblem<dim>::initial_state() {
 template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
   const double dt = m_opt.dt;
   const auto n = m_dofs.n_dofs();
-  load_vector(t_new, m_f);
-  m_rhs = m_f;
-  if (m_opt.static_solve) {
-    // K u = f: m_A is K.
-  } else if (m_opt.scheme == "newmark") {
-    m_tmp = m_u;
-    m_tmp.add(dt, m_v);
-    m_tmp *= 4 / (dt * dt);
-    m_tmp += m_a;
+  const double c1 = 1 / (m_beta * dt * dt), c2 = m_gamma / (m_beta * dt);
+  if (newmark_family()) {
+    // d_a = -(u + dt v + dt^2 (1/2 - beta) a) c1,  d_v = v + dt (1 - gamma) a + gamma dt d_a.
+    m_da = m_u;
+    m_da.add(dt, m_v, dt * dt * (0.5 - m_beta), m_a);
+    m_da *= -c1;
+    m_dv = m_v;
+    m_dv.add(dt * (1 - m_gamma), m_a, m_gamma * dt, m_da);
+    load_vector(t_new - m_af * dt, m_rhs);
+    m_tmp = m_a; // - am M a - (1 - am) M d_a
+    m_tmp *= -m_am;
+    m_tmp.add(-(1 - m_am), m_da);
     m_M.vmult_add(m_rhs, m_tmp);
-    m_tmp = m_u;
-    m_tmp *= 2 / dt;
-    m_tmp += m_v;
+    m_tmp = m_v; // - af C v - (1 - af) C d_v
+    m_tmp *= -m_af;
+    m_tmp.add(-(1 - m_af), m_dv);
     m_C.vmult_add(m_rhs, m_tmp);
+    m_tmp = m_u; // - af K u
+    m_tmp *= -m_af;
+    m_K.vmult_add(m_rhs, m_tmp);
+  } else if (m_opt.static_solve) {
+    load_vector(t_new, m_rhs); // K u = f
   } else {
+    load_vector(t_new, m_rhs);
     m_tmp = m_u;
     m_tmp *= 1 / (dt * dt);
     m_tmp.add(1 / dt, m_v);
@@ -400,6 +424,7 @@ template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
     m_tmp *= 1 / dt;
     m_C.vmult_add(m_rhs, m_tmp);
   }
+  // Lift the prescribed values: u+ = u_bar + delta, A0 delta = rhs - A u_bar, delta = 0 on them.
   m_ubar = m_u;
   for (types::global_dof_index d = 0; d < n; ++d)
     if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
@@ -414,11 +439,9 @@ template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
     m_u = u_new;
     return;
   }
-  if (m_opt.scheme == "newmark") {
-    // a+ = 4 (u+ - u - dt v) / dt^2 - a ;  v+ = 2 (u+ - u) / dt - v. On prescribed dofs the
-    // motion is known: its rate and (piecewise linear ramps) zero acceleration. The Newmark
-    // update would instead ring there forever after a kink of the prescribed motion (it
-    // does not damp), and the ringing would enter the reactions through M a.
+  if (newmark_family()) {
+    // a+ = c1 u+ + d_a, v+ = c2 u+ + d_v. On prescribed dofs the motion is known: its rate and
+    // (piecewise linear ramps) zero acceleration; the update would ring there after a kink.
     for (types::global_dof_index d = 0; d < n; ++d) {
       if (m_support_of[d] >= 0) {
         const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of[d])];
@@ -426,10 +449,8 @@ template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
         m_a[d] = 0;
         continue;
       }
-      const double du = u_new[d] - m_u[d];
-      const double a_new = 4 * (du - dt * m_v[d]) / (dt * dt) - m_a[d];
-      m_v[d] = 2 * du / dt - m_v[d];
-      m_a[d] = a_new;
+      m_a[d] = c1 * u_new[d] + m_da[d];
+      m_v[d] = c2 * u_new[d] + m_dv[d];
     }
   } else {
     for (types::global_dof_index d = 0; d < n; ++d) {
@@ -509,12 +530,21 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
   {
     TimerOutput::Scope s(m_timer, "factorisation");
     const double dt = m_opt.dt;
+    if (m_opt.scheme == "generalized-alpha") {
+      const double rho = 0.0;
+      m_am = (2 * rho - 1) / (rho + 1);
+      m_af = rho / (rho + 1);
+      m_gamma = 0.5 - m_am + m_af;
+      m_beta = 0.25 * (1 - m_am + m_af) * (1 - m_am + m_af);
+    }
     m_A.copy_from(m_K);
-    if (!m_opt.static_solve) {
-      const double cm = m_opt.scheme == "newmark" ? 4 / (dt * dt) : 1 / (dt * dt);
-      const double cc = m_opt.scheme == "newmark" ? 2 / dt : 1 / dt;
-      m_A.add(cm, m_M);
-      m_A.add(cc, m_C);
+    if (newmark_family()) {
+      m_A *= 1 - m_af;
+      m_A.add((1 - m_am) / (m_beta * dt * dt), m_M);
+      m_A.add((1 - m_af) * m_gamma / (m_beta * dt), m_C);
+    } else if (!m_opt.static_solve) {
+      m_A.add(1 / (dt * dt), m_M);
+      m_A.add(1 / dt, m_C);
     }
     m_A0.copy_from(m_A);
     const auto n = m_dofs.n_dofs();

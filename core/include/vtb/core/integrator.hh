@@ -43,6 +43,7 @@ struct IntegratorOptions {
   std::string filter = "full";
   bool momentum_correction = true;
   double strain_limit = 0.0;
+  double rtol = 1e-8, atol = 1e-12; ///< cvode
 };
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.

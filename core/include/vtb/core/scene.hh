@@ -76,8 +76,8 @@ struct SolverDesc {
   double atol = 1e-12;
   int degree = 1;
   int refinements = 0;
-  std::string scheme = "newmark"; ///< fem: newmark (average acceleration) | backward-euler
-  bool static_solve = false;      ///< fem: `static = true` solves K u = f at the final load
+  std::string scheme = "generalized-alpha"; ///< fem: generalized-alpha (rho_inf 0) | newmark | backward-euler
+  bool static_solve = false;                ///< fem: `static = true` solves K u = f at the final load
 };
 
 struct HandDesc {

@@ -9,10 +9,12 @@
 namespace vtb::fem {
 
 struct FemOptions {
-  int degree = 1;                 ///< FE_SimplexP degree: 1 or 2
-  int refinements = 0;            ///< uniform refinements of the scene's mesh
-  std::string scheme = "newmark"; ///< newmark (average acceleration, order 2) | backward-euler (order 1)
-  bool static_solve = false;      ///< solve K u = f(t_end) once instead of stepping
+  int degree = 1;      ///< FE_SimplexP degree: 1 or 2
+  int refinements = 0; ///< uniform refinements of the scene's mesh
+  /// generalized-alpha (rho_inf = 0, order 2, annihilates the highest modes) | newmark (average
+  /// acceleration, order 2, no damping) | backward-euler (order 1)
+  std::string scheme = "generalized-alpha";
+  bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
   double dt = 1e-3;
 };
 

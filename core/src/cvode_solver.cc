@@ -1,0 +1,308 @@
+#include "vtb/core/cvode_solver.hh"
+
+#include <cvode/cvode.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace vtb {
+namespace {
+
+/// RAII owner of every SUNDIALS object of one integration (context first, freed last).
+class CvodeHandle {
+public:
+  explicit CvodeHandle(sunindextype n, sunindextype nnz) {
+    if (SUNContext_Create(nullptr, &m_ctx) != 0) throw std::runtime_error("cvode: SUNContext_Create failed");
+    m_y = N_VNew_Serial(n, m_ctx);
+    m_mem = CVodeCreate(CV_BDF, m_ctx);
+    m_A = SUNSparseMatrix(n, n, nnz, CSC_MAT, m_ctx);
+    m_ls = SUNLinSol_KLU(m_y, m_A, m_ctx);
+    if (!m_y || !m_mem || !m_A || !m_ls) {
+      release();
+      throw std::runtime_error("cvode: cannot allocate the integrator");
+    }
+  }
+  ~CvodeHandle() { release(); }
+  CvodeHandle(const CvodeHandle&) = delete;
+  CvodeHandle& operator=(const CvodeHandle&) = delete;
+
+  void* mem() const { return m_mem; }
+  N_Vector y() const { return m_y; }
+  SUNMatrix matrix() const { return m_A; }
+  SUNLinearSolver solver() const { return m_ls; }
+
+private:
+  void release() {
+    if (m_mem) CVodeFree(&m_mem);
+    if (m_ls) SUNLinSolFree(m_ls);
+    if (m_A) SUNMatDestroy(m_A);
+    if (m_y) N_VDestroy(m_y);
+    if (m_ctx) SUNContext_Free(&m_ctx);
+    m_mem = nullptr;
+    m_ls = nullptr;
+    m_A = nullptr;
+    m_y = nullptr;
+  }
+  SUNContext m_ctx = nullptr;
+  N_Vector m_y = nullptr;
+  void* m_mem = nullptr;
+  SUNMatrix m_A = nullptr;
+  SUNLinearSolver m_ls = nullptr;
+};
+
+/// The ODE of the free nodes: state y = [u_free (dim nf); v_free (dim nf)].
+template <int dim> class SpringOde {
+public:
+  explicit SpringOde(const Model<dim>& model)
+      : m_model(model), m_nf(static_cast<int>(model.free_nodes.size())), m_u(dim, model.num_nodes()),
+        m_v(dim, model.num_nodes()), m_f(dim, model.num_nodes()), m_ext(dim, model.num_nodes()) {
+    // Jacobian pattern: neighbours (and self) among free nodes, per free node.
+    const auto& net = model.net;
+    m_nb.resize(static_cast<std::size_t>(m_nf));
+    for (int a = 0; a < m_nf; ++a) {
+      const int i = model.free_nodes[static_cast<std::size_t>(a)];
+      m_nb[static_cast<std::size_t>(a)].push_back(a);
+      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p) {
+        const int b = model.free_index[static_cast<std::size_t>(net.adj_node[static_cast<std::size_t>(p)])];
+        if (b >= 0) m_nb[static_cast<std::size_t>(a)].push_back(b);
+      }
+      std::sort(m_nb[static_cast<std::size_t>(a)].begin(), m_nb[static_cast<std::size_t>(a)].end());
+    }
+    const int N = dim * m_nf;
+    m_colptr.assign(static_cast<std::size_t>(2 * N + 1), 0);
+    for (int part = 0; part < 2; ++part)
+      for (int b = 0; b < m_nf; ++b)
+        for (int q = 0; q < dim; ++q) {
+          const int col = part * N + b * dim + q;
+          m_colptr[static_cast<std::size_t>(col) + 1] =
+              m_colptr[static_cast<std::size_t>(col)] + part +
+              static_cast<int>(m_nb[static_cast<std::size_t>(b)].size()) * dim;
+        }
+  }
+
+  sunindextype size() const { return 2 * dim * m_nf; }
+  sunindextype nonzeros() const { return m_colptr.back(); }
+
+  /// Full-node state from y at time t (supports prescribed).
+  void unpack(double t, const double* y) {
+    const int N = dim * m_nf;
+    for (int a = 0; a < m_nf; ++a) {
+      const int i = m_model.free_nodes[static_cast<std::size_t>(a)];
+      for (int p = 0; p < dim; ++p) {
+        m_u(p, i) = y[a * dim + p];
+        m_v(p, i) = y[N + a * dim + p];
+      }
+    }
+    m_model.apply_constraints(t, m_u, m_v);
+  }
+
+  int rhs(double t, const double* y, double* ydot) {
+    const int N = dim * m_nf;
+    for (int k = 0; k < 2 * N; ++k)
+      if (!std::isfinite(y[k])) return 1; // recoverable: CVODE retries with a smaller step
+    unpack(t, y);
+    m_model.external_forces(t, m_f);
+    add_internal_forces(m_model.net, m_u, m_v, m_f);
+    for (int a = 0; a < m_nf; ++a) {
+      const int i = m_model.free_nodes[static_cast<std::size_t>(a)];
+      for (int p = 0; p < dim; ++p) {
+        ydot[a * dim + p] = y[N + a * dim + p];
+        ydot[N + a * dim + p] = m_f(p, i) / m_model.net.mass[i];
+      }
+    }
+    return 0;
+  }
+
+  int jacobian(double t, const double* y, SUNMatrix J) {
+    unpack(t, y);
+    const int N = dim * m_nf;
+    sunindextype* colptr = SUNSparseMatrix_IndexPointers(J);
+    sunindextype* rowval = SUNSparseMatrix_IndexValues(J);
+    double* data = SUNSparseMatrix_Data(J);
+    for (std::size_t c = 0; c < m_colptr.size(); ++c) colptr[c] = m_colptr[c];
+    // Row indices and zero values.
+    for (int part = 0; part < 2; ++part)
+      for (int b = 0; b < m_nf; ++b)
+        for (int q = 0; q < dim; ++q) {
+          sunindextype pos = m_colptr[static_cast<std::size_t>(part * N + b * dim + q)];
+          if (part == 1) {
+            rowval[pos] = b * dim + q; // d(u')/dv = I
+            data[pos++] = 1.0;
+          }
+          for (int a : m_nb[static_cast<std::size_t>(b)])
+            for (int p = 0; p < dim; ++p) {
+              rowval[pos] = N + a * dim + p;
+              data[pos++] = 0.0;
+            }
+        }
+    const auto& net = m_model.net;
+    auto add = [&](int part, int a, int b, const Mat<dim>& block, double scale) {
+      // Entry d(v'_a)/d(x_b) += scale * block / m_a, in column (part, b, q).
+      const auto& nb = m_nb[static_cast<std::size_t>(b)];
+      const int slot = static_cast<int>(std::lower_bound(nb.begin(), nb.end(), a) - nb.begin());
+      const double inv_m = 1.0 / net.mass[m_model.free_nodes[static_cast<std::size_t>(a)]];
+      for (int q = 0; q < dim; ++q) {
+        const sunindextype base = m_colptr[static_cast<std::size_t>(part * N + b * dim + q)] + part + slot * dim;
+        for (int p = 0; p < dim; ++p) data[base + p] += scale * block(p, q) * inv_m;
+      }
+    };
+    for (int s = 0; s < net.num_springs(); ++s) {
+      const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
+      const int a = m_model.free_index[static_cast<std::size_t>(i)],
+                b = m_model.free_index[static_cast<std::size_t>(j)];
+      if (a < 0 && b < 0) continue;
+      const Vec<dim> xi = net.rest.col(i) + m_u.col(i), xj = net.rest.col(j) + m_u.col(j);
+      const Mat<dim> K = spring_jacobian<dim>(xi, xj, net.rest_length[s], net.stiffness[s], false);
+      const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping[s]);
+      for (const auto& [part, B] : {std::pair<int, Mat<dim>>{0, K}, std::pair<int, Mat<dim>>{1, C}}) {
+        if (a >= 0) add(part, a, a, B, -1.0);
+        if (b >= 0) add(part, b, b, B, -1.0);
+        if (a >= 0 && b >= 0) {
+          add(part, a, b, B, 1.0);
+          add(part, b, a, B, 1.0);
+        }
+      }
+    }
+    if (net.mass_damping != 0)
+      for (int a = 0; a < m_nf; ++a)
+        add(1, a, a,
+            -net.mass_damping * net.mass[m_model.free_nodes[static_cast<std::size_t>(a)]] * Mat<dim>::Identity(), 1.0);
+    return 0;
+  }
+
+  const Nodal<dim>& u() const { return m_u; }
+  const Nodal<dim>& v() const { return m_v; }
+
+private:
+  const Model<dim>& m_model;
+  int m_nf;
+  Nodal<dim> m_u, m_v, m_f, m_ext;
+  std::vector<std::vector<int>> m_nb;
+  std::vector<sunindextype> m_colptr;
+};
+
+template <int dim> int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
+  return static_cast<SpringOde<dim>*>(user)->rhs(t, N_VGetArrayPointer(y), N_VGetArrayPointer(ydot));
+}
+
+template <int dim> int jac_fn(realtype t, N_Vector y, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
+  return static_cast<SpringOde<dim>*>(user)->jacobian(t, N_VGetArrayPointer(y), J);
+}
+
+} // namespace
+
+template <int dim>
+RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field) {
+  using clock = std::chrono::steady_clock;
+  RunReport rep;
+  rep.solver = "cvode";
+  rep.dim = dim;
+  rep.nodes = model.num_nodes();
+  rep.springs = model.net.num_springs();
+  rep.free_nodes = static_cast<int>(model.free_nodes.size());
+  rep.duration = model.duration;
+  rep.calibration = model.net.calibration;
+  rep.effective_poisson_ratio = dim == 2 ? 1.0 / 3.0 : 0.25;
+  if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("[solver].rtol and atol must be > 0");
+
+  const auto t0 = clock::now();
+  SpringOde<dim> ode(model);
+  CvodeHandle h(ode.size(), ode.nonzeros());
+  // Initial state: zero displacement, the scene's initial velocity.
+  const State<dim> s0 = initial_state(model);
+  double* y = N_VGetArrayPointer(h.y());
+  const int N = dim * static_cast<int>(model.free_nodes.size());
+  for (std::size_t a = 0; a < model.free_nodes.size(); ++a)
+    for (int p = 0; p < dim; ++p) {
+      y[static_cast<int>(a) * dim + p] = 0.0;
+      y[N + static_cast<int>(a) * dim + p] = s0.v(p, model.free_nodes[a]);
+    }
+  auto check = [](int flag, const char* what) {
+    if (flag < 0) throw std::runtime_error(std::string("cvode: ") + what + " failed: " + CVodeGetReturnFlagName(flag));
+  };
+  check(CVodeInit(h.mem(), rhs_fn<dim>, 0.0, h.y()), "CVodeInit");
+  check(CVodeSStolerances(h.mem(), o.rtol, o.atol), "CVodeSStolerances");
+  check(CVodeSetUserData(h.mem(), &ode), "CVodeSetUserData");
+  check(CVodeSetLinearSolver(h.mem(), h.solver(), h.matrix()), "CVodeSetLinearSolver");
+  check(CVodeSetJacFn(h.mem(), jac_fn<dim>), "CVodeSetJacFn");
+  check(CVodeSetMaxNumSteps(h.mem(), o.max_steps), "CVodeSetMaxNumSteps");
+  check(CVodeSetStopTime(h.mem(), model.duration), "CVodeSetStopTime");
+  rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+
+  const long samples = static_cast<long>(std::floor(model.duration / model.output_interval + 1e-9)) + 1;
+  Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
+  std::vector<Vec<dim>> reactions;
+  std::vector<double> per_step; // wall time per CVODE step, per output interval
+  long last_steps = 0;
+  auto record = [&](double t) {
+    ode.unpack(t, y);
+    State<dim> s;
+    s.t = t;
+    s.u = ode.u();
+    s.v = ode.v();
+    traj.t.push_back(t);
+    std::vector<Vec<dim>> pu;
+    for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
+    traj.probe_u.push_back(std::move(pu));
+    support_reactions(model, s, scratch, ext, reactions);
+    traj.reaction.push_back(reactions);
+    if (record_field) traj.field.push_back(s.u);
+    rep.max_strain = std::max(rep.max_strain, max_strain(model.net, s.u));
+  };
+  record(0.0);
+  const auto start = clock::now();
+  for (long k = 1; k < samples; ++k) {
+    const double tout = std::min(model.duration, static_cast<double>(k) * model.output_interval);
+    double t = 0;
+    const auto a = clock::now();
+    const int flag = CVode(h.mem(), tout, h.y(), &t, CV_NORMAL);
+    const double wall = std::chrono::duration<double>(clock::now() - a).count();
+    long nst = 0;
+    CVodeGetNumSteps(h.mem(), &nst);
+    if (nst > last_steps) per_step.push_back(wall / static_cast<double>(nst - last_steps));
+    last_steps = nst;
+    if (flag < 0) {
+      rep.stable = false;
+      rep.failure = std::string("CVODE: ") + CVodeGetReturnFlagName(flag);
+      rep.failure_time = t;
+      break;
+    }
+    record(t);
+  }
+  const double total = std::chrono::duration<double>(clock::now() - start).count();
+  long nst = 0, nni = 0, nje = 0, netf = 0, nncf = 0;
+  CVodeGetNumSteps(h.mem(), &nst);
+  CVodeGetNumNonlinSolvIters(h.mem(), &nni);
+  CVodeGetNumJacEvals(h.mem(), &nje);
+  CVodeGetNumErrTestFails(h.mem(), &netf);
+  CVodeGetNumNonlinSolvConvFails(h.mem(), &nncf);
+  rep.steps = rep.steps_taken = nst;
+  rep.dt = nst > 0 ? model.duration / static_cast<double>(nst) : 0.0; // mean step
+  rep.step_seconds.mean = nst > 0 ? total / static_cast<double>(nst) : 0.0;
+  if (!per_step.empty()) {
+    std::sort(per_step.begin(), per_step.end());
+    rep.step_seconds.median = per_step[per_step.size() / 2];
+    rep.step_seconds.p99 =
+        per_step[std::min(per_step.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(per_step.size())))];
+  }
+  rep.extra = {{"rtol", o.rtol},
+               {"atol", o.atol},
+               {"cvode_steps", static_cast<double>(nst)},
+               {"newton_iterations", static_cast<double>(nni)},
+               {"jacobian_evaluations", static_cast<double>(nje)},
+               {"error_test_failures", static_cast<double>(netf)},
+               {"nonlinear_convergence_failures", static_cast<double>(nncf)},
+               {"total_seconds", total}};
+  return rep;
+}
+
+template RunReport simulate_cvode<2>(const Model<2>&, const CvodeOptions&, Trajectory<2>&, bool);
+template RunReport simulate_cvode<3>(const Model<3>&, const CvodeOptions&, Trajectory<3>&, bool);
+
+} // namespace vtb

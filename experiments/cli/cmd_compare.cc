@@ -1,0 +1,39 @@
+#include "commands.hh"
+
+#include "vtb/harness/compare.hh"
+
+#include <iostream>
+#include <memory>
+
+namespace vtb::cli {
+
+Action add_compare(CLI::App& app) {
+  struct Opts {
+    std::string scene, reference = "fem", out;
+    std::vector<std::string> solvers;
+    double dt = 0;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand("compare", "Run several solvers on a scene; errors against a reference, timing, "
+                                                "and the error decomposition (compare.csv, decomposition.csv)");
+  cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
+  cmd->add_option("--solvers", o->solvers,
+                  "Comma-separated: explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem")
+      ->delimiter(',')
+      ->required();
+  cmd->add_option("--reference", o->reference, "fem (default) or cvode");
+  cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
+  cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");
+  return [o]() {
+    const Scene scene = read_scene(o->scene);
+    if (o->dt < 0) throw InputError("--dt must be > 0");
+    const auto res = harness::run_compare(scene, o->solvers, o->reference, o->dt, &std::cerr);
+    const std::filesystem::path out =
+        o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-compare") : std::filesystem::path(o->out);
+    harness::write_compare(res, out);
+    std::cout << harness::format_compare(res) << "outputs in " << out.string() << "\n";
+    return 0;
+  };
+}
+
+} // namespace vtb::cli

@@ -1,0 +1,45 @@
+#pragma once
+/// \file
+/// `vtb compare`: run several solvers on one scene and measure each against a reference;
+/// the error decomposition of DESIGN.md §3.
+
+#include "vtb/harness/metrics.hh"
+
+#include <filesystem>
+#include <map>
+
+namespace vtb::harness {
+
+struct CompareRow {
+  std::string solver;
+  RunReport report;
+  ErrorMetrics error; ///< against the reference
+  double wall_seconds = 0;
+};
+
+/// One term of the decomposition: `a` measured against `b`.
+struct DecompositionRow {
+  std::string a, b, meaning;
+  ErrorMetrics error;
+};
+
+struct CompareResult {
+  std::string scene, reference;
+  int nodes = 0;
+  double duration = 0;
+  std::vector<CompareRow> rows;
+  std::vector<DecompositionRow> decomposition; ///< filtered vs cvode, cvode vs fem, filtered vs fem (those run)
+};
+
+/// Runs `solvers` and the reference (fem or cvode) on the scene. `dt` > 0 overrides the
+/// scene's step for every fixed-step solver. Progress goes to `progress` if non-null.
+CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
+                          double dt = 0, std::ostream* progress = nullptr);
+
+/// compare.csv (one row per solver) and decomposition.csv; nothing is left half-written.
+void write_compare(const CompareResult& result, const std::filesystem::path& dir);
+
+/// The readable table printed by `vtb compare`.
+std::string format_compare(const CompareResult& result);
+
+} // namespace vtb::harness

@@ -1,0 +1,136 @@
+#include "vtb/harness/compare.hh"
+
+#include "vtb/harness/solvers.hh"
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace vtb::harness {
+namespace {
+
+template <int dim>
+CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const std::vector<std::string>& solvers,
+                           const std::string& reference, double dt, std::ostream* progress) {
+  CompareResult res;
+  res.scene = scene.name;
+  res.reference = reference;
+  res.nodes = model.num_nodes();
+  res.duration = model.duration;
+  std::vector<std::string> all = solvers;
+  if (std::find(all.begin(), all.end(), reference) == all.end()) all.push_back(reference);
+  std::map<std::string, Trajectory<dim>> runs;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    const std::string& name = all[k];
+    if (progress) *progress << "[" << k + 1 << "/" << all.size() << "] " << name << " ..." << std::flush;
+    const auto a = std::chrono::steady_clock::now();
+    CompareRow row;
+    row.solver = name;
+    row.report = run_solver(scene, model, name, dt, runs[name]);
+    row.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+    if (progress) *progress << " " << std::fixed << std::setprecision(2) << row.wall_seconds << " s\n";
+    res.rows.push_back(std::move(row));
+  }
+  for (auto& row : res.rows) row.error = compare(runs[row.solver], runs[reference]);
+  // The decomposition, from whatever of its three runs exist.
+  std::string filtered;
+  for (const char* f : {"filtered", "filtered-full", "filtered-neighbors"})
+    if (runs.count(f)) {
+      filtered = f;
+      break;
+    }
+  auto add = [&](const std::string& a, const std::string& b, const char* meaning) {
+    if (!a.empty() && runs.count(a) && runs.count(b))
+      res.decomposition.push_back({a, b, meaning, compare(runs[a], runs[b])});
+  };
+  add(filtered, "cvode", "time-integration error of the approximation");
+  add("cvode", "fem", "modelling error of springs vs continuum");
+  add(filtered, "fem", "what a user sees");
+  return res;
+}
+
+std::string num(double x) {
+  std::ostringstream os;
+  os << std::setprecision(6) << x;
+  return os.str();
+}
+
+} // namespace
+
+CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
+                          double dt, std::ostream* progress) {
+  if (reference != "fem" && reference != "cvode")
+    throw InputError("--reference must be fem or cvode, not " + reference);
+  for (const auto& s : solvers)
+    if (!known_solver(s))
+      throw InputError("--solvers: unknown solver \"" + s +
+                       "\" (explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem)");
+  AnyMesh mesh = load_mesh(scene);
+  return std::visit(
+      [&](auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        const Model<dim> model = build_model<dim>(scene, std::move(m));
+        return compare_impl<dim>(scene, model, solvers, reference, dt, progress);
+      },
+      mesh);
+}
+
+void write_compare(const CompareResult& r, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::ostringstream c, d;
+  c << "solver,reference,nodes,dt,steps,stable,displacement_error_max,displacement_error_final,probe_error_max,"
+       "reaction_error_max,reaction_error_final,precompute_seconds,step_median_seconds,step_p99_seconds,total_seconds,"
+       "real_time_factor\n";
+  for (const auto& row : r.rows) {
+    const auto& p = row.report;
+    c << row.solver << ',' << r.reference << ',' << r.nodes << ',' << num(p.dt) << ',' << p.steps_taken << ','
+      << (p.stable ? "true" : "false") << ',' << num(row.error.displacement_max) << ','
+      << num(row.error.displacement_final) << ',' << num(row.error.probe_max) << ',' << num(row.error.reaction_max)
+      << ',' << num(row.error.reaction_final) << ',' << num(p.precompute_seconds) << ',' << num(p.step_seconds.median)
+      << ',' << num(p.step_seconds.p99) << ',' << num(row.wall_seconds) << ',' << num(r.duration / row.wall_seconds)
+      << '\n';
+  }
+  d << "run,against,meaning,displacement_error_max,displacement_error_final,reaction_error_max\n";
+  for (const auto& x : r.decomposition)
+    d << x.a << ',' << x.b << ",\"" << x.meaning << "\"," << num(x.error.displacement_max) << ','
+      << num(x.error.displacement_final) << ',' << num(x.error.reaction_max) << '\n';
+  for (const auto& [name, text] :
+       {std::pair<const char*, std::string>{"compare.csv", c.str()}, {"decomposition.csv", d.str()}}) {
+    std::ofstream f(dir / (std::string(name) + ".part"));
+    f << text;
+    if (!f) throw InputError((dir / name).string() + ": cannot write");
+  }
+  for (const char* name : {"compare.csv", "decomposition.csv"})
+    std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+}
+
+std::string format_compare(const CompareResult& r) {
+  std::ostringstream os;
+  char line[256];
+  os << "scene " << r.scene << ": " << r.nodes << " nodes, " << r.duration << " s simulated, reference " << r.reference
+     << "\n";
+  std::snprintf(line, sizeof line, "%-20s %10s %7s %12s %12s %12s %12s %12s %9s\n", "solver", "dt [s]", "stable",
+                "disp err", "final err", "react err", "precomp [ms]", "step [us]", "RT factor");
+  os << line;
+  for (const auto& row : r.rows) {
+    const auto& p = row.report;
+    std::snprintf(line, sizeof line, "%-20s %10.3g %7s %12.3e %12.3e %12.3e %12.3f %12.2f %9.1f\n", row.solver.c_str(),
+                  p.dt, p.stable ? "yes" : "NO", row.error.displacement_max, row.error.displacement_final,
+                  row.error.reaction_max, p.precompute_seconds * 1e3, p.step_seconds.median * 1e6,
+                  r.duration / row.wall_seconds);
+    os << line;
+  }
+  if (!r.decomposition.empty()) {
+    os << "error decomposition (max over time of the relative L2 displacement error):\n";
+    for (const auto& x : r.decomposition) {
+      std::snprintf(line, sizeof line, "  %-18s vs %-6s %12.3e   %s\n", x.a.c_str(), x.b.c_str(),
+                    x.error.displacement_max, x.meaning.c_str());
+      os << line;
+    }
+  }
+  return os.str();
+}
+
+} // namespace vtb::harness

@@ -1,0 +1,65 @@
+#include "vtb/harness/metrics.hh"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace vtb::harness {
+
+template <int dim> ErrorMetrics compare(const Trajectory<dim>& a, const Trajectory<dim>& ref) {
+  ErrorMetrics m;
+  const std::size_t n = std::min(a.t.size(), ref.t.size());
+  m.compared = n;
+  if (n == 0) return m;
+  for (std::size_t k = 0; k < n; ++k)
+    if (std::abs(a.t[k] - ref.t[k]) > 1e-9 * std::max(1.0, std::abs(ref.t[k])))
+      throw std::invalid_argument("compare: sample " + std::to_string(k) + " is at t = " + std::to_string(a.t[k]) +
+                                  " in one run and " + std::to_string(ref.t[k]) + " in the reference");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto ratio = [nan](double e, double scale) { return scale > 0 ? e / scale : (e > 0 ? nan : 0.0); };
+  // Displacement field.
+  if (!a.field.empty() && !ref.field.empty()) {
+    double scale = 0;
+    for (const auto& f : ref.field) scale = std::max(scale, f.norm());
+    for (std::size_t k = 0; k < n; ++k) {
+      const double e = ratio((a.field[k] - ref.field[k]).norm(), scale);
+      m.displacement_max = std::max(m.displacement_max, e);
+      if (k + 1 == n) m.displacement_final = e;
+    }
+  } else {
+    m.displacement_max = m.displacement_final = nan;
+  }
+  // Probes.
+  double pscale = 0;
+  for (const auto& s : ref.probe_u)
+    for (const auto& u : s) pscale = std::max(pscale, u.norm());
+  for (std::size_t k = 0; k < n; ++k) {
+    double e = 0;
+    for (std::size_t p = 0; p < ref.probe_u[k].size(); ++p)
+      e = std::max(e, (a.probe_u[k][p] - ref.probe_u[k][p]).norm());
+    e = ratio(e, pscale);
+    m.probe_max = std::max(m.probe_max, e);
+    if (k + 1 == n) m.probe_final = e;
+  }
+  // Reactions.
+  auto stack_norm = [](const std::vector<Vec<dim>>& r) {
+    double s = 0;
+    for (const auto& v : r) s += v.squaredNorm();
+    return std::sqrt(s);
+  };
+  double rscale = 0;
+  for (const auto& r : ref.reaction) rscale = std::max(rscale, stack_norm(r));
+  for (std::size_t k = 0; k < n; ++k) {
+    std::vector<Vec<dim>> d = a.reaction[k];
+    for (std::size_t q = 0; q < d.size(); ++q) d[q] -= ref.reaction[k][q];
+    const double e = ratio(stack_norm(d), rscale);
+    m.reaction_max = std::max(m.reaction_max, e);
+    if (k + 1 == n) m.reaction_final = e;
+  }
+  return m;
+}
+
+template ErrorMetrics compare<2>(const Trajectory<2>&, const Trajectory<2>&);
+template ErrorMetrics compare<3>(const Trajectory<3>&, const Trajectory<3>&);
+
+} // namespace vtb::harness
