@@ -1,11 +1,9 @@
 #!/usr/bin/env bash
-# The main job on a fresh machine: install, build, run. Options go to the job.
-# Today the main job is one `vtb run` of the example plate scene (the paper's step-force
-# experiment on a structured stand-in mesh); `--quick` shortens it to 0.5 s of simulated time.
+# The main job on a fresh machine: install, build, then the paper's reproduction
+# (`vtb reproduce`): timing table on the 517- and 123-node plates, Fig. 3 analogue,
+# accuracy vs speed, stability map, report.md. `--quick` (2 s of simulated time, small
+# ladders) takes about a minute; without it about five.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
-quick=()
-for a in "$@"; do [ "$a" = "--quick" ] && quick=(--duration 0.5); done
-out=${VTB_OUT:-$VTB_ROOT/out/plate-step}
-"$VTB_BUILD/bin/vtb" run "$VTB_ROOT/experiments/scenes/plate_step.toml" --out "$out" "${quick[@]}"
-echo "summary: $out/summary.json"
+out=${VTB_OUT:-$VTB_ROOT/out/reproduce}
+"$VTB_BUILD/bin/vtb" reproduce --out "$out" "$@"

@@ -578,7 +578,7 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
     rep.steps = steps;
     step_time.reserve(static_cast<std::size_t>(steps));
     long next_sample = 0;
-    const double eps = 1e-9 * m_opt.dt;
+    const double eps = 1e-6 * m_opt.dt;
     record(0.0, out, record_field, rep);
     ++next_sample;
     for (long k = 0; k < steps; ++k) {
