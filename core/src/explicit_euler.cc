@@ -12,6 +12,7 @@ ExplicitEuler<dim>::ExplicitEuler(const Model<dim>& model, double dt)
 template <int dim> void ExplicitEuler<dim>::step(State<dim>& s) {
   const double dt = this->dt();
   m_model.external_forces(s.t, m_ext);
+  if (s.applied.cols() == m_ext.cols()) m_ext += s.applied;
   m_force = m_ext;
   add_internal_forces(m_model.net, s.u, s.v, m_force);
   for (int i : m_model.free_nodes) {

@@ -80,6 +80,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
 
   // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
   m_model.external_forces(s.t + dt, m_force);
+  if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force, dt);
   for (Eigen::Index a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];

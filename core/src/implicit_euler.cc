@@ -75,6 +75,7 @@ template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {
   }
   // Right-hand side dt (f + f_ext + dt K v) and the matrix, spring by spring.
   m_model.external_forces(s.t + dt, m_force);
+  if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force);
   for (int sp = 0; sp < net.num_springs(); ++sp) {
     const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];

@@ -16,6 +16,7 @@ template <int dim>
 void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
                        std::vector<Vec<dim>>& out) {
   model.external_forces(s.t, ext);
+  if (s.applied.cols() == ext.cols()) ext += s.applied;
   scratch = ext;
   add_internal_forces(model.net, s.u, s.v, scratch);
   out.resize(model.supports.size());

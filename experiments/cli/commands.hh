@@ -16,5 +16,6 @@ Action add_mesh(CLI::App& app);
 Action add_compare(CLI::App& app);
 Action add_sweep(CLI::App& app);
 Action add_reproduce(CLI::App& app);
+Action add_haptics(CLI::App& app);
 
 } // namespace vtb::cli

@@ -13,6 +13,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action compare = vtb::cli::add_compare(app);
   vtb::cli::Action sweep = vtb::cli::add_sweep(app);
   vtb::cli::Action reproduce = vtb::cli::add_reproduce(app);
+  vtb::cli::Action haptics = vtb::cli::add_haptics(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -24,6 +25,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("compare")) return compare();
     if (app.got_subcommand("sweep")) return sweep();
     if (app.got_subcommand("reproduce")) return reproduce();
+    if (app.got_subcommand("haptics")) return haptics();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

@@ -15,6 +15,9 @@ template <int dim> struct State {
   double t = 0;
   Nodal<dim> u;
   Nodal<dim> v;
+  /// Forces applied from outside the scene during the run (the haptic probe's contact),
+  /// added to the scene's loads when sized like u; empty otherwise.
+  Nodal<dim> applied;
 };
 
 /// Initial state of a model: zero displacement, the scene's initial velocity, constraints.

@@ -1,0 +1,41 @@
+#pragma once
+/// \file
+/// The handle's proxy (god-object) against the deformed boundary of a 2D body: outside the
+/// body the proxy is the handle; inside, it is held on the boundary, found by walking along
+/// the boundary from where contact began, so a probe pressed deep never pops through to the
+/// far side. Allocation-free after construction.
+
+#include "vtb/core/spring_kernels.hh"
+#include "vtb/meshes/mesh.hh"
+
+namespace vtb {
+
+class BoundaryContact {
+public:
+  /// The boundary loops of the mesh (outward-oriented facets chained into a cycle).
+  explicit BoundaryContact(const Mesh2& mesh);
+
+  struct Result {
+    bool touching = false;
+    Eigen::Vector2d proxy = Eigen::Vector2d::Zero();
+    int edge = -1;    ///< index into edges()
+    double along = 0; ///< position on the edge, 0 at its first node
+  };
+
+  /// Updates the proxy for the handle at `handle` with the body's nodes at `x` (deformed).
+  Result update(const Eigen::Vector2d& handle, const Nodal<2>& x);
+  void reset() { m_last = Result{}; }
+
+  const std::vector<std::array<int, 2>>& edges() const { return m_edges; }
+
+private:
+  bool inside(const Eigen::Vector2d& p, const Nodal<2>& x) const;
+  /// Closest point on edge e to p; returns distance^2 and sets along.
+  double closest_on(int e, const Eigen::Vector2d& p, const Nodal<2>& x, double& along) const;
+
+  std::vector<std::array<int, 2>> m_edges; ///< boundary edges, in loop order
+  std::vector<int> m_next, m_prev;         ///< neighbours along the loop
+  Result m_last;
+};
+
+} // namespace vtb

@@ -1,0 +1,39 @@
+#pragma once
+/// \file
+/// What stands between the physics and the motors: saturation that keeps the direction, a
+/// ramp-in at start, and a watchdog that ramps the force to zero when the physics stalls,
+/// diverges or returns non-finite values. Pure and allocation-free: the servo loop calls it.
+
+#include <Eigen/Core>
+
+namespace vtb {
+
+/// |F| <= max_force with F's direction kept; a non-finite F becomes zero.
+Eigen::Vector2d saturate(const Eigen::Vector2d& force, double max_force, bool* saturated = nullptr);
+
+class ForceShaper {
+public:
+  struct Params {
+    double max_force = 4.0;    ///< N
+    double ramp_in = 0.5;      ///< s from zero to full scale at start
+    double ramp_out = 0.03;    ///< s from full scale to zero on a fault (well inside 50 ms)
+    double stall_after = 0.01; ///< s without a physics update that counts as a stall (zero by 40 ms)
+  };
+  explicit ForceShaper(Params p) : m_p(p) {}
+
+  /// The force to command at servo time t for the raw coupling force, given when the physics
+  /// last published (`physics_time`) and whether what it published was finite. After a fault
+  /// the scale only decreases: the force stays zero until the run ends.
+  Eigen::Vector2d shape(const Eigen::Vector2d& raw, double t, double physics_time, bool physics_finite);
+
+  bool faulted() const { return m_faulted; }
+  double fault_time() const { return m_fault_time; }
+  bool last_saturated() const { return m_saturated; }
+
+private:
+  Params m_p;
+  bool m_faulted = false, m_saturated = false;
+  double m_fault_time = -1, m_scale_at_fault = 1;
+};
+
+} // namespace vtb

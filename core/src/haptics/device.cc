@@ -1,0 +1,94 @@
+#include "vtb/core/haptics/device.hh"
+
+#include "vtb/meshes/input_error.hh"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace vtb {
+
+Eigen::Vector2d HandScript::at(double t) const {
+  if (waypoints.empty()) return Eigen::Vector2d::Zero();
+  if (waypoints.size() == 1 || t <= 0) return waypoints.front();
+  const double s = std::min(t / duration, 1.0) * static_cast<double>(waypoints.size() - 1);
+  const auto k = std::min(static_cast<std::size_t>(s), waypoints.size() - 2);
+  const double f = s - static_cast<double>(k);
+  return (1 - f) * waypoints[k] + f * waypoints[k + 1];
+}
+
+SimulatedProCAT::SimulatedProCAT(const DeviceSpec& spec, HandScript hand, Physical physical)
+    : m_spec(spec), m_hand(std::move(hand)), m_phys(physical), m_x(m_hand.at(0)), m_measured(m_x),
+      m_measured_prev(m_x) {}
+
+void SimulatedProCAT::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
+  position = m_measured;
+  velocity = m_velocity_estimate;
+}
+
+void SimulatedProCAT::command(const Eigen::Vector2d& force) {
+  // The amplifier's own limit, keeping direction; a non-finite command renders nothing.
+  if (!force.allFinite()) {
+    m_force.setZero();
+    return;
+  }
+  const double n = force.norm();
+  m_force = n > m_spec.max_force ? Eigen::Vector2d(force * (m_spec.max_force / n)) : force;
+}
+
+void SimulatedProCAT::advance(double dt) {
+  // Semi-implicit Euler in 8 substeps: m a = k_g (hand - x) + F - b v - f_c v / max(|v|, 1 mm/s).
+  const int sub = 8;
+  const double h = dt / sub;
+  for (int k = 0; k < sub; ++k) {
+    const Eigen::Vector2d hand = m_hand.at(m_t + (k + 1) * h);
+    const double speed = m_v.norm();
+    const Eigen::Vector2d friction = m_phys.coulomb * m_v / std::max(speed, 1e-3);
+    const Eigen::Vector2d f = m_hand.grip_stiffness * (hand - m_x) + m_force - m_phys.viscous * m_v - friction;
+    // Implicit in the viscous and grip terms for unconditional stability at the servo rate.
+    const double denom = m_phys.mass + h * m_phys.viscous + h * h * m_hand.grip_stiffness;
+    m_v += h * f / denom;
+    m_x += h * m_v;
+  }
+  m_t += dt;
+  // Encoder: positions quantised to counts; velocity by a first-order filtered difference.
+  m_measured_prev = m_measured;
+  m_measured = (m_x / m_phys.encoder).array().round().matrix() * m_phys.encoder;
+  const Eigen::Vector2d raw = (m_measured - m_measured_prev) / dt;
+  const double alpha = std::min(1.0, dt * 2 * 3.14159265358979 * 100.0); // 100 Hz low-pass
+  m_velocity_estimate += alpha * (raw - m_velocity_estimate);
+}
+
+ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv) : m_spec(spec) {
+  std::ifstream f(csv);
+  if (!f) throw InputError(csv.string() + ": cannot open the recorded trajectory");
+  std::string line;
+  std::getline(f, line); // header
+  int row = 1;
+  while (std::getline(f, line)) {
+    ++row;
+    std::replace(line.begin(), line.end(), ',', ' ');
+    std::istringstream is(line);
+    double t, x, y;
+    if (!(is >> t >> x >> y) || !std::isfinite(t) || !std::isfinite(x) || !std::isfinite(y))
+      throw InputError(csv.string() + ":" + std::to_string(row) + ": expected t,hx,hy as finite numbers");
+    if (!m_time.empty() && t <= m_time.back())
+      throw InputError(csv.string() + ":" + std::to_string(row) + ": times must increase");
+    m_time.push_back(t);
+    m_pos.emplace_back(x, y);
+  }
+  if (m_time.size() < 2) throw InputError(csv.string() + ": needs at least two samples");
+}
+
+void ReplayDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
+  const auto it = std::upper_bound(m_time.begin(), m_time.end(), m_t);
+  const std::size_t k = it == m_time.begin() ? 0
+                                             : std::min<std::size_t>(static_cast<std::size_t>(it - m_time.begin()) - 1,
+                                                                     m_time.size() - 2);
+  const double f = std::clamp((m_t - m_time[k]) / (m_time[k + 1] - m_time[k]), 0.0, 1.0);
+  position = (1 - f) * m_pos[k] + f * m_pos[k + 1];
+  velocity = (m_pos[k + 1] - m_pos[k]) / (m_time[k + 1] - m_time[k]);
+}
+
+} // namespace vtb

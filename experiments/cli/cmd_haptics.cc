@@ -1,0 +1,44 @@
+#include "commands.hh"
+
+#include "vtb/core/haptics/session.hh"
+
+#include <iostream>
+#include <memory>
+
+namespace vtb::cli {
+
+Action add_haptics(CLI::App& app) {
+  struct Opts {
+    std::string scene, fault, out, replay;
+    bool lockstep = false;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "haptics", "The simulated ProCAT's servo loop against the scene's body (haptics.csv, summary.json)");
+  cmd->add_option("scene", o->scene, "Scene file with [haptics] (.toml)")->required();
+  cmd->add_option("--fault", o->fault, "Inject a fault: stall@T (physics stops) or nan@T (physics returns NaN)");
+  cmd->add_option("--replay", o->replay, "Recorded handle trajectory (t,hx,hy CSV) for device = \"replay\"");
+  cmd->add_flag("--lockstep", o->lockstep, "Interleave servo and physics in simulated time (deterministic)");
+  cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-haptics)");
+  return [o]() {
+    const Scene scene = read_scene(o->scene);
+    HapticsOptions ho;
+    if (!o->fault.empty()) ho.fault = parse_fault(o->fault, ho.fault_time);
+    ho.lockstep = o->lockstep;
+    ho.replay = o->replay;
+    const HapticsReport r = run_haptics(scene, ho);
+    const std::filesystem::path out =
+        o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-haptics") : std::filesystem::path(o->out);
+    write_haptics(r, out, scene.name);
+    std::cout << "vtb haptics: " << r.samples << " servo samples at " << r.rate_hz_mean << " Hz (p99 period "
+              << r.period_p99_us << " us, " << r.deadline_misses << " deadline misses), max force " << r.max_force
+              << " N, " << r.saturated_samples << " saturated, " << r.nonfinite_samples
+              << " non-finite, energy to user " << r.energy_to_user << " J";
+    if (r.fault_time >= 0)
+      std::cout << "; fault at " << r.fault_time << " s, force zero at " << r.force_zero_time << " s";
+    std::cout << "; outputs in " << out.string() << "\n";
+    return 0;
+  };
+}
+
+} // namespace vtb::cli
