@@ -15,20 +15,18 @@ Eigen::Vector2d saturate(const Eigen::Vector2d& f, double max_force, bool* satur
 }
 
 Eigen::Vector2d ForceShaper::shape(const Eigen::Vector2d& raw, double t, double physics_time, bool physics_finite) {
-  double scale = m_p.ramp_in > 0 ? std::clamp(t / m_p.ramp_in, 0.0, 1.0) : 1.0;
   const bool stalled = t - physics_time > m_p.stall_after;
   if (!m_faulted && (stalled || !physics_finite || !raw.allFinite())) {
     m_faulted = true;
     m_fault_time = t;
-    m_scale_at_fault = scale;
   }
   if (m_faulted) {
-    // Ramp down from the scale at the fault; the raw force may be garbage: hold the last
-    // finite direction by using raw only when finite, else zero.
-    scale = m_scale_at_fault * std::clamp(1.0 - (t - m_fault_time) / m_p.ramp_out, 0.0, 1.0);
+    const double scale = std::clamp(1.0 - (t - m_fault_time) / m_p.ramp_out, 0.0, 1.0);
+    return saturate(m_last_good * scale, m_p.max_force, &m_saturated);
   }
-  const Eigen::Vector2d f = raw.allFinite() ? Eigen::Vector2d(raw * scale) : Eigen::Vector2d::Zero();
-  return saturate(f, m_p.max_force, &m_saturated);
+  const double scale = m_p.ramp_in > 0 ? std::clamp(t / m_p.ramp_in, 0.0, 1.0) : 1.0;
+  m_last_good = saturate(raw * scale, m_p.max_force, &m_saturated);
+  return m_last_good;
 }
 
 } // namespace vtb

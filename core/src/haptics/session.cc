@@ -21,6 +21,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/prctl.h>
 
 namespace vtb {
 namespace {
@@ -252,6 +253,7 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
       sched_param prio{};
       prio.sched_priority = 80;
       pthread_setschedparam(pthread_self(), SCHED_FIFO, &prio);
+      prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL); // wake-ups to the microsecond, not 50 us late
       auto next = start;
       auto last = start;
       const auto p = std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(period));

@@ -217,9 +217,9 @@ std::string run_reproduce(const ReproduceOptions& o) {
   if (log) *log << "[stability map]\n";
   {
     Scene scene = scene_of("plate123_step.toml");
-    scene.duration = o.quick ? 0.5 : 2.0;
+    scene.duration = o.quick ? 0.5 : 1.0;
     const std::vector<double> dts =
-        o.quick ? std::vector<double>{1e-5, 1e-3, 2e-2} : std::vector<double>{1e-6, 1e-5, 1e-4, 1e-3, 1e-2, 4e-2};
+        o.quick ? std::vector<double>{1e-5, 1e-3, 2e-2} : std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2, 4e-2};
     const std::vector<double> scales =
         o.quick ? std::vector<double>{0.1, 10.0} : std::vector<double>{0.01, 0.1, 1.0, 10.0, 100.0};
     write_sweep(

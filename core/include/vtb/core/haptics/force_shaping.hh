@@ -22,8 +22,9 @@ public:
   explicit ForceShaper(Params p) : m_p(p) {}
 
   /// The force to command at servo time t for the raw coupling force, given when the physics
-  /// last published (`physics_time`) and whether what it published was finite. After a fault
-  /// the scale only decreases: the force stays zero until the run ends.
+  /// last published (`physics_time`) and whether what it published was finite. On a fault the
+  /// last force commanded before it (the physics' output can no longer be trusted) ramps
+  /// linearly to zero over ramp_out, and stays zero until the run ends: no jolt, no NaN.
   Eigen::Vector2d shape(const Eigen::Vector2d& raw, double t, double physics_time, bool physics_finite);
 
   bool faulted() const { return m_faulted; }
@@ -33,7 +34,8 @@ public:
 private:
   Params m_p;
   bool m_faulted = false, m_saturated = false;
-  double m_fault_time = -1, m_scale_at_fault = 1;
+  double m_fault_time = -1;
+  Eigen::Vector2d m_last_good = Eigen::Vector2d::Zero(); ///< the last force commanded before a fault
 };
 
 } // namespace vtb
