@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <iomanip>
 #include <sstream>
 
@@ -33,7 +34,14 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
     if (progress) *progress << " " << std::fixed << std::setprecision(2) << row.wall_seconds << " s\n";
     res.rows.push_back(std::move(row));
   }
-  for (auto& row : res.rows) row.error = compare(runs[row.solver], runs[reference]);
+  for (auto& row : res.rows) {
+    row.error = compare(runs[row.solver], runs[reference]);
+    if (!row.report.stable) { // the samples before the blow-up say nothing about accuracy
+      const double nan = std::numeric_limits<double>::quiet_NaN();
+      row.error.displacement_max = row.error.displacement_final = row.error.probe_max = nan;
+      row.error.probe_final = row.error.reaction_max = row.error.reaction_final = nan;
+    }
+  }
   // The decomposition, from whatever of its three runs exist.
   std::string filtered;
   for (const char* f : {"filtered", "filtered-full", "filtered-neighbors"})
