@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <sstream>
@@ -54,6 +55,20 @@ void write_file(const std::filesystem::path& path, const std::string& text) {
 }
 
 } // namespace
+
+void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times) {
+  std::ostringstream os;
+  os << std::setprecision(12)
+     << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/frame_%04zu.vtu", k);
+    os << "<DataSet timestep=\"" << times[k] << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
+  }
+  os << "</Collection>\n</VTKFile>\n";
+  write_file(dir / "frames.pvd.part", os.str());
+  std::filesystem::rename(dir / "frames.pvd.part", dir / "frames.pvd");
+}
 
 template <int dim>
 void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,

@@ -5,10 +5,12 @@
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
 #include "vtb/core/output.hh"
+#include "vtb/meshes/vtu_io.hh"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 
 namespace vtb {
 
@@ -158,8 +160,17 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
         constexpr int dim = std::decay_t<decltype(m)>::points_dim;
         const Model<dim> model = build_model<dim>(scene, std::move(m));
         Trajectory<dim> traj;
-        RunReport rep = simulate(model, o, traj);
+        RunReport rep = simulate(model, o, traj, ov.frames);
         write_run_outputs(out_dir, model, traj, rep, scene.name);
+        if (ov.frames) {
+          std::filesystem::create_directories(out_dir / "frames");
+          for (std::size_t k = 0; k < traj.field.size(); ++k) {
+            char name[32];
+            std::snprintf(name, sizeof name, "frame_%04zu.vtu", k);
+            write_vtu(model.mesh, out_dir / "frames" / name, traj.field[k]);
+          }
+          write_pvd(out_dir, traj.t);
+        }
         return rep;
       },
       mesh);

@@ -12,6 +12,7 @@ Action add_run(CLI::App& app) {
   struct Opts {
     std::string scene, solver, out;
     double dt = 0, duration = 0;
+    bool frames = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd =
@@ -21,12 +22,14 @@ Action add_run(CLI::App& app) {
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
+  cmd->add_flag("--frames", o->frames, "Also write frames.pvd and frames/*.vtu (one per sample) for ParaView");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     RunOverrides ov;
     if (!o->solver.empty()) ov.solver = o->solver;
     if (o->dt != 0) ov.dt = o->dt;
     if (o->duration != 0) ov.duration = o->duration;
+    ov.frames = o->frames;
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const std::string kind = ov.solver ? *ov.solver : scene.solver.kind;

@@ -36,10 +36,13 @@
 #include <deal.II/lac/sparse_matrix.h>
 #include <deal.II/lac/sparsity_pattern.h>
 #include <deal.II/lac/vector.h>
+#include <deal.II/numerics/data_out.h>
 
 #include <Eigen/Eigenvalues>
 
 #include <chrono>
+#include <cstdio>
+#include <fstream>
 #include <map>
 #include <set>
 #include <sstream>
@@ -485,6 +488,21 @@ void KelvinVoigtProblem<dim>::record(double t, Trajectory<dim>& out, bool record
   for (types::global_dof_index d = 0; d < m_dofs.n_dofs(); ++d)
     if (m_support_of[d] >= 0) reac[static_cast<std::size_t>(m_support_of[d])][m_component[d]] += m_rhs[d];
   out.reaction.push_back(reac);
+  if (!m_opt.frames_dir.empty()) {
+    // The displacement on the (refined, possibly P2) FE mesh, as deal.II writes it.
+    DataOut<dim> data_out;
+    data_out.attach_dof_handler(m_dofs);
+    const std::vector<std::string> names(dim, "displacement");
+    const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
+        dim, DataComponentInterpretation::component_is_part_of_vector);
+    data_out.add_data_vector(m_u, names, DataOut<dim>::type_dof_data, kinds);
+    data_out.build_patches(m_mapping, static_cast<unsigned int>(m_opt.degree));
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04zu.vtu", out.t.size() - 1);
+    std::filesystem::create_directories(m_opt.frames_dir);
+    std::ofstream f(m_opt.frames_dir / name);
+    data_out.write_vtu(f);
+  }
   if (record_field) {
     Nodal<dim> field(dim, m_model.num_nodes());
     for (int i = 0; i < m_model.num_nodes(); ++i)

@@ -14,7 +14,8 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
     scene.duration = *ov.duration;
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
-  const FemOptions o = options_from(scene.solver);
+  FemOptions o = options_from(scene.solver);
+  if (ov.frames) o.frames_dir = out_dir / "frames";
   AnyMesh mesh = load_mesh(scene);
   return std::visit(
       [&](auto& m) {
@@ -23,6 +24,7 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
         Trajectory<dim> traj;
         const RunReport rep = simulate<dim>(model, scene.material, o, traj);
         write_run_outputs(out_dir, model, traj, rep, scene.name);
+        if (ov.frames) write_pvd(out_dir, traj.t);
         return rep;
       },
       mesh);

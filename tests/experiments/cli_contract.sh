@@ -39,6 +39,24 @@ check "good scene runs" '[ $rc -eq 0 ] && [ -s "$work/out_good/probes.csv" ] && 
 "$vtb" run "$src/experiments/scenes/plate_step.toml" --solver explicit --dt 1e-3 --duration 0.2 --out "$work/out_unstable" > /dev/null 2> "$work/err"; rc=$?
 check "unstable run exits 2 with stable=false" '[ $rc -eq 2 ] && grep -q "\"stable\": false" "$work/out_unstable/summary.json" && grep -q "unstable" "$work/err"'
 
+"$vtb" run "$src/experiments/scenes/plate123_step.toml" --solver fem --duration 0.08 --frames --out "$work/out_frames" > /dev/null; rc=$?
+check "fem run with frames" '[ $rc -eq 0 ] && [ -s "$work/out_frames/frames.pvd" ] && [ $(ls "$work/out_frames/frames" | wc -l) -eq 3 ]'
+
+"$vtb" compare "$src/experiments/scenes/plate123_step.toml" --solvers filtered,implicit-euler --reference cvode --dt 0.01 --out "$work/out_cmp" > "$work/cmp.txt" 2> /dev/null; rc=$?
+check "compare writes compare.csv and a table" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_cmp/compare.csv") -eq 4 ] && grep -q "implicit-euler" "$work/cmp.txt"'
+
+"$vtb" compare "$src/experiments/scenes/plate123_step.toml" --solvers filterd --out "$work/out_cmp2" 2> "$work/err"; rc=$?
+check "compare refuses an unknown solver" '[ $rc -eq 1 ] && grep -q "unknown solver" "$work/err" && [ ! -e "$work/out_cmp2" ]'
+
+"$vtb" haptics "$src/experiments/scenes/haptic_press.toml" --lockstep --fault nan@1.4 --out "$work/out_hap" > /dev/null; rc=$?
+check "haptics writes haptics.csv and summary.json" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_hap/haptics.csv") -eq 3001 ] && grep -q "deadline_misses" "$work/out_hap/summary.json"'
+
+"$vtb" haptics "$src/experiments/scenes/plate_step.toml" --out "$work/out_hap2" 2> "$work/err"; rc=$?
+check "haptics refuses a scene without [haptics]" '[ $rc -eq 1 ] && grep -q "\[haptics\] is missing" "$work/err"'
+
+"$vtb" haptics "$src/experiments/scenes/haptic_press.toml" --fault melt@1 --out "$work/out_hap3" 2> "$work/err"; rc=$?
+check "haptics refuses a bad fault" '[ $rc -eq 1 ] && grep -q "stall@T or nan@T" "$work/err"'
+
 "$vtb" mesh generate rectangle --size 0.2 0.05 --divisions 4 2 -o "$work/r.msh" > /dev/null; rc=$?
 check "mesh generate + info" '[ $rc -eq 0 ] && "$vtb" mesh info "$work/r.msh" | grep -q "nodes: 15"'
 

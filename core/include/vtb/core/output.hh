@@ -13,6 +13,10 @@ template <int dim>
 void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
                        const RunReport& report, const std::string& scene_name);
 
+/// frames.pvd listing frames/frame_NNNN.vtu with their times (the .vtu files written by the
+/// caller: the spring runs with write_vtu, the FEM with deal.II's DataOut).
+void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times);
+
 /// The summary as JSON text (for tests).
 std::string summary_json(const RunReport& report, const std::string& scene_name);
 

@@ -63,6 +63,7 @@ struct RunOverrides {
   std::optional<std::string> solver;
   std::optional<double> dt;
   std::optional<double> duration;
+  bool frames = false; ///< also write frames.pvd + frames/frame_NNNN.vtu, one per sample
 };
 
 /// Everything `vtb run` does: load mesh, build model, simulate, write probes.csv,

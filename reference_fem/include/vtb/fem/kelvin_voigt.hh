@@ -16,6 +16,7 @@ struct FemOptions {
   std::string scheme = "generalized-alpha";
   bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
   double dt = 1e-3;
+  std::filesystem::path frames_dir; ///< if set: frames/frame_NNNN.vtu per sample (deal.II DataOut)
 };
 
 FemOptions options_from(const SolverDesc& solver);
