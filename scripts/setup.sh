@@ -12,7 +12,7 @@ VTB_PACKAGES=(
   g++ clang libclang-rt-14-dev cmake ninja-build pkg-config
   libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
-  libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev
+  libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev openmpi-bin python3
 )
 
 vtb_install_packages() {

@@ -1,11 +1,13 @@
 /// vtb: the Voigt deformation testbed command line (DESIGN.md §2).
 #include "commands.hh"
 
+#include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <iostream>
 
 int main(int argc, char** argv) {
+  vtb::fem::MpiScope mpi(argc, argv); // only under mpirun
   CLI::App app{"vtb: the Voigt deformation testbed (Cai, Dill, Payandeh mass-spring model and references)"};
   app.require_subcommand(1);
   vtb::cli::Action run = vtb::cli::add_run(app);

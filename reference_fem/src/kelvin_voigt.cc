@@ -22,6 +22,8 @@
 // constrained rows and columns replaced by the identity (factorised once, UMFPACK).
 #include "vtb/fem/kelvin_voigt.hh"
 
+#include "grid.hh"
+
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/timer.h>
 #include <deal.II/dofs/dof_handler.h>
@@ -51,12 +53,6 @@ namespace vtb::fem {
 namespace {
 
 using namespace dealii;
-
-template <int dim> Point<dim> to_point(const Eigen::Matrix<double, dim, 1>& x) {
-  Point<dim> p;
-  for (int a = 0; a < dim; ++a) p[a] = x[a];
-  return p;
-}
 
 template <int dim> class KelvinVoigtProblem {
 public:
@@ -109,43 +105,9 @@ private:
   TimerOutput m_timer;
 };
 
-/// The scene's mesh as a deal.II triangulation, refined; boundary facets of traction loads
-/// get a boundary id per combination of loads (ids survive refinement).
+/// The scene's mesh as a deal.II triangulation (see make_triangulation).
 template <int dim> void KelvinVoigtProblem<dim>::make_grid() {
-  const Mesh<dim>& mesh = m_model.mesh;
-  std::vector<Point<dim>> vertices(static_cast<std::size_t>(mesh.num_nodes()));
-  for (int i = 0; i < mesh.num_nodes(); ++i) vertices[static_cast<std::size_t>(i)] = to_point<dim>(mesh.points.col(i));
-  std::vector<CellData<dim>> cells(mesh.cells.size(), CellData<dim>(dim + 1));
-  for (std::size_t c = 0; c < mesh.cells.size(); ++c)
-    for (int k = 0; k <= dim; ++k)
-      cells[c].vertices[static_cast<std::size_t>(k)] =
-          static_cast<unsigned int>(mesh.cells[c][static_cast<std::size_t>(k)]);
-  m_tria.create_triangulation(vertices, cells, SubCellData());
-
-  std::map<std::array<int, dim>, std::set<int>> loads_of_facet;
-  for (std::size_t l = 0; l < m_model.loads.size(); ++l)
-    for (auto f : m_model.loads[l].facets) {
-      std::sort(f.begin(), f.end());
-      loads_of_facet[f].insert(static_cast<int>(l));
-    }
-  m_loads_of_id.assign(1, {}); // id 0: no load
-  for (const auto& cell : m_tria.active_cell_iterators())
-    for (const unsigned int face : cell->face_indices()) {
-      if (!cell->face(face)->at_boundary()) continue;
-      std::array<int, dim> key{};
-      for (unsigned int v = 0; v < dim; ++v) key[v] = static_cast<int>(cell->face(face)->vertex_index(v));
-      std::sort(key.begin(), key.end());
-      const auto it = loads_of_facet.find(key);
-      types::boundary_id id = 0;
-      if (it != loads_of_facet.end()) {
-        const auto [pos, inserted] =
-            m_load_ids.emplace(it->second, static_cast<types::boundary_id>(m_loads_of_id.size()));
-        if (inserted) m_loads_of_id.emplace_back(it->second.begin(), it->second.end());
-        id = pos->second;
-      }
-      cell->face(face)->set_boundary_id(id);
-    }
-  if (m_opt.refinements > 0) m_tria.refine_global(static_cast<unsigned int>(m_opt.refinements));
+  make_triangulation(m_model, m_opt.refinements, m_tria, m_loads_of_id);
 }
 
 template <int dim> void KelvinVoigtProblem<dim>::setup_system() {

@@ -22,6 +22,12 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
         constexpr int dim = std::decay_t<decltype(m)>::points_dim;
         const Model<dim> model = build_model<dim>(scene, std::move(m));
         Trajectory<dim> traj;
+        if (mpi_size() > 1) {
+          if (ov.frames) throw InputError("--frames is not available under MPI yet");
+          const RunReport rep = simulate_distributed<dim>(model, scene.material, o, traj);
+          if (mpi_rank() == 0) write_run_outputs(out_dir, model, traj, rep, scene.name);
+          return rep;
+        }
         const RunReport rep = simulate<dim>(model, scene.material, o, traj);
         write_run_outputs(out_dir, model, traj, rep, scene.name);
         if (ov.frames) write_pvd(out_dir, traj.t);

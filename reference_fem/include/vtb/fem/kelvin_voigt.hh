@@ -6,6 +6,8 @@
 
 #include "vtb/core/simulation.hh"
 
+#include <memory>
+
 namespace vtb::fem {
 
 struct FemOptions {
@@ -30,7 +32,31 @@ template <int dim>
 RunReport simulate(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
                    Trajectory<dim>& out, bool record_field = false);
 
-/// `vtb run SCENE --solver fem`: same files as the spring solvers.
+/// The same problem distributed over the MPI ranks of mpirun (parallel::fullydistributed
+/// triangulation, Trilinos matrices, a Trilinos direct solver); every rank returns the same
+/// trajectory. Requires an MpiScope alive.
+template <int dim>
+RunReport simulate_distributed(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+                               Trajectory<dim>& out, bool record_field = false);
+
+/// Initialises and finalises MPI when the process was started by mpirun (OMPI_COMM_WORLD_SIZE
+/// or PMI_SIZE set); otherwise does nothing. One per process, in main.
+class MpiScope {
+public:
+  MpiScope(int& argc, char**& argv);
+  ~MpiScope();
+  MpiScope(const MpiScope&) = delete;
+  MpiScope& operator=(const MpiScope&) = delete;
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> m_impl;
+};
+int mpi_size(); ///< 1 without MPI
+int mpi_rank(); ///< 0 without MPI
+
+/// `vtb run SCENE --solver fem`: same files as the spring solvers (distributed when run under
+/// mpirun with more than one rank; rank 0 writes).
 RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
 
 } // namespace vtb::fem
