@@ -1,10 +1,16 @@
 #pragma once
-// Internal to reference_fem: the triangulation of a scene's mesh, shared by the serial and
-// the distributed solvers.
+// Internal to reference_fem: what the serial and the distributed solvers share: the
+// triangulation of a scene's mesh, the material's Lame constants, the element matrices and
+// the rule for support points on a support's facets.
 
 #include "vtb/core/model.hh"
 
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/fe_values.h>
 #include <deal.II/grid/tria.h>
+#include <deal.II/lac/full_matrix.h>
+
+#include <Eigen/Dense>
 
 #include <algorithm>
 #include <map>
@@ -59,6 +65,52 @@ void make_triangulation(const Model<dim>& m_model, int refinements, dealii::Tria
       cell->face(face)->set_boundary_id(id);
     }
   if (refinements > 0) m_tria.refine_global(static_cast<unsigned int>(refinements));
+}
+
+/// Lame constants (lambda, mu); plane stress in 2D replaces lambda by
+/// 2 lambda mu / (lambda + 2 mu) = E nu / (1 - nu^2).
+template <int dim> std::pair<double, double> lame(const MaterialDesc& m) {
+  const double E = m.young_modulus, nu = m.poisson_ratio;
+  return {dim == 2 ? E * nu / (1 - nu * nu) : E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))};
+}
+
+/// Element stiffness k and consistent mass m on the cell fev was reinit'ed on, times the
+/// thickness in 2D: (lambda div u div w + mu (grad u + grad u^T) : grad w), component form
+/// (step-8), and rho u . w.
+template <int dim>
+void element_matrices(const dealii::FEValues<dim>& fev, const dealii::FESystem<dim>& fe, const MaterialDesc& mat,
+                      dealii::FullMatrix<double>& k, dealii::FullMatrix<double>& m) {
+  const auto [lambda, mu] = lame<dim>(mat);
+  const double t = dim == 2 ? mat.thickness : 1.0;
+  const unsigned int nd = fe.n_dofs_per_cell();
+  k = 0;
+  m = 0;
+  for (unsigned int q = 0; q < fev.n_quadrature_points; ++q)
+    for (unsigned int i = 0; i < nd; ++i) {
+      const unsigned int ci = fe.system_to_component_index(i).first;
+      for (unsigned int j = 0; j < nd; ++j) {
+        const unsigned int cj = fe.system_to_component_index(j).first;
+        const double jxw = fev.JxW(q) * t;
+        k(i, j) += (fev.shape_grad(i, q)[ci] * fev.shape_grad(j, q)[cj] * lambda +
+                    fev.shape_grad(i, q)[cj] * fev.shape_grad(j, q)[ci] * mu +
+                    (ci == cj ? fev.shape_grad(i, q) * fev.shape_grad(j, q) * mu : 0.0)) *
+                   jxw;
+        if (ci == cj) m(i, j) += mat.density * fev.shape_value(i, q) * fev.shape_value(j, q) * jxw;
+      }
+    }
+}
+
+/// Whether point p lies on facet f of the mesh (within tol): a barycentric test on the
+/// segment (2D) or triangle (3D).
+template <int dim>
+bool on_facet(const Mesh<dim>& mesh, const dealii::Point<dim>& p, const std::array<int, dim>& f, double tol) {
+  const Eigen::Matrix<double, dim, 1> x = Eigen::Map<const Eigen::Matrix<double, dim, 1>>(p.begin_raw());
+  const auto a = mesh.points.col(f[0]);
+  Eigen::Matrix<double, dim, dim - 1> B;
+  for (int k = 1; k < dim; ++k) B.col(k - 1) = mesh.points.col(f[static_cast<std::size_t>(k)]) - a;
+  const Eigen::Matrix<double, dim - 1, 1> lam = (B.transpose() * B).ldlt().solve(B.transpose() * (x - a));
+  if ((lam.array() < -1e-9).any() || lam.sum() > 1 + 1e-9) return false;
+  return (a + B * lam - x).norm() <= tol;
 }
 
 } // namespace vtb::fem

@@ -150,11 +150,6 @@ template <int dim> void KelvinVoigtProblem<dim>::setup_system() {
 
 /// K, M and C = tau K + gamma M, by quadrature of degree 2p (exact for the affine simplices).
 template <int dim> void KelvinVoigtProblem<dim>::assemble_system() {
-  const double E = m_mat.young_modulus, nu = m_mat.poisson_ratio;
-  const double t = dim == 2 ? m_mat.thickness : 1.0;
-  const double mu = E / (2 * (1 + nu));
-  // Plane stress in 2D replaces lambda by 2 lambda mu / (lambda + 2 mu) = E nu / (1 - nu^2).
-  const double lambda = dim == 2 ? E * nu / (1 - nu * nu) : E * nu / ((1 + nu) * (1 - 2 * nu));
   const QGaussSimplex<dim> quad(static_cast<unsigned int>(m_opt.degree + 1));
   FEValues<dim> fev(m_mapping, m_fe, quad, update_values | update_gradients | update_JxW_values);
   const unsigned int nd = m_fe.n_dofs_per_cell();
@@ -162,22 +157,7 @@ template <int dim> void KelvinVoigtProblem<dim>::assemble_system() {
   std::vector<types::global_dof_index> local(nd);
   for (const auto& cell : m_dofs.active_cell_iterators()) {
     fev.reinit(cell);
-    k = 0;
-    m = 0;
-    for (unsigned int q = 0; q < quad.size(); ++q)
-      for (unsigned int i = 0; i < nd; ++i) {
-        const unsigned int ci = m_fe.system_to_component_index(i).first;
-        for (unsigned int j = 0; j < nd; ++j) {
-          const unsigned int cj = m_fe.system_to_component_index(j).first;
-          const double jxw = fev.JxW(q) * t;
-          // (lambda div u div w + mu (grad u + grad u^T) : grad w), component form (step-8).
-          k(i, j) += (fev.shape_grad(i, q)[ci] * fev.shape_grad(j, q)[cj] * lambda +
-                      fev.shape_grad(i, q)[cj] * fev.shape_grad(j, q)[ci] * mu +
-                      (ci == cj ? fev.shape_grad(i, q) * fev.shape_grad(j, q) * mu : 0.0)) *
-                     jxw;
-          if (ci == cj) m(i, j) += m_mat.density * fev.shape_value(i, q) * fev.shape_value(j, q) * jxw;
-        }
-      }
+    element_matrices(fev, m_fe, m_mat, k, m);
     cell->get_dof_indices(local);
     for (unsigned int i = 0; i < nd; ++i)
       for (unsigned int j = 0; j < nd; ++j) {
@@ -197,16 +177,7 @@ template <int dim> void KelvinVoigtProblem<dim>::setup_constraints() {
   m_support_of.assign(n, -1);
   const double grow = 1e-9 * bounding_diagonal(m_model.mesh);
   const double tol = 1e-10 * bounding_diagonal(m_model.mesh);
-  auto on_facet = [&](const Point<dim>& p, const std::array<int, dim>& f) {
-    // Barycentric test: p within tol of the segment (2D) or triangle (3D).
-    const Eigen::Matrix<double, dim, 1> x = Eigen::Map<const Eigen::Matrix<double, dim, 1>>(p.begin_raw());
-    const auto a = m_model.mesh.points.col(f[0]);
-    Eigen::Matrix<double, dim, dim - 1> B;
-    for (int k = 1; k < dim; ++k) B.col(k - 1) = m_model.mesh.points.col(f[static_cast<std::size_t>(k)]) - a;
-    const Eigen::Matrix<double, dim - 1, 1> lam = (B.transpose() * B).ldlt().solve(B.transpose() * (x - a));
-    if ((lam.array() < -1e-9).any() || lam.sum() > 1 + 1e-9) return false;
-    return (a + B * lam - x).norm() <= tol;
-  };
+
   for (std::size_t s = 0; s < m_model.supports.size(); ++s) {
     const auto& sup = m_model.supports[s];
     std::vector<types::global_dof_index> dofs;
@@ -223,7 +194,7 @@ template <int dim> void KelvinVoigtProblem<dim>::setup_constraints() {
       if (!sup.facets.empty())
         for (types::global_dof_index d = 0; d < n; ++d)
           for (const auto& f : sup.facets)
-            if (on_facet(m_support[d], f)) {
+            if (on_facet<dim>(m_model.mesh, m_support[d], f, tol)) {
               dofs.push_back(d);
               break;
             }

@@ -151,15 +151,8 @@ private:
         } else {
           const auto nd = node_dofs.find(dof);
           if (nd != node_dofs.end()) in = std::binary_search(sup.nodes.begin(), sup.nodes.end(), nd->second);
-          for (const auto& f : sup.facets) {
-            if (in) break;
-            const Eigen::Matrix<double, dim, 1> x = Eigen::Map<const Eigen::Matrix<double, dim, 1>>(p.begin_raw());
-            const auto a0 = m_model.mesh.points.col(f[0]);
-            Eigen::Matrix<double, dim, dim - 1> B;
-            for (int k = 1; k < dim; ++k) B.col(k - 1) = m_model.mesh.points.col(f[static_cast<std::size_t>(k)]) - a0;
-            const Eigen::Matrix<double, dim - 1, 1> lam = (B.transpose() * B).ldlt().solve(B.transpose() * (x - a0));
-            in = !(lam.array() < -1e-9).any() && lam.sum() <= 1 + 1e-9 && (a0 + B * lam - x).norm() <= tol;
-          }
+          for (const auto& f : sup.facets)
+            if (!in) in = on_facet<dim>(m_model.mesh, p, f, tol);
         }
         if (in) m_support_of[dof] = static_cast<int>(s);
       }
@@ -179,10 +172,7 @@ private:
   /// K, M, C and the scheme's matrix A; A0 and M0 with the prescribed rows and columns
   /// eliminated (identity-like diagonal), for the lifted solves.
   void assemble() {
-    const double dt = m_opt.dt, E = m_mat.young_modulus, nu = m_mat.poisson_ratio;
-    const double t = dim == 2 ? m_mat.thickness : 1.0;
-    const double mu = E / (2 * (1 + nu));
-    const double lambda = dim == 2 ? E * nu / (1 - nu * nu) : E * nu / ((1 + nu) * (1 - 2 * nu));
+    const double dt = m_opt.dt;
     if (m_opt.scheme == "generalized-alpha") {
       m_am = -1, m_af = 0, m_gamma = 1.5, m_beta = 1; // rho_inf = 0
     }
@@ -204,21 +194,7 @@ private:
     for (const auto& cell : m_dofs.active_cell_iterators()) {
       if (!cell->is_locally_owned()) continue;
       fev.reinit(cell);
-      k = 0;
-      m = 0;
-      for (unsigned int q = 0; q < quad.size(); ++q)
-        for (unsigned int i = 0; i < nd; ++i) {
-          const unsigned int ci = m_fe.system_to_component_index(i).first;
-          for (unsigned int j = 0; j < nd; ++j) {
-            const unsigned int cj = m_fe.system_to_component_index(j).first;
-            const double jxw = fev.JxW(q) * t;
-            k(i, j) += (fev.shape_grad(i, q)[ci] * fev.shape_grad(j, q)[cj] * lambda +
-                        fev.shape_grad(i, q)[cj] * fev.shape_grad(j, q)[ci] * mu +
-                        (ci == cj ? fev.shape_grad(i, q) * fev.shape_grad(j, q) * mu : 0.0)) *
-                       jxw;
-            if (ci == cj) m(i, j) += m_mat.density * fev.shape_value(i, q) * fev.shape_value(j, q) * jxw;
-          }
-        }
+      element_matrices(fev, m_fe, m_mat, k, m);
       c = 0;
       c.add(m_mat.retardation_time, k, m_mat.mass_damping, m);
       a = 0;
