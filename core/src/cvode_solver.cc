@@ -236,8 +236,6 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
   const long samples = static_cast<long>(std::floor(model.duration / model.output_interval + 1e-9)) + 1;
-  Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
-  std::vector<Vec<dim>> reactions;
   std::vector<double> per_step; // wall time per CVODE step, per output interval
   long last_steps = 0;
   auto record = [&](double t) {
@@ -246,14 +244,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
     s.t = t;
     s.u = ode.u();
     s.v = ode.v();
-    traj.t.push_back(t);
-    std::vector<Vec<dim>> pu;
-    for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
-    traj.probe_u.push_back(std::move(pu));
-    support_reactions(model, s, scratch, ext, reactions);
-    traj.reaction.push_back(reactions);
-    if (record_field) traj.field.push_back(s.u);
-    rep.max_strain = std::max(rep.max_strain, max_strain(model.net, s.u));
+    rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field));
   };
   record(0.0);
   const auto start = clock::now();

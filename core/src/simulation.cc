@@ -29,6 +29,20 @@ void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>&
   }
 }
 
+template <int dim>
+double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field) {
+  traj.t.push_back(s.t);
+  std::vector<Vec<dim>> pu;
+  for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
+  traj.probe_u.push_back(std::move(pu));
+  Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
+  std::vector<Vec<dim>> reactions;
+  support_reactions(model, s, scratch, ext, reactions);
+  traj.reaction.push_back(std::move(reactions));
+  if (record_field) traj.field.push_back(s.u);
+  return max_strain(model.net, s.u);
+}
+
 namespace {
 
 StepStats stats(std::vector<double> t) {
@@ -87,21 +101,12 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   traj.probe_u.reserve(static_cast<std::size_t>(samples));
   traj.reaction.reserve(static_cast<std::size_t>(samples));
   if (record_field) traj.field.reserve(static_cast<std::size_t>(samples));
-  Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
-  std::vector<Vec<dim>> reactions;
   std::vector<double> step_time;
   step_time.reserve(static_cast<std::size_t>(steps));
 
   long next_sample = 0;
   auto record = [&]() {
-    traj.t.push_back(s.t);
-    std::vector<Vec<dim>> pu;
-    for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
-    traj.probe_u.push_back(std::move(pu));
-    support_reactions(model, s, scratch, ext, reactions);
-    traj.reaction.push_back(reactions);
-    if (record_field) traj.field.push_back(s.u);
-    rep.max_strain = std::max(rep.max_strain, max_strain(model.net, s.u));
+    rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field));
     ++next_sample;
   };
   record();
@@ -178,6 +183,8 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
 
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
 template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
+template double record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool);
+template double record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool);
 template void support_reactions<2>(const Model<2>&, const State<2>&, Nodal<2>&, Nodal<2>&, std::vector<Vec<2>>&);
 template void support_reactions<3>(const Model<3>&, const State<3>&, Nodal<3>&, Nodal<3>&, std::vector<Vec<3>>&);
 

@@ -58,6 +58,11 @@ template <int dim>
 void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
                        std::vector<Vec<dim>>& out);
 
+/// Appends the sample of state s to traj (time, probes, support reactions, the whole field if
+/// record_field) and returns the largest spring strain in it. Shared by every spring solver.
+template <int dim>
+double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field);
+
 /// Options of `vtb run` that override the scene.
 struct RunOverrides {
   std::optional<std::string> solver;
