@@ -81,7 +81,10 @@ double TableReader::number(std::string_view key, std::optional<double> fallback,
     return *fallback;
   }
   if (!n->is_number()) fail(key, "must be a number");
-  const double v = n->value<double>().value();
+  // toml++ refuses integers that a double cannot hold exactly (beyond 2^53).
+  const std::optional<double> x = n->value<double>();
+  if (!x) fail(key, "must be a number a double can hold exactly");
+  const double v = *x;
   if (!std::isfinite(v)) fail(key, "must be finite");
   if (check)
     if (const std::string e = check(v); !e.empty()) {
@@ -147,8 +150,9 @@ Eigen::VectorXd TableReader::vector(std::string_view key, std::size_t min_len, s
   Eigen::VectorXd v(static_cast<Eigen::Index>(a->size()));
   for (std::size_t i = 0; i < a->size(); ++i) {
     const toml::node& e = *a->get(i);
-    if (!e.is_number()) fail(key, "entry " + std::to_string(i) + " must be a number");
-    v[static_cast<Eigen::Index>(i)] = e.value<double>().value();
+    const std::optional<double> x = e.is_number() ? e.value<double>() : std::nullopt;
+    if (!x) fail(key, "entry " + std::to_string(i) + " must be a number a double can hold exactly");
+    v[static_cast<Eigen::Index>(i)] = *x;
     if (!std::isfinite(v[static_cast<Eigen::Index>(i)])) fail(key, "entry " + std::to_string(i) + " must be finite");
   }
   return v;

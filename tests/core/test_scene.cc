@@ -94,7 +94,12 @@ INSTANTIATE_TEST_SUITE_P(
                 "[[fix]]\ngroup = \"left\"\n[[drive]]\ngroup = \"left\"\ndisplacement = [0.0, 0.001]",
                 "both constrain node"},
         BadCase{"output_interval = 0.01", "output_interval = 5.0", "must not exceed [scene].duration"},
-        BadCase{"[solver]", "[solvr]", "unknown key; did you mean 'solver'?"}),
+        BadCase{"[solver]", "[solvr]", "unknown key; did you mean 'solver'?"},
+        // Found by fuzzing: integers beyond 2^53 are numbers toml++ will not convert.
+        BadCase{"young_modulus = 5.0e4", "young_modulus = 9007199254740993",
+                "[material].young_modulus: must be a number a double can hold exactly"},
+        BadCase{"total_force = [1.0, 0.0]", "total_force = [9007199254740993, 0.0]",
+                "total_force: entry 0 must be a number a double can hold exactly"}),
     [](const auto& pinfo) { return "case" + std::to_string(pinfo.index); });
 
 TEST(Scene, ReadSceneNamesAMissingFile) {
