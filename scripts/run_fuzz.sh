@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Bounded fuzzing (libFuzzer, clang, ASan + UBSan) of the .msh reader and the scene parser,
 # starting from tests/fuzz/corpus. Any crash, leak, sanitizer report or timeout fails it.
-# By default the run is reproducible: a fixed seed and a fixed number of inputs per target
-# (about 45 s each here), so the test command's verdict does not depend on luck; set
+# By default the run is bounded by a fixed number of inputs per target from a fixed seed
+# (about 45 s each here; libFuzzer's corpus evolution still varies slightly between runs,
+# so this narrows, not removes, the role of luck in the test command's verdict); set
 # FUZZ_SECONDS=N for an open-ended, randomly seeded exploration of N seconds per target.
 # Needs the packages of setup.sh.
 set -euo pipefail
