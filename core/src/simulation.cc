@@ -137,7 +137,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   return rep;
 }
 
-RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
+Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;
   if (ov.solver) scene.solver.kind = *ov.solver;
   if (ov.dt) {
@@ -151,14 +151,24 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
   }
   if (scene.solver.dt > scene.duration)
     throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
+  return scene;
+}
+
+IntegratorOptions integrator_options(const SolverDesc& s) {
   IntegratorOptions o;
-  o.kind = scene.solver.kind;
-  o.dt = scene.solver.dt;
-  o.filter = scene.solver.filter;
-  o.momentum_correction = scene.solver.momentum_correction;
-  o.strain_limit = scene.solver.strain_limit;
-  o.rtol = scene.solver.rtol;
-  o.atol = scene.solver.atol;
+  o.kind = s.kind;
+  o.dt = s.dt;
+  o.filter = s.filter;
+  o.momentum_correction = s.momentum_correction;
+  o.strain_limit = s.strain_limit;
+  o.rtol = s.rtol;
+  o.atol = s.atol;
+  return o;
+}
+
+RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
+  const Scene scene = with_overrides(scene_in, ov);
+  const IntegratorOptions o = integrator_options(scene.solver);
   AnyMesh mesh = load_mesh(scene);
   return std::visit(
       [&](auto& m) {

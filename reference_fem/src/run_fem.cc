@@ -4,16 +4,7 @@
 namespace vtb::fem {
 
 RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
-  Scene scene = scene_in;
-  if (ov.dt) {
-    if (!(*ov.dt > 0)) throw InputError("--dt must be a positive number");
-    scene.solver.dt = *ov.dt;
-  }
-  if (ov.duration) {
-    if (!(*ov.duration > 0)) throw InputError("--duration must be a positive number");
-    scene.duration = *ov.duration;
-    scene.output_interval = std::min(scene.output_interval, scene.duration);
-  }
+  const Scene scene = with_overrides(scene_in, ov);
   FemOptions o = options_from(scene.solver);
   if (ov.frames) o.frames_dir = out_dir / "frames";
   AnyMesh mesh = load_mesh(scene);

@@ -5,6 +5,7 @@
 #include "vtb/core/haptics/force_shaping.hh"
 #include "vtb/core/haptics/triple_buffer.hh"
 #include "vtb/core/integrator.hh"
+#include "vtb/core/simulation.hh"
 
 #include <nlohmann/json.hpp>
 
@@ -211,12 +212,9 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
     device = std::make_unique<SimulatedProCAT>(spec, hand);
   }
 
-  IntegratorOptions o;
-  o.kind = scene.solver.kind == "cvode" || scene.solver.kind == "fem" ? "filtered" : scene.solver.kind;
-  o.dt = scene.solver.dt;
-  o.filter = scene.solver.filter;
-  o.momentum_correction = scene.solver.momentum_correction;
-  o.strain_limit = scene.solver.strain_limit;
+  IntegratorOptions o = integrator_options(scene.solver);
+  // The physics of a session steps at a fixed dt: CVODE and the FEM fall back to the filter.
+  if (o.kind == "cvode" || o.kind == "fem") o.kind = "filtered";
 
   Snapshot init;
   init.x = model.net.rest;

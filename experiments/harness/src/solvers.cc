@@ -27,13 +27,10 @@ RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::str
     o.static_solve = false;
     return fem::simulate<dim>(model, scene.material, o, out, true);
   }
-  IntegratorOptions o;
+  IntegratorOptions o = integrator_options(scene.solver);
   o.kind = solver.rfind("filtered", 0) == 0 ? "filtered" : solver;
-  o.filter = solver == "filtered-full" ? "full" : solver == "filtered-neighbors" ? "neighbors" : scene.solver.filter;
-  o.momentum_correction = scene.solver.momentum_correction;
-  o.strain_limit = scene.solver.strain_limit;
-  o.rtol = scene.solver.rtol;
-  o.atol = scene.solver.atol;
+  if (solver == "filtered-full") o.filter = "full";
+  if (solver == "filtered-neighbors") o.filter = "neighbors";
   o.dt = step;
   if (solver == "explicit" && dt <= 0) {
     // Half the predicted limit, rounded down so that samples fall on steps like the others'.

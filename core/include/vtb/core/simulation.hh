@@ -71,6 +71,13 @@ struct RunOverrides {
   bool frames = false; ///< also write frames.pvd + frames/frame_NNNN.vtu, one per sample
 };
 
+/// The scene with `vtb run`'s overrides applied; InputError for a non-positive or
+/// non-finite --dt/--duration, or a step longer than the run. Shared by every `run_scene`.
+Scene with_overrides(const Scene& scene, const RunOverrides& overrides);
+
+/// The spring integrators' options from [solver].
+IntegratorOptions integrator_options(const SolverDesc& solver);
+
 /// Everything `vtb run` does: load mesh, build model, simulate, write probes.csv,
 /// reactions.csv and summary.json into `out_dir` (all or nothing). Returns the report.
 RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
