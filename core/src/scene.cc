@@ -188,15 +188,16 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
 
   if ((t = top.table("haptics"))) {
     const TableReader r(*t, "[haptics]", name,
-                        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand"});
+                        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand", "probe",
+                         "plane"});
     HapticsDesc h;
     h.device = r.string("device", "procat-sim", {"procat-sim", "replay"});
     h.rate = r.number("rate", 1000.0, positive);
     h.coupling_stiffness = r.number("coupling_stiffness", 400.0, positive);
     h.coupling_damping = r.number("coupling_damping", 2.0, non_negative);
     h.max_force = r.number("max_force", 4.0, positive);
-    if (const toml::table* ht = r.table("hand")) {
-      const TableReader hr(*ht, "[haptics.hand]", name, {"waypoints", "duration", "grip_stiffness"});
+    const auto read_hand = [&name](const toml::table& ht, const std::string& path) {
+      const TableReader hr(ht, path, name, {"waypoints", "duration", "grip_stiffness"});
       HandDesc hand;
       const toml::array* w = hr.node("waypoints") ? hr.node("waypoints")->as_array() : nullptr;
       if (!w || w->empty()) hr.fail("waypoints", "must be a non-empty array of [x, y] points");
@@ -214,7 +215,32 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       }
       hand.duration = hr.number("duration", std::nullopt, positive);
       hand.grip_stiffness = hr.number("grip_stiffness", std::nullopt, positive);
-      h.hand = std::move(hand);
+      return hand;
+    };
+    if (const toml::table* ht = r.table("hand")) h.hand = read_hand(*ht, "[haptics.hand]");
+    const auto hands = r.tables("probe");
+    for (std::size_t i = 0; i < hands.size(); ++i)
+      h.probes.push_back(read_hand(*hands[i], "[[haptics.probe]] #" + std::to_string(i + 1)));
+    if (!hands.empty() && h.device == "procat-sim" && !h.hand)
+      r.fail("probe", "[[haptics.probe]] adds devices to the first one: [haptics.hand] is missing");
+    if (const toml::table* pt = r.table("plane")) {
+      const TableReader pr(*pt, "[haptics.plane]", name, {"origin", "x_axis", "y_axis"});
+      DevicePlaneDesc plane;
+      const auto vec3 = [&pr](std::string_view key, const Eigen::Vector3d& fallback) -> Eigen::Vector3d {
+        if (!pr.has(key)) return fallback;
+        const Eigen::VectorXd v = pr.vector(key, 3, 3);
+        return v;
+      };
+      plane.origin = vec3("origin", plane.origin);
+      plane.x_axis = vec3("x_axis", plane.x_axis);
+      plane.y_axis = vec3("y_axis", plane.y_axis);
+      for (auto [key, axis] : {std::pair{"x_axis", &plane.x_axis}, std::pair{"y_axis", &plane.y_axis}}) {
+        if (!(axis->norm() > 1e-12)) pr.fail(key, "must be a non-zero direction");
+        axis->normalize();
+      }
+      if (std::abs(plane.x_axis.dot(plane.y_axis)) > 1e-6)
+        pr.fail("y_axis", "must be orthogonal to x_axis (the device's two axes are at right angles)");
+      h.plane = plane;
     }
     s.haptics = std::move(h);
   }

@@ -61,8 +61,9 @@ TEST_P(Watchdog, DropsTheForceToZeroWithin50msOfAFault) {
   o.fault = parse_fault(GetParam() + "@1.4", o.fault_time);
   const HapticsReport r = run_haptics(press_scene(), o);
   double before = 0;
+  const ProbeTrace& p = r.probes.at(0);
   for (std::size_t k = 0; k < r.t.size(); ++k) {
-    const double f = std::hypot(r.fx[k], r.fy[k]);
+    const double f = std::hypot(p.fx[k], p.fy[k]);
     ASSERT_TRUE(std::isfinite(f)) << "t = " << r.t[k];
     ASSERT_LE(f, 4.0) << "t = " << r.t[k];
     if (r.t[k] < 1.4) before = std::max(before, f);
@@ -85,8 +86,8 @@ TEST(Haptics, LockstepRunsAreDeterministicAndReplayReproducesTheHandle) {
   const HapticsReport a = run_haptics(scene, o), b = run_haptics(scene, o);
   ASSERT_EQ(a.t.size(), b.t.size());
   for (std::size_t k = 0; k < a.t.size(); ++k) {
-    ASSERT_EQ(a.fx[k], b.fx[k]);
-    ASSERT_EQ(a.hy[k], b.hy[k]);
+    ASSERT_EQ(a.probes[0].fx[k], b.probes[0].fx[k]);
+    ASSERT_EQ(a.probes[0].hy[k], b.probes[0].hy[k]);
   }
   // Record, then replay the handle: the replay device reports the recorded positions.
   const auto dir = std::filesystem::temp_directory_path() / "vtb_haptics_replay";
@@ -95,7 +96,7 @@ TEST(Haptics, LockstepRunsAreDeterministicAndReplayReproducesTheHandle) {
   Eigen::Vector2d p, v;
   for (std::size_t k = 0; k + 1 < a.t.size(); k += 97) {
     replay.read(p, v);
-    EXPECT_NEAR(p.y(), a.hy[k], 1e-9) << "t = " << a.t[k];
+    EXPECT_NEAR(p.y(), a.probes[0].hy[k], 1e-9) << "t = " << a.t[k];
     for (std::size_t j = 0; j < 97 && k + j + 1 < a.t.size(); ++j) replay.advance(a.t[k + j + 1] - a.t[k + j]);
   }
 }

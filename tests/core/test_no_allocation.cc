@@ -2,6 +2,10 @@
 // test thread while integrators step. This program replaces malloc (glibc's __libc_*
 // entry points do the work), so it is kept apart from the other suites.
 #include "support/small_models.hh"
+#include "vtb/core/haptics/contact2d.hh"
+#include "vtb/core/haptics/contact3d.hh"
+#include "vtb/core/haptics/force_shaping.hh"
+#include "vtb/meshes/generate.hh"
 
 #include <gtest/gtest.h>
 
@@ -98,6 +102,38 @@ TEST(NoAllocation, FreeBodyMomentumCorrectionAllocatesNothing) {
   for (int k = 0; k < 20; ++k) integ->step(s);
   g_counting = false;
   EXPECT_EQ(g_allocations, 0);
+}
+
+TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
+  // What a servo cycle calls: the proxy updates in 2D and 3D (outside, contact onset, deep in
+  // contact), the AABB tree following a deformed body (refits within the margin and full
+  // builds beyond it), and the force shaper.
+  const Mesh2 plate = generate_rectangle({0.02, 0.02}, {4, 4});
+  BoundaryContact c2(plate);
+  const Mesh3 box = generate_box({0.02, 0.02, 0.02}, {3, 3, 3});
+  SurfaceTree tree(box);
+  SurfaceContact c3(tree);
+  BasicForceShaper<3> shaper({4.0, 0.5, 0.03, 0.01});
+  Nodal<3> x = box.points;
+  // The handle goes down in 1 mm steps from 5 mm above the top face to 14 mm into the box,
+  // and lands exactly on the face on the way (where an exact-predicate kernel would fall back
+  // to allocating GMP numbers).
+  const auto cycle = [&](int k) {
+    const double y = 0.025 - 0.001 * (k % 20);
+    c2.update({0.01, y}, plate.points);
+    x.row(1) = box.points.row(1) * (1.0 - 0.05 * (k % 7)); // squeezed by up to 6 mm
+    tree.rebuild(x);
+    const auto r = c3.update({0.01, y, 0.01}, x);
+    shaper.shape(r.proxy - Eigen::Vector3d(0.01, y, 0.01), 1e-3 * k, 1e-3 * k, true);
+  };
+  cycle(0);
+  const long builds = tree.builds();
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 1; k < 60; ++k) cycle(k);
+  g_counting = false;
+  EXPECT_EQ(g_allocations, 0);
+  EXPECT_GT(tree.builds(), builds) << "the squeeze exceeds the margin: full builds were exercised";
 }
 
 } // namespace

@@ -61,7 +61,7 @@ BoundaryContact::Result BoundaryContact::update(const Eigen::Vector2d& handle, c
     m_last = r;
     return r;
   }
-  int e = m_last.edge;
+  int e = m_last.facet;
   if (!m_last.touching || e < 0) {
     // Contact begins: the globally closest boundary point (the handle has just crossed it).
     double best = std::numeric_limits<double>::infinity(), along = 0;
@@ -89,8 +89,8 @@ BoundaryContact::Result BoundaryContact::update(const Eigen::Vector2d& handle, c
     }
   }
   r.touching = true;
-  r.edge = e;
-  r.along = along;
+  r.facet = e;
+  r.weights = {1 - along, along};
   const Eigen::Vector2d a = x.col(m_edges[static_cast<std::size_t>(e)][0]);
   r.proxy = a + along * (Eigen::Vector2d(x.col(m_edges[static_cast<std::size_t>(e)][1])) - a);
   m_last = r;

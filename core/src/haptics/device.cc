@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <cstdlib>
 #include <sstream>
+#include <string>
 
 namespace vtb {
 
@@ -60,19 +62,44 @@ void SimulatedProCAT::advance(double dt) {
   m_velocity_estimate += alpha * (raw - m_velocity_estimate);
 }
 
-ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv) : m_spec(spec) {
+ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv, int probe) : m_spec(spec) {
   std::ifstream f(csv);
   if (!f) throw InputError(csv.string() + ": cannot open the recorded trajectory");
+  // Columns by name: t, then hx,hy for probe 0 or hx_<k>,hy_<k> for probe k (haptics.csv's layout).
+  const std::string suffix = probe == 0 ? "" : "_" + std::to_string(probe);
   std::string line;
-  std::getline(f, line); // header
+  std::getline(f, line);
+  std::vector<std::string> header;
+  {
+    std::istringstream is(line);
+    for (std::string name; std::getline(is, name, ',');) {
+      while (!name.empty() && (name.back() == '\r' || name.back() == ' ')) name.pop_back();
+      header.push_back(name);
+    }
+  }
+  const auto column = [&](const std::string& name) {
+    const auto it = std::find(header.begin(), header.end(), name);
+    if (it == header.end()) throw InputError(csv.string() + ":1: no column \"" + name + "\" in the header");
+    return static_cast<std::size_t>(it - header.begin());
+  };
+  const std::size_t ct = column("t"), cx = column("hx" + suffix), cy = column("hy" + suffix);
   int row = 1;
+  std::vector<double> values;
   while (std::getline(f, line)) {
     ++row;
-    std::replace(line.begin(), line.end(), ',', ' ');
+    values.clear();
     std::istringstream is(line);
-    double t, x, y;
-    if (!(is >> t >> x >> y) || !std::isfinite(t) || !std::isfinite(x) || !std::isfinite(y))
-      throw InputError(csv.string() + ":" + std::to_string(row) + ": expected t,hx,hy as finite numbers");
+    for (std::string cell; std::getline(is, cell, ',');) {
+      char* end = nullptr;
+      const double v = std::strtod(cell.c_str(), &end);
+      const bool whole = end != cell.c_str() && cell.find_first_not_of(" \r", static_cast<std::size_t>(end - cell.c_str())) == std::string::npos;
+      values.push_back(whole ? v : std::nan(""));
+    }
+    const auto at = [&](std::size_t c) { return c < values.size() ? values[c] : std::nan(""); };
+    const double t = at(ct), x = at(cx), y = at(cy);
+    if (!std::isfinite(t) || !std::isfinite(x) || !std::isfinite(y))
+      throw InputError(csv.string() + ":" + std::to_string(row) + ": expected t,hx" + suffix + ",hy" + suffix +
+                       " as finite numbers");
     if (!m_time.empty() && t <= m_time.back())
       throw InputError(csv.string() + ":" + std::to_string(row) + ": times must increase");
     m_time.push_back(t);

@@ -5,16 +5,19 @@
 
 namespace vtb {
 
-Eigen::Vector2d saturate(const Eigen::Vector2d& f, double max_force, bool* saturated) {
+template <int n>
+Eigen::Matrix<double, n, 1> saturate(const Eigen::Matrix<double, n, 1>& f, double max_force, bool* saturated) {
   if (saturated) *saturated = false;
-  if (!f.allFinite()) return Eigen::Vector2d::Zero();
-  const double n = f.norm();
-  if (n <= max_force) return f;
+  if (!f.allFinite()) return Eigen::Matrix<double, n, 1>::Zero();
+  const double norm = f.norm();
+  if (norm <= max_force) return f;
   if (saturated) *saturated = true;
-  return f * (max_force / n);
+  return f * (max_force / norm);
 }
 
-Eigen::Vector2d ForceShaper::shape(const Eigen::Vector2d& raw, double t, double physics_time, bool physics_finite) {
+template <int n>
+typename BasicForceShaper<n>::Vec BasicForceShaper<n>::shape(const Vec& raw, double t, double physics_time,
+                                                             bool physics_finite) {
   const bool stalled = t - physics_time > m_p.stall_after;
   if (!m_faulted && (stalled || !physics_finite || !raw.allFinite())) {
     m_faulted = true;
@@ -22,11 +25,16 @@ Eigen::Vector2d ForceShaper::shape(const Eigen::Vector2d& raw, double t, double 
   }
   if (m_faulted) {
     const double scale = std::clamp(1.0 - (t - m_fault_time) / m_p.ramp_out, 0.0, 1.0);
-    return saturate(m_last_good * scale, m_p.max_force, &m_saturated);
+    return saturate<n>(m_last_good * scale, m_p.max_force, &m_saturated);
   }
   const double scale = m_p.ramp_in > 0 ? std::clamp(t / m_p.ramp_in, 0.0, 1.0) : 1.0;
-  m_last_good = saturate(raw * scale, m_p.max_force, &m_saturated);
+  m_last_good = saturate<n>(raw * scale, m_p.max_force, &m_saturated);
   return m_last_good;
 }
+
+template Eigen::Matrix<double, 2, 1> saturate<2>(const Eigen::Matrix<double, 2, 1>&, double, bool*);
+template Eigen::Matrix<double, 3, 1> saturate<3>(const Eigen::Matrix<double, 3, 1>&, double, bool*);
+template class BasicForceShaper<2>;
+template class BasicForceShaper<3>;
 
 } // namespace vtb

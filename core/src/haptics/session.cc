@@ -1,6 +1,7 @@
 #include "vtb/core/haptics/session.hh"
 
 #include "vtb/core/haptics/contact2d.hh"
+#include "vtb/core/haptics/contact3d.hh"
 #include "vtb/core/haptics/device.hh"
 #include "vtb/core/haptics/force_shaping.hh"
 #include "vtb/core/haptics/triple_buffer.hh"
@@ -29,95 +30,173 @@ namespace {
 
 using steady = std::chrono::steady_clock;
 
+template <int dim> using Vec = Eigen::Matrix<double, dim, 1>;
+
 /// What the physics publishes for the servo: the deformed body and when.
-struct Snapshot {
+template <int dim> struct Snapshot {
   double t = 0;
   bool finite = true;
-  Nodal<2> x, v;
+  Nodal<dim> x, v;
 };
 
-/// What the servo sends back: the contact force on the body, where.
-struct ContactCommand {
-  int edge = -1;
-  double along = 0;
-  Eigen::Vector2d force_on_body = Eigen::Vector2d::Zero();
+/// What the servo sends back for one probe: the contact force on the body, where.
+template <int dim> struct ContactCommand {
+  int facet = -1;
+  std::array<double, dim> weights{};
+  Vec<dim> force_on_body = Vec<dim>::Zero();
+};
+template <int dim> using Commands = std::vector<ContactCommand<dim>>; ///< one per probe, sized once
+
+/// The 2-DOF device's plane in the body's space: world = origin + axes * device.
+template <int dim> struct DevicePlane {
+  Vec<dim> origin = Vec<dim>::Zero();
+  Eigen::Matrix<double, dim, 2> axes = Eigen::Matrix<double, dim, 2>::Identity();
 };
 
-/// The servo side: device, proxy, coupling, shaping, log. No allocation in tick().
-class Servo {
+/// The probes' proxies against the body: the 2D boundary walk, or one AABB tree and a proxy
+/// per probe in 3D.
+template <int dim> class Contacts;
+
+template <> class Contacts<2> {
 public:
-  Servo(HapticDevice& device, const Mesh2& mesh, const HapticsDesc& h, long max_samples, TripleBuffer<Snapshot>& snap,
-        TripleBuffer<ContactCommand>& cmd)
-      : m_device(device), m_contact(mesh), m_h(h),
-        m_shaper(ForceShaper::Params{std::min(h.max_force, device.spec().max_force), 0.5, 0.03, 0.01}), m_snap(snap),
-        m_cmd(cmd), m_x(mesh.points) {
-    for (auto* v : {&m_rep.t, &m_rep.hx, &m_rep.hy, &m_rep.fx, &m_rep.fy})
-      v->reserve(static_cast<std::size_t>(max_samples));
-    m_max = max_samples;
+  Contacts(const Mesh2& mesh, std::size_t probes) {
+    m_c.reserve(probes);
+    for (std::size_t i = 0; i < probes; ++i) m_c.emplace_back(mesh);
+  }
+  void refit(const Nodal<2>&) {}
+  ContactResult<2> update(std::size_t i, const Eigen::Vector2d& h, const Nodal<2>& x) { return m_c[i].update(h, x); }
+  const std::vector<std::array<int, 2>>& facets() const { return m_c.front().facets(); }
+
+private:
+  std::vector<BoundaryContact> m_c;
+};
+
+template <> class Contacts<3> {
+public:
+  Contacts(const Mesh3& mesh, std::size_t probes) : m_tree(mesh), m_c(probes, SurfaceContact(m_tree)) {}
+  void refit(const Nodal<3>& x) { m_tree.rebuild(x); }
+  ContactResult<3> update(std::size_t i, const Eigen::Vector3d& h, const Nodal<3>& x) { return m_c[i].update(h, x); }
+  const std::vector<std::array<int, 3>>& facets() const { return m_tree.facets(); }
+
+private:
+  SurfaceTree m_tree;
+  std::vector<SurfaceContact> m_c;
+};
+
+/// The servo side: devices, proxies, coupling, shaping, log. No allocation in tick().
+template <int dim> class Servo {
+public:
+  Servo(std::vector<std::unique_ptr<HapticDevice>>& devices, const Mesh<dim>& mesh, const HapticsDesc& h,
+        const DevicePlane<dim>& plane, long max_samples, TripleBuffer<Snapshot<dim>>& snap,
+        TripleBuffer<Commands<dim>>& cmd)
+      : m_devices(devices), m_contacts(mesh, devices.size()), m_h(h), m_plane(plane), m_snap(snap), m_cmd(cmd),
+        m_x(mesh.points), m_max(max_samples) {
+    m_rep.t.reserve(static_cast<std::size_t>(max_samples));
+    m_rep.probes.resize(devices.size());
+    for (std::size_t i = 0; i < devices.size(); ++i) {
+      m_shapers.emplace_back(typename BasicForceShaper<dim>::Params{
+          std::min(h.max_force, devices[i]->spec().max_force), 0.5, 0.03, 0.01});
+      for (auto* v : {&m_rep.probes[i].hx, &m_rep.probes[i].hy, &m_rep.probes[i].fx, &m_rep.probes[i].fy})
+        v->reserve(static_cast<std::size_t>(max_samples));
+    }
   }
 
-  /// One servo cycle at servo time t.
+  /// One servo cycle at servo time t, for every probe.
   void tick(double t) {
-    Eigen::Vector2d pos, vel;
-    m_device.read(pos, vel);
-    m_snap.fetch();
-    const Snapshot& s = m_snap.front();
+    const bool fresh = m_snap.fetch();
+    const Snapshot<dim>& s = m_snap.front();
     // Local linear model of the body between physics updates: nodes move on with their
     // velocity since the snapshot (refreshed by every physics step).
     const double age = std::clamp(t - s.t, 0.0, 0.05);
     m_x = s.x + age * s.v;
-    Eigen::Vector2d raw = Eigen::Vector2d::Zero();
-    const BoundaryContact::Result c = m_contact.update(pos, m_x);
-    if (c.touching) raw = m_h.coupling_stiffness * (c.proxy - pos) - m_h.coupling_damping * vel;
-    const Eigen::Vector2d f = m_shaper.shape(raw, t, s.t, s.finite && m_x.allFinite());
-    m_device.command(f);
-    ContactCommand& out = m_cmd.back();
-    out.edge = c.touching ? c.edge : -1;
-    out.along = c.along;
-    out.force_on_body = -f;
+    const bool finite = s.finite && m_x.allFinite();
+    if (fresh && finite) m_contacts.refit(s.x);
+    const bool record = static_cast<long>(m_rep.t.size()) < m_max;
+    if (record) m_rep.t.push_back(t);
+    bool all_zero = true;
+    Commands<dim>& out = m_cmd.back();
+    for (std::size_t i = 0; i < m_devices.size(); ++i) {
+      Eigen::Vector2d pos, vel;
+      m_devices[i]->read(pos, vel);
+      const Vec<dim> handle = m_plane.origin + m_plane.axes * pos;
+      Vec<dim> raw = Vec<dim>::Zero();
+      ContactResult<dim> c;
+      if (finite) c = m_contacts.update(i, handle, m_x);
+      if (c.touching) raw = coupling(c, handle, m_plane.axes * vel, s.v);
+      // The coupling force is shaped whole; a planar device renders its in-plane part (the
+      // rest is taken by its mechanism), the body receives the whole reaction.
+      const Vec<dim> f = m_shapers[i].shape(raw, t, s.t, finite);
+      const Eigen::Vector2d fd = m_plane.axes.transpose() * f;
+      m_devices[i]->command(fd);
+      out[i].facet = c.touching ? c.facet : -1;
+      out[i].weights = c.weights;
+      out[i].force_on_body = -f;
+      all_zero = all_zero && f.norm() == 0.0;
+      if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, fd);
+      if (m_shapers[i].faulted() && m_rep.fault_time < 0) m_rep.fault_time = m_shapers[i].fault_time();
+    }
     m_cmd.publish();
-    record(t, pos, vel, f);
+    if (m_rep.fault_time >= 0 && m_rep.force_zero_time < 0 && all_zero) m_rep.force_zero_time = t;
   }
 
   HapticsReport& report() { return m_rep; }
-  const BoundaryContact& contact() const { return m_contact; }
-  const ForceShaper& shaper() const { return m_shaper; }
+  const std::vector<std::array<int, dim>>& facets() const { return m_contacts.facets(); }
 
 private:
-  void record(double t, const Eigen::Vector2d& pos, const Eigen::Vector2d& vel, const Eigen::Vector2d& f) {
-    if (static_cast<long>(m_rep.t.size()) >= m_max) return;
-    m_rep.t.push_back(t);
-    m_rep.hx.push_back(pos.x());
-    m_rep.hy.push_back(pos.y());
-    m_rep.fx.push_back(f.x());
-    m_rep.fy.push_back(f.y());
-    if (!f.allFinite()) ++m_rep.nonfinite_samples;
-    if (m_shaper.last_saturated()) ++m_rep.saturated_samples;
-    m_rep.max_force = std::max(m_rep.max_force, f.norm());
-    if (!m_rep.t.empty() && m_rep.t.size() > 1) m_rep.energy_to_user += f.dot(vel) * (t - m_rep.t[m_rep.t.size() - 2]);
-    if (m_shaper.faulted() && m_rep.fault_time < 0) m_rep.fault_time = m_shaper.fault_time();
-    if (m_shaper.faulted() && m_rep.force_zero_time < 0 && f.norm() == 0.0) m_rep.force_zero_time = t;
+  /// Virtual coupling between handle and proxy: a spring, and a damper on their relative
+  /// velocity (the proxy moves with the surface: the weighted velocities of the touched facet's
+  /// nodes). Contact pushes and never pulls: a negative normal part (the handle withdrawing
+  /// faster than the surface follows) is dropped, so the surface is not sticky.
+  Vec<dim> coupling(const ContactResult<dim>& c, const Vec<dim>& handle, const Vec<dim>& handle_velocity,
+                    const Nodal<dim>& node_velocity) const {
+    const auto& facet = m_contacts.facets()[static_cast<std::size_t>(c.facet)];
+    Vec<dim> proxy_velocity = Vec<dim>::Zero();
+    for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k)
+      proxy_velocity += c.weights[k] * node_velocity.col(facet[k]);
+    Vec<dim> f = m_h.coupling_stiffness * (c.proxy - handle) + m_h.coupling_damping * (proxy_velocity - handle_velocity);
+    const Vec<dim> depth = c.proxy - handle;
+    const double d2 = depth.squaredNorm();
+    if (d2 > 0) {
+      const double normal = f.dot(depth) / d2;
+      if (normal < 0) f -= normal * depth;
+    }
+    return f;
   }
 
-  HapticDevice& m_device;
-  BoundaryContact m_contact;
+  void log(ProbeTrace& p, const BasicForceShaper<dim>& shaper, const Eigen::Vector2d& pos, const Eigen::Vector2d& vel,
+           const Eigen::Vector2d& f) {
+    const std::size_t n = m_rep.t.size();
+    if (n > 1) p.energy_to_user += f.dot(vel) * (m_rep.t[n - 1] - m_rep.t[n - 2]);
+    p.hx.push_back(pos.x());
+    p.hy.push_back(pos.y());
+    p.fx.push_back(f.x());
+    p.fy.push_back(f.y());
+    if (!f.allFinite()) ++p.nonfinite_samples;
+    if (shaper.last_saturated()) ++p.saturated_samples;
+    p.max_force = std::max(p.max_force, f.norm());
+  }
+
+  std::vector<std::unique_ptr<HapticDevice>>& m_devices;
+  Contacts<dim> m_contacts;
   const HapticsDesc& m_h;
-  ForceShaper m_shaper;
-  TripleBuffer<Snapshot>& m_snap;
-  TripleBuffer<ContactCommand>& m_cmd;
-  Nodal<2> m_x;
+  DevicePlane<dim> m_plane;
+  std::vector<BasicForceShaper<dim>> m_shapers;
+  TripleBuffer<Snapshot<dim>>& m_snap;
+  TripleBuffer<Commands<dim>>& m_cmd;
+  Nodal<dim> m_x;
   HapticsReport m_rep;
   long m_max = 0;
 };
 
-/// The physics side: one spring-solver step with the contact force applied, then publish.
-class Physics {
+/// The physics side: one spring-solver step with the probes' contact forces applied, then publish.
+template <int dim> class Physics {
 public:
-  Physics(const Model<2>& model, const IntegratorOptions& o, TripleBuffer<Snapshot>& snap,
-          TripleBuffer<ContactCommand>& cmd, const std::vector<std::array<int, 2>>& edges, const HapticsOptions& faults)
+  Physics(const Model<dim>& model, const IntegratorOptions& o, TripleBuffer<Snapshot<dim>>& snap,
+          TripleBuffer<Commands<dim>>& cmd, const std::vector<std::array<int, dim>>& facets,
+          const HapticsOptions& faults)
       : m_model(model), m_integ(make_integrator(model, o)), m_state(initial_state(model)), m_snap(snap), m_cmd(cmd),
-        m_edges(edges), m_faults(faults) {
-    m_state.applied = Nodal<2>::Zero(2, model.num_nodes());
+        m_facets(facets), m_faults(faults) {
+    m_state.applied = Nodal<dim>::Zero(dim, model.num_nodes());
   }
 
   double dt() const { return m_integ->dt(); }
@@ -128,17 +207,17 @@ public:
     using F = HapticsOptions::Fault;
     if (m_faults.fault == F::stall && m_state.t >= m_faults.fault_time) return false;
     m_cmd.fetch();
-    const ContactCommand& c = m_cmd.front();
     m_state.applied.setZero();
-    if (c.edge >= 0) {
-      const auto& e = m_edges[static_cast<std::size_t>(c.edge)];
-      m_state.applied.col(e[0]) += (1 - c.along) * c.force_on_body;
-      m_state.applied.col(e[1]) += c.along * c.force_on_body;
+    // Each probe's force on the nodes of the touched facet, by the proxy's barycentric weights.
+    for (const ContactCommand<dim>& c : m_cmd.front()) {
+      if (c.facet < 0) continue;
+      const auto& f = m_facets[static_cast<std::size_t>(c.facet)];
+      for (int k = 0; k < dim; ++k) m_state.applied.col(f[static_cast<std::size_t>(k)]) += c.weights[static_cast<std::size_t>(k)] * c.force_on_body;
     }
     const auto a = steady::now();
     m_integ->step(m_state);
     m_step_us.push_back(std::chrono::duration<double, std::micro>(steady::now() - a).count());
-    Snapshot& s = m_snap.back();
+    Snapshot<dim>& s = m_snap.back();
     s.t = m_state.t;
     s.x = m_model.net.rest + m_state.u;
     s.v = m_state.v;
@@ -152,12 +231,12 @@ public:
   std::vector<double>& step_times() { return m_step_us; }
 
 private:
-  const Model<2>& m_model;
-  std::unique_ptr<Integrator<2>> m_integ;
-  State<2> m_state;
-  TripleBuffer<Snapshot>& m_snap;
-  TripleBuffer<ContactCommand>& m_cmd;
-  const std::vector<std::array<int, 2>>& m_edges;
+  const Model<dim>& m_model;
+  std::unique_ptr<Integrator<dim>> m_integ;
+  State<dim> m_state;
+  TripleBuffer<Snapshot<dim>>& m_snap;
+  TripleBuffer<Commands<dim>>& m_cmd;
+  const std::vector<std::array<int, dim>>& m_facets;
   HapticsOptions m_faults;
   std::vector<double> m_step_us;
 };
@@ -187,49 +266,78 @@ HapticsOptions::Fault parse_fault(const std::string& spec, double& time) {
   return kind == "stall" ? HapticsOptions::Fault::stall : HapticsOptions::Fault::nan;
 }
 
-HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
-  const std::string file = scene.file.string();
-  if (!scene.haptics) throw InputError(file + ": [haptics] is missing: this scene does not use the device");
-  const HapticsDesc& h = *scene.haptics;
-  AnyMesh any = load_mesh(scene);
-  if (!std::holds_alternative<Mesh2>(any))
-    throw InputError(file + ": the ProCAT is a 2-DOF planar device; [haptics] needs a 2D mesh");
-  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(std::move(any)));
+namespace {
 
+/// The devices: one per probe, all simulated ProCATs held by scripted hands, or all replays.
+std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, const HapticsOptions& opt) {
+  const std::string file = scene.file.string();
+  const HapticsDesc& h = *scene.haptics;
   DeviceSpec spec;
   spec.max_force = h.max_force;
   spec.rate_hz = h.rate;
-  std::unique_ptr<HapticDevice> device;
+  std::vector<std::unique_ptr<HapticDevice>> devices;
+  const int probes = 1 + static_cast<int>(h.probes.size());
   if (h.device == "replay") {
     if (opt.replay.empty()) throw InputError(file + ": [haptics].device = \"replay\" needs --replay FILE");
-    device = std::make_unique<ReplayDevice>(spec, opt.replay);
-  } else {
-    if (!h.hand) throw InputError(file + ": [haptics.hand] is missing: the simulated ProCAT needs a scripted hand");
-    HandScript hand;
-    for (const auto& w : h.hand->waypoints) hand.waypoints.emplace_back(w[0], w[1]);
-    hand.duration = h.hand->duration;
-    hand.grip_stiffness = h.hand->grip_stiffness;
-    device = std::make_unique<SimulatedProCAT>(spec, hand);
+    for (int i = 0; i < probes; ++i) devices.push_back(std::make_unique<ReplayDevice>(spec, opt.replay, i));
+    return devices;
   }
+  if (!h.hand) throw InputError(file + ": [haptics.hand] is missing: the simulated ProCAT needs a scripted hand");
+  for (int i = 0; i < probes; ++i) {
+    const HandDesc& desc = i == 0 ? *h.hand : h.probes[static_cast<std::size_t>(i - 1)];
+    HandScript hand;
+    for (const auto& w : desc.waypoints) hand.waypoints.emplace_back(w[0], w[1]);
+    hand.duration = desc.duration;
+    hand.grip_stiffness = desc.grip_stiffness;
+    devices.push_back(std::make_unique<SimulatedProCAT>(spec, hand));
+  }
+  return devices;
+}
+
+template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<dim>& mesh) {
+  DevicePlane<dim> plane;
+  if constexpr (dim == 2) {
+    if (scene.haptics->plane)
+      throw InputError(scene.file.string() + ": [haptics.plane] places the device in a 3D body; this mesh is 2D");
+  } else {
+    if (scene.haptics->plane) {
+      plane.origin = scene.haptics->plane->origin;
+      plane.axes << scene.haptics->plane->x_axis, scene.haptics->plane->y_axis;
+    } else {
+      // The device's x-y plane through the middle of the body in z.
+      plane.origin.z() = 0.5 * (mesh.points.row(2).minCoeff() + mesh.points.row(2).maxCoeff());
+    }
+  }
+  return plane;
+}
+
+template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, Mesh<dim> mesh) {
+  const HapticsDesc& h = *scene.haptics;
+  const DevicePlane<dim> plane = device_plane(scene, mesh);
+  const Model<dim> model = build_model<dim>(scene, std::move(mesh));
+  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt);
 
   IntegratorOptions o = integrator_options(scene.solver);
   // The physics of a session steps at a fixed dt: CVODE and the FEM fall back to the filter.
   if (o.kind == "cvode" || o.kind == "fem") o.kind = "filtered";
 
-  Snapshot init;
+  Snapshot<dim> init;
   init.x = model.net.rest;
-  init.v = Nodal<2>::Zero(2, model.num_nodes());
-  TripleBuffer<Snapshot> snap(init);
-  TripleBuffer<ContactCommand> cmd(ContactCommand{});
+  init.v = Nodal<dim>::Zero(dim, model.num_nodes());
+  TripleBuffer<Snapshot<dim>> snap(init);
+  TripleBuffer<Commands<dim>> cmd(Commands<dim>(devices.size()));
   const double period = 1.0 / h.rate;
   const long ticks = std::lround(scene.duration / period);
-  Servo servo(*device, model.mesh, h, ticks + 2, snap, cmd);
-  Physics physics(model, o, snap, cmd, servo.contact().edges(), opt);
+  Servo<dim> servo(devices, model.mesh, h, plane, ticks + 2, snap, cmd);
+  Physics<dim> physics(model, o, snap, cmd, servo.facets(), opt);
+  const auto advance_devices = [&devices](double dt) {
+    for (auto& d : devices) d->advance(dt);
+  };
 
-  std::vector<double> periods;
+  std::vector<double> periods, tick_us;
   periods.reserve(static_cast<std::size_t>(ticks));
+  tick_us.reserve(static_cast<std::size_t>(ticks));
   long misses = 0;
-  double elapsed = 0;
   if (opt.lockstep) {
     // Simulated time only: deterministic, for tests and replays.
     for (long k = 0; k < ticks; ++k) {
@@ -237,10 +345,9 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
       while (physics.time() + 1e-12 < t)
         if (!physics.step()) break;
       servo.tick(t);
-      device->advance(period);
+      advance_devices(period);
       periods.push_back(period * 1e6);
     }
-    elapsed = static_cast<double>(ticks) * period;
   } else {
     // Real time: the servo on its own thread, absolute deadlines, the last 200 us spun.
     std::atomic<bool> done{false};
@@ -264,7 +371,8 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
         if (k > 0) periods.push_back(std::chrono::duration<double, std::micro>(now - last).count());
         last = now;
         servo.tick(static_cast<double>(k) * period);
-        device->advance(period);
+        tick_us.push_back(std::chrono::duration<double, std::micro>(steady::now() - now).count());
+        advance_devices(period);
         next += p;
         if (now - next > 10 * p) next = now + p; // far behind: resynchronise rather than burst
       }
@@ -281,10 +389,16 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
       }
     }
     servo_thread.join();
-    elapsed = std::chrono::duration<double>(steady::now() - start).count();
   }
   HapticsReport rep = std::move(servo.report());
+  rep.dim = dim;
   rep.samples = static_cast<long>(rep.t.size());
+  for (const ProbeTrace& p : rep.probes) {
+    rep.max_force = std::max(rep.max_force, p.max_force);
+    rep.saturated_samples += p.saturated_samples;
+    rep.nonfinite_samples += p.nonfinite_samples;
+    rep.energy_to_user += p.energy_to_user;
+  }
   rep.rate_hz_mean =
       periods.empty()
           ? 0
@@ -292,10 +406,20 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
   rep.period_p99_us = percentile(periods, 0.99);
   rep.period_max_us = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
   rep.deadline_misses = misses;
+  rep.tick_median_us = percentile(tick_us, 0.5);
+  rep.tick_p99_us = percentile(tick_us, 0.99);
   rep.physics_steps = static_cast<long>(physics.step_times().size());
   rep.physics_step_median_us = percentile(physics.step_times(), 0.5);
-  (void)elapsed;
   return rep;
+}
+
+} // namespace
+
+HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
+  if (!scene.haptics) throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
+  AnyMesh any = load_mesh(scene);
+  if (auto* m2 = std::get_if<Mesh2>(&any)) return run_session<2>(scene, opt, std::move(*m2));
+  return run_session<3>(scene, opt, std::get<Mesh3>(std::move(any)));
 }
 
 void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, const std::string& scene_name) {
@@ -303,9 +427,15 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   std::filesystem::create_directories(dir, ec);
   if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
   std::ostringstream csv;
-  csv << std::setprecision(10) << "t,hx,hy,fx,fy\n";
-  for (std::size_t k = 0; k < r.t.size(); ++k)
-    csv << r.t[k] << ',' << r.hx[k] << ',' << r.hy[k] << ',' << r.fx[k] << ',' << r.fy[k] << '\n';
+  csv << std::setprecision(10) << "t,hx,hy,fx,fy";
+  for (std::size_t i = 1; i < r.probes.size(); ++i)
+    for (const char* c : {"hx_", "hy_", "fx_", "fy_"}) csv << ',' << c << i;
+  csv << '\n';
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    csv << r.t[k];
+    for (const ProbeTrace& p : r.probes) csv << ',' << p.hx[k] << ',' << p.hy[k] << ',' << p.fx[k] << ',' << p.fy[k];
+    csv << '\n';
+  }
   nlohmann::ordered_json j;
   j["scene"] = scene_name;
   j["samples"] = r.samples;
@@ -321,6 +451,15 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["force_zero_time"] = r.force_zero_time;
   j["physics_steps"] = r.physics_steps;
   j["physics_step_median_us"] = r.physics_step_median_us;
+  j["tick_median_us"] = r.tick_median_us;
+  j["tick_p99_us"] = r.tick_p99_us;
+  j["dim"] = r.dim;
+  j["probes"] = nlohmann::ordered_json::array();
+  for (const ProbeTrace& p : r.probes)
+    j["probes"].push_back({{"max_force", p.max_force},
+                           {"saturated_samples", p.saturated_samples},
+                           {"nonfinite_samples", p.nonfinite_samples},
+                           {"energy_to_user", p.energy_to_user}});
   const std::pair<const char*, std::string> files[] = {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}};
   for (const auto& [name, text] : files) {
     std::ofstream f(dir / (std::string(name) + ".part"));

@@ -86,6 +86,12 @@ struct HandDesc {
   double grip_stiffness = 0;
 };
 
+/// Where the 2-DOF device's plane lies in a 3D body: world = origin + hx x_axis + hy y_axis.
+struct DevicePlaneDesc {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  Eigen::Vector3d x_axis = Eigen::Vector3d::UnitX(), y_axis = Eigen::Vector3d::UnitY(); ///< unit, orthogonal
+};
+
 struct HapticsDesc {
   std::string device = "procat-sim";
   double rate = 1000.0;
@@ -93,6 +99,11 @@ struct HapticsDesc {
   double coupling_damping = 2.0;
   double max_force = 4.0;
   std::optional<HandDesc> hand;
+  /// [[haptics.probe]]: further devices, each held by a scripted hand of its own (probe 1, 2, ...;
+  /// [haptics.hand] is probe 0). Their contact forces act on the body in the same step.
+  std::vector<HandDesc> probes;
+  /// [haptics.plane], 3D scenes only; absent = the x-y plane through the middle of the body in z.
+  std::optional<DevicePlaneDesc> plane;
 };
 
 struct Scene {

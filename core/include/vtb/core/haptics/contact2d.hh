@@ -5,6 +5,7 @@
 /// the boundary from where contact began, so a probe pressed deep never pops through to the
 /// far side. Allocation-free after construction.
 
+#include "vtb/core/haptics/contact_result.hh"
 #include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
 
@@ -15,18 +16,14 @@ public:
   /// The boundary loops of the mesh (outward-oriented facets chained into a cycle).
   explicit BoundaryContact(const Mesh2& mesh);
 
-  struct Result {
-    bool touching = false;
-    Eigen::Vector2d proxy = Eigen::Vector2d::Zero();
-    int edge = -1;    ///< index into edges()
-    double along = 0; ///< position on the edge, 0 at its first node
-  };
+  using Result = ContactResult<2>;
 
   /// Updates the proxy for the handle at `handle` with the body's nodes at `x` (deformed).
   Result update(const Eigen::Vector2d& handle, const Nodal<2>& x);
   void reset() { m_last = Result{}; }
 
-  const std::vector<std::array<int, 2>>& edges() const { return m_edges; }
+  /// The boundary edges (Result::facet indexes them), outward oriented.
+  const std::vector<std::array<int, 2>>& facets() const { return m_edges; }
 
 private:
   bool inside(const Eigen::Vector2d& p, const Nodal<2>& x) const;

@@ -67,11 +67,11 @@ private:
   Eigen::Vector2d m_measured, m_measured_prev, m_velocity_estimate = Eigen::Vector2d::Zero();
 };
 
-/// Replays a recorded handle trajectory (CSV with columns t,hx,hy, as haptics.csv has):
-/// the handle goes where the recording says, whatever force is commanded.
+/// Replays a recorded handle trajectory (CSV with columns t,hx,hy, as haptics.csv has; probe
+/// k > 0 reads hx_k,hy_k): the handle goes where the recording says, whatever force is commanded.
 class ReplayDevice final : public HapticDevice {
 public:
-  ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv);
+  ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv, int probe = 0);
   const DeviceSpec& spec() const override { return m_spec; }
   void read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const override;
   void command(const Eigen::Vector2d&) override {}

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// `vtb haptics`: the device servo loop (its own thread, `rate` Hz) coupled through a virtual
-/// coupling and the proxy to a 2D body simulated by a spring solver (multirate: physics at its
-/// own dt on the main thread), with saturation, ramp-in and a watchdog.
+/// coupling and the proxy to a 2D or 3D body simulated by a spring solver (multirate: physics
+/// at its own dt on the main thread), with saturation, ramp-in and a watchdog. One or several
+/// probes (devices), whose contact forces act on the body in the same physics step.
 
 #include "vtb/core/scene.hh"
 
@@ -14,31 +15,44 @@ struct HapticsOptions {
   enum class Fault { none, stall, nan } fault = Fault::none;
   double fault_time = 0;        ///< s of simulated time
   bool lockstep = false;        ///< one thread, servo and physics interleaved in simulated time (deterministic)
-  std::filesystem::path replay; ///< for device = "replay": the recorded handle trajectory
+  std::filesystem::path replay; ///< for device = "replay": the recorded handle trajectories (haptics.csv)
 };
 
 /// Parses "stall@T" or "nan@T". Throws InputError otherwise.
 HapticsOptions::Fault parse_fault(const std::string& spec, double& time);
 
+/// One probe's record: handle position and the force sent to its device, per servo sample
+/// (device coordinates), and its totals.
+struct ProbeTrace {
+  std::vector<double> hx, hy, fx, fy;
+  double max_force = 0;
+  long saturated_samples = 0, nonfinite_samples = 0;
+  double energy_to_user = 0; ///< J: the work the device did on the handle
+};
+
 struct HapticsReport {
+  int dim = 2;
   long samples = 0;
   double rate_hz_mean = 0, period_p99_us = 0, period_max_us = 0;
   long deadline_misses = 0; ///< cycles that started more than half a period late
+  /// Over all probes: the largest force, the sums of the counts and of the energy.
   double max_force = 0;
   long saturated_samples = 0, nonfinite_samples = 0;
-  double energy_to_user = 0;                    ///< J: the work the device did on the handle
-  double fault_time = -1, force_zero_time = -1; ///< when the watchdog tripped, when |F| first hit 0 after it
+  double energy_to_user = 0;
+  double fault_time = -1, force_zero_time = -1; ///< when the watchdog tripped, when every |F| first hit 0 after it
   long physics_steps = 0;
   double physics_step_median_us = 0;
-  /// The servo samples: t, handle position, commanded force.
-  std::vector<double> t, hx, hy, fx, fy;
+  double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
+  std::vector<double> t;          ///< servo sample times
+  std::vector<ProbeTrace> probes; ///< probe 0 is [haptics.hand], then [[haptics.probe]] in order
 };
 
-/// Runs the scene's [haptics] session for [scene].duration. Requires a 2D scene with
-/// [haptics] and [haptics.hand] (procat-sim) or a replay file.
+/// Runs the scene's [haptics] session for [scene].duration: a 2D scene, or a 3D one with the
+/// device's plane placed by [haptics.plane]. Needs [haptics.hand] (procat-sim) or a replay file.
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& options);
 
-/// haptics.csv (t,hx,hy,fx,fy) and summary.json into dir, all or nothing.
+/// haptics.csv (t,hx,hy,fx,fy, then hx_k,hy_k,fx_k,fy_k for probe k >= 1) and summary.json
+/// into dir, all or nothing.
 void write_haptics(const HapticsReport& report, const std::filesystem::path& dir, const std::string& scene_name);
 
 } // namespace vtb
