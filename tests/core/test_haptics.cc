@@ -1,11 +1,14 @@
-// Haptics: force shaping, the watchdog on both faults, passivity of the virtual coupling
-// against Colgate's bound, deterministic replay, and the proxy on convex and concave boundaries.
+// Haptics: force shaping, the watchdog on both faults (2D and 3D), passivity of the virtual
+// coupling against Colgate's bound, deterministic replay, the proxy on convex and concave
+// boundaries in 2D and 3D, the AABB tree following a deformed body, and several probes at once.
 #include "support/small_models.hh"
 #include "vtb/core/haptics/contact2d.hh"
+#include "vtb/core/haptics/contact3d.hh"
 #include "vtb/core/haptics/device.hh"
 #include "vtb/core/haptics/force_shaping.hh"
 #include "vtb/core/haptics/session.hh"
 #include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/generate.hh"
 
 #include <gtest/gtest.h>
 
@@ -48,18 +51,21 @@ TEST(ForceShaping, RampsInAndOutAndStaysOff) {
   EXPECT_EQ(s.shape(raw, 2.0, 2.0, true).x(), 0.0) << "a tripped watchdog stays tripped";
 }
 
-Scene press_scene() {
-  return read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments" / "scenes" / "haptic_press.toml");
+Scene scene_named(const std::string& name) {
+  return read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments" / "scenes" / (name + ".toml"));
 }
+Scene press_scene() { return scene_named("haptic_press"); }
 
-class Watchdog : public ::testing::TestWithParam<std::string> {};
+/// (scene, fault): the 2D plate press and the 3D slab press, each with both faults.
+class Watchdog : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};
 
 TEST_P(Watchdog, DropsTheForceToZeroWithin50msOfAFault) {
-  // Lockstep (deterministic) press on the plate; the fault at 1.4 s, while the handle presses.
+  // Lockstep (deterministic) press; the fault at 1.4 s, while the handle presses.
+  const auto& [scene, fault] = GetParam();
   HapticsOptions o;
   o.lockstep = true;
-  o.fault = parse_fault(GetParam() + "@1.4", o.fault_time);
-  const HapticsReport r = run_haptics(press_scene(), o);
+  o.fault = parse_fault(fault + "@1.4", o.fault_time);
+  const HapticsReport r = run_haptics(scene_named(scene), o);
   double before = 0;
   const ProbeTrace& p = r.probes.at(0);
   for (std::size_t k = 0; k < r.t.size(); ++k) {
@@ -77,7 +83,10 @@ TEST_P(Watchdog, DropsTheForceToZeroWithin50msOfAFault) {
   EXPECT_EQ(r.nonfinite_samples, 0);
 }
 
-INSTANTIATE_TEST_SUITE_P(Faults, Watchdog, ::testing::Values("stall", "nan"));
+INSTANTIATE_TEST_SUITE_P(Faults, Watchdog,
+                         ::testing::Combine(::testing::Values("haptic_press", "haptic_slab_press"),
+                                            ::testing::Values("stall", "nan")),
+                         [](const auto& pinfo) { return std::get<0>(pinfo.param) + "_" + std::get<1>(pinfo.param); });
 
 TEST(Haptics, LockstepRunsAreDeterministicAndReplayReproducesTheHandle) {
   HapticsOptions o;
@@ -173,6 +182,211 @@ TEST(Contact, ProxySlidesAlongAConcaveCorner) {
     const bool on_notch_bottom = std::abs(r.proxy.y() - 0.02) < 1e-9 && r.proxy.x() >= 0.02 - 1e-9;
     const bool on_notch_side = std::abs(r.proxy.x() - 0.02) < 1e-9 && r.proxy.y() >= 0.02 - 1e-9;
     EXPECT_TRUE(on_notch_bottom || on_notch_side) << r.proxy.transpose();
+  }
+}
+
+TEST(Contact, TwoDimensionalWeightsRebuildTheProxy) {
+  const Mesh2 m = generate_rectangle({0.02, 0.02}, {4, 4});
+  BoundaryContact c(m);
+  c.update({0.0133, 0.025}, m.points);
+  const auto r = c.update({0.0133, 0.018}, m.points);
+  ASSERT_TRUE(r.touching);
+  const auto& e = c.facets()[static_cast<std::size_t>(r.facet)];
+  const Eigen::Vector2d rebuilt = r.weights[0] * m.points.col(e[0]) + r.weights[1] * m.points.col(e[1]);
+  EXPECT_NEAR((rebuilt - r.proxy).norm(), 0.0, 1e-15);
+  EXPECT_NEAR(r.weights[0] + r.weights[1], 1.0, 1e-15);
+}
+
+/// An L-shaped block: the box [0, 0.04] x [0, 0.04] x [0, 0.02] without the quarter x > 0.02,
+/// y > 0.02 (a notch whose floor is y = 0.02 and whose wall is x = 0.02).
+Mesh3 l_block() {
+  Mesh3 box = generate_box({0.04, 0.04, 0.02}, {8, 8, 4});
+  std::vector<Mesh3::Cell> kept;
+  for (const auto& c : box.cells) {
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int v : c) centroid += 0.25 * box.points.col(v);
+    if (!(centroid.x() > 0.02 && centroid.y() > 0.02)) kept.push_back(c);
+  }
+  box.cells = kept;
+  return box;
+}
+
+bool in_l_block(const Eigen::Vector3d& p) {
+  const bool in_box = p.x() > 0 && p.x() < 0.04 && p.y() > 0 && p.y() < 0.04 && p.z() > 0 && p.z() < 0.02;
+  return in_box && !(p.x() > 0.02 && p.y() > 0.02);
+}
+
+TEST(Contact3D, InsideIsExactOnAConcaveBody) {
+  // Ray parity on the AABB tree against the L-shape's analytic membership, on a lattice offset
+  // from every face (no sample is within 0.6 mm of one: the answer is not a rounding question).
+  const SurfaceTree tree(l_block());
+  int n = 0, in = 0;
+  for (int i = 0; i < 12; ++i)
+    for (int j = 0; j < 12; ++j)
+      for (int k = 0; k < 7; ++k) {
+        const Eigen::Vector3d p(-0.0047 + 0.0046 * i, -0.0047 + 0.0046 * j, -0.0041 + 0.0046 * k);
+        ASSERT_EQ(tree.inside(p), in_l_block(p)) << p.transpose();
+        ++n;
+        in += in_l_block(p);
+      }
+  EXPECT_GT(in, n / 5) << "the lattice samples the inside as well";
+}
+
+TEST(Contact3D, ProxyStaysOnTheEntrySideOfAConvexBody) {
+  // A 2 cm cube pressed from the top (y = 0.02) deeper than half its height: the globally
+  // closest surface point would jump to the bottom face; the proxy stays on the top face,
+  // straight above the handle, and its barycentric weights rebuild it on the touched triangle.
+  const Mesh3 m = generate_box({0.02, 0.02, 0.02}, {4, 4, 4});
+  const SurfaceTree tree(m);
+  SurfaceContact c(tree);
+  EXPECT_FALSE(c.update({0.0101, 0.025, 0.0093}, m.points).touching);
+  for (double y = 0.0199; y > 0.002; y -= 0.0005) {
+    const auto r = c.update({0.0101, y, 0.0093}, m.points);
+    ASSERT_TRUE(r.touching) << y;
+    ASSERT_NEAR(r.proxy.y(), 0.02, 1e-15) << "popped through at y = " << y;
+    ASSERT_NEAR(r.proxy.x(), 0.0101, 1e-15);
+    ASSERT_NEAR(r.proxy.z(), 0.0093, 1e-15);
+    const auto& t = tree.facets()[static_cast<std::size_t>(r.facet)];
+    Eigen::Vector3d rebuilt = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      ASSERT_GE(r.weights[static_cast<std::size_t>(k)], 0.0);
+      rebuilt += r.weights[static_cast<std::size_t>(k)] * m.points.col(t[static_cast<std::size_t>(k)]);
+    }
+    ASSERT_NEAR((rebuilt - r.proxy).norm(), 0.0, 1e-15);
+  }
+  EXPECT_FALSE(c.update({0.0101, 0.03, 0.0093}, m.points).touching) << "contact ends outside";
+}
+
+TEST(Contact3D, ProxySlidesIntoAConcaveEdge) {
+  // The handle enters the notch floor of the L-block and moves, inside the material, towards
+  // and past the re-entrant edge (x = 0.02, y = 0.02): the proxy stays on the floor or on the
+  // wall it slides to, never on a far face.
+  const Mesh3 m = l_block();
+  const SurfaceTree tree(m);
+  SurfaceContact c(tree);
+  EXPECT_FALSE(c.update({0.03, 0.021, 0.0101}, m.points).touching);
+  auto r = c.update({0.03, 0.019, 0.0101}, m.points);
+  ASSERT_TRUE(r.touching);
+  EXPECT_NEAR(r.proxy.y(), 0.02, 1e-15);
+  bool reached_wall = false;
+  for (double s = 0; s <= 1.0; s += 0.02) {
+    r = c.update({0.03 - 0.0135 * s, 0.019 - 0.002 * s, 0.0101}, m.points);
+    ASSERT_TRUE(r.touching) << s;
+    const bool on_floor = std::abs(r.proxy.y() - 0.02) < 1e-15 && r.proxy.x() >= 0.02 - 1e-15;
+    const bool on_wall = std::abs(r.proxy.x() - 0.02) < 1e-15 && r.proxy.y() >= 0.02 - 1e-15;
+    ASSERT_TRUE(on_floor || on_wall) << r.proxy.transpose();
+    reached_wall = reached_wall || (on_wall && r.proxy.y() > 0.02 + 1e-6);
+  }
+  EXPECT_FALSE(reached_wall) << "below the floor the floor is the closer face until the corner";
+}
+
+TEST(Contact3D, TreeFollowsTheDeformedBody) {
+  // The boxes are grown by the margin: a move smaller than it keeps the boxes (no build) and
+  // the answers right, since the triangles are read from the new shape; a larger move builds.
+  const Mesh3 m = generate_box({0.02, 0.02, 0.02}, {4, 4, 4});
+  SurfaceTree tree(m);
+  const double d = 0.5 * tree.margin();
+  Nodal<3> x = m.points;
+  x.row(0).array() += d;
+  tree.rebuild(x);
+  EXPECT_EQ(tree.builds(), 0);
+  EXPECT_TRUE(tree.inside({0.02 + 0.9 * d, 0.01, 0.01})) << "inside the moved body only";
+  EXPECT_FALSE(tree.inside({0.5 * d, 0.01, 0.01})) << "outside the moved body only";
+  x.row(0).array() += 0.01;
+  tree.rebuild(x);
+  EXPECT_EQ(tree.builds(), 1);
+  EXPECT_TRUE(tree.inside({0.029, 0.01, 0.01}));
+  EXPECT_FALSE(tree.inside({0.009, 0.01, 0.01}));
+  Nodal<3> broken = x;
+  broken(1, 3) = std::nan("");
+  tree.rebuild(broken);
+  EXPECT_TRUE(tree.inside({0.029, 0.01, 0.01})) << "a non-finite shape is ignored";
+}
+
+TEST(Haptics, SlabPressPushesBackOutOfTheSurfaceAndIsDeterministic) {
+  // The 3D session: the handle presses 5 mm into the slab's top face and holds (t in [1, 2]).
+  // No contact force pulls the handle into the body (a proxy popped through to the base
+  // would), every force stays within the limit, and two lockstep runs agree bit for bit.
+  HapticsOptions o;
+  o.lockstep = true;
+  const Scene scene = scene_named("haptic_slab_press");
+  const HapticsReport a = run_haptics(scene, o), b = run_haptics(scene, o);
+  EXPECT_EQ(a.dim, 3);
+  const ProbeTrace& p = a.probes.at(0);
+  double hold_min = 1e9;
+  for (std::size_t k = 0; k < a.t.size(); ++k) {
+    ASSERT_EQ(p.fy[k], b.probes[0].fy[k]);
+    ASSERT_LE(std::hypot(p.fx[k], p.fy[k]), 4.0);
+    // The contact's normal part never pulls; what downward part there is comes from the
+    // damper's tangential part (b |v| <= 2 N s/m x 0.035 m/s = 0.07 N) on a tilted surface. A
+    // proxy popped through to the base 15 mm down would pull with 400 N/m x 15 mm = 6 N (4 N
+    // saturated).
+    ASSERT_GT(p.fy[k], -0.07) << "t = " << a.t[k];
+    if (a.t[k] > 1.1 && a.t[k] < 1.9) hold_min = std::min(hold_min, p.fy[k]);
+  }
+  // The coupling (400 N/m) at 5 mm depth bounds the force by 2 N; a layer that gave way
+  // entirely would push back nothing. Any pressing force in between is a working contact.
+  EXPECT_GT(hold_min, 0.1);
+  EXPECT_LT(a.max_force, 400.0 * 0.0055);
+}
+
+TEST(Haptics, TwoProbesAtOnePointShareTheLoad) {
+  // Two devices with the same scripted hand press the same point of the plate. If both
+  // contact forces act on the body in the same step, then for any body whose indentation grows
+  // with the load: each probe feels less than a probe pressing alone (the surface under it is
+  // pushed deeper by the other), and the two together push more than one alone. Compared at
+  // the end of the hold (t = 1.9 s), when the body is at rest. The plate is made ten times
+  // stiffer and pressed 1 mm, so the indentation stays a fraction of a millimetre (linear
+  // regime: in the linear estimate F2 = F1 (1 + a) / (1 + 2a), a = k c, the margins are ~40 %
+  // of F1, far above the ~0.01 N the handles' Coulomb friction can shift them).
+  HapticsOptions o;
+  o.lockstep = true;
+  Scene one = press_scene();
+  one.material.young_modulus *= 10;
+  for (auto& w : one.haptics->hand->waypoints)
+    if (w[1] < 0.05) w[1] = 0.049;
+  Scene two = one;
+  two.haptics->probes.push_back(*two.haptics->hand);
+  const HapticsReport r1 = run_haptics(one, o), r2 = run_haptics(two, o);
+  ASSERT_EQ(r2.probes.size(), 2u);
+  const std::size_t k = 1900;
+  ASSERT_NEAR(r1.t[k], 1.9, 1e-12);
+  const double f1 = r1.probes[0].fy[k], f2a = r2.probes[0].fy[k], f2b = r2.probes[1].fy[k];
+  EXPECT_EQ(f2a, f2b) << "identical probes, identical forces";
+  EXPECT_GT(f2a, 0.0);
+  EXPECT_LT(f2a, f1);
+  EXPECT_GT(2 * f2a, f1);
+}
+
+TEST(Haptics, TwoProbeSceneRecordsAndReplaysEachProbe) {
+  HapticsOptions o;
+  o.lockstep = true;
+  const HapticsReport r = run_haptics(scene_named("haptic_two_probes"), o);
+  ASSERT_EQ(r.probes.size(), 2u);
+  // Probe 1 stays above the plate for the first second, then both press at t = 2 s.
+  EXPECT_EQ(r.probes[1].fy[500], 0.0);
+  EXPECT_GT(r.probes[0].fy[2000], 0.01);
+  EXPECT_GT(r.probes[1].fy[2000], 0.01);
+  EXPECT_EQ(r.max_force, std::max(r.probes[0].max_force, r.probes[1].max_force));
+  const auto dir = std::filesystem::temp_directory_path() / "vtb_haptics_two_probes";
+  write_haptics(r, dir, "two");
+  ReplayDevice replay(DeviceSpec{}, dir / "haptics.csv", 1);
+  Eigen::Vector2d p, v;
+  for (std::size_t k = 0; k < 2000; ++k) replay.advance(r.t[k + 1] - r.t[k]);
+  replay.read(p, v);
+  EXPECT_NEAR(p.y(), r.probes[1].hy[2000], 1e-9);
+  EXPECT_THROW(ReplayDevice(DeviceSpec{}, dir / "haptics.csv", 2), InputError) << "no columns hx_2, hy_2";
+}
+
+TEST(Haptics, APlaneInA2DSceneIsRefused) {
+  Scene s = press_scene();
+  s.haptics->plane = DevicePlaneDesc{};
+  try {
+    run_haptics(s, HapticsOptions{});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[haptics.plane] places the device in a 3D body; this mesh is 2D"),
+              std::string::npos);
   }
 }
 

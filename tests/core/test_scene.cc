@@ -21,6 +21,12 @@ point = [0.2, 0.025]
 [solver]
 kind = "filtered"
 dt = 1e-3
+[haptics]
+max_force = 4.0
+[haptics.hand]
+waypoints = [[0.05, 0.08], [0.05, 0.04]]
+duration = 1.0
+grip_stiffness = 2000.0
 )");
 
 /// Replaces the first occurrence of `from` in the good scene.
@@ -99,7 +105,21 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"young_modulus = 5.0e4", "young_modulus = 9007199254740993",
                 "[material].young_modulus: must be a number a double can hold exactly"},
         BadCase{"total_force = [1.0, 0.0]", "total_force = [9007199254740993, 0.0]",
-                "total_force: entry 0 must be a number a double can hold exactly"}),
+                "total_force: entry 0 must be a number a double can hold exactly"},
+        // Haptics: further probes and the device's plane in a 3D body.
+        BadCase{"grip_stiffness = 2000.0",
+                "grip_stiffness = 2000.0\n[[haptics.probe]]\nwaypoints = [[0.1, 0.08]]\nduration = 1.0\n"
+                "grip_stifness = 2000.0",
+                "[[haptics.probe]] #1.grip_stifness: unknown key; did you mean 'grip_stiffness'?"},
+        BadCase{"[haptics.hand]", "[[haptics.probe]]", "[haptics.hand] is missing"},
+        BadCase{"[haptics.hand]", "[haptics.plane]\norign = [0.0, 0.0, 0.0]\n[haptics.hand]",
+                "[haptics.plane].orign: unknown key; did you mean 'origin'?"},
+        BadCase{"[haptics.hand]", "[haptics.plane]\nx_axis = [0.0, 0.0, 0.0]\n[haptics.hand]",
+                "[haptics.plane].x_axis: must be a non-zero direction"},
+        BadCase{"[haptics.hand]", "[haptics.plane]\ny_axis = [1.0, 1.0, 0.0]\n[haptics.hand]",
+                "[haptics.plane].y_axis: must be orthogonal to x_axis"},
+        BadCase{"[haptics.hand]", "[haptics.plane]\norigin = [0.0, 0.0]\n[haptics.hand]",
+                "[haptics.plane].origin: must have 3 entries, has 2"}),
     [](const auto& pinfo) { return "case" + std::to_string(pinfo.index); });
 
 TEST(Scene, ReadSceneNamesAMissingFile) {

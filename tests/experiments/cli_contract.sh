@@ -51,6 +51,17 @@ check "compare refuses an unknown solver" '[ $rc -eq 1 ] && grep -q "unknown sol
 "$vtb" haptics "$src/experiments/scenes/haptic_press.toml" --lockstep --fault nan@1.4 --out "$work/out_hap" > /dev/null; rc=$?
 check "haptics writes haptics.csv and summary.json" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_hap/haptics.csv") -eq 3001 ] && grep -q "deadline_misses" "$work/out_hap/summary.json"'
 
+"$vtb" haptics "$src/experiments/scenes/haptic_slab_press.toml" --lockstep --out "$work/out_hap3d" > /dev/null; rc=$?
+check "haptics runs a 3D body (device plane in the slab)" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_hap3d/haptics.csv") -eq 3001 ] && grep -q "\"dim\": 3" "$work/out_hap3d/summary.json"'
+
+"$vtb" haptics "$src/experiments/scenes/haptic_two_probes.toml" --lockstep --out "$work/out_hap_two" > /dev/null; rc=$?
+check "haptics with two probes writes a column set per probe" '[ $rc -eq 0 ] && head -1 "$work/out_hap_two/haptics.csv" | grep -qx "t,hx,hy,fx,fy,hx_1,hy_1,fx_1,fy_1"'
+
+sed 's/^y_axis = \[0.0, 0.0, 1.0\]/y_axis = [1.0, 0.0, 1.0]/' "$src/experiments/scenes/haptic_slab_press.toml" > "$work/bad_plane.toml"
+sed -i 's|"\.\./\.\./meshes|"'"$src"'/meshes|' "$work/bad_plane.toml"
+"$vtb" haptics "$work/bad_plane.toml" --out "$work/out_hap_bad" 2> "$work/err"; rc=$?
+check "haptics refuses a device plane whose axes are not at right angles" '[ $rc -eq 1 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "\[haptics.plane\].y_axis: must be orthogonal" "$work/err" && [ ! -e "$work/out_hap_bad" ]'
+
 "$vtb" haptics "$src/experiments/scenes/plate_step.toml" --out "$work/out_hap2" 2> "$work/err"; rc=$?
 check "haptics refuses a scene without [haptics]" '[ $rc -eq 1 ] && grep -q "\[haptics\] is missing" "$work/err"'
 
