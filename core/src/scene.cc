@@ -203,9 +203,13 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       if (!w || w->empty()) hr.fail("waypoints", "must be a non-empty array of [x, y] points");
       for (std::size_t i = 0; i < w->size(); ++i) {
         const toml::array* p = w->get(i)->as_array();
-        if (!p || p->size() != 2) hr.fail("waypoints", "entry " + std::to_string(i) + " must be [x, y]");
-        Eigen::VectorXd q(2);
-        for (std::size_t k = 0; k < 2; ++k) {
+        if (!p || p->size() < 2 || p->size() > 3)
+          hr.fail("waypoints", "entry " + std::to_string(i) + " must be [x, y] (device) or [x, y, z] (a point of a 3D scene)");
+        if (i > 0 && static_cast<Eigen::Index>(p->size()) != hand.waypoints.front().size())
+          hr.fail("waypoints", "entry " + std::to_string(i) + " has " + std::to_string(p->size()) +
+                                   " coordinates, entry 0 has " + std::to_string(hand.waypoints.front().size()));
+        Eigen::VectorXd q(static_cast<Eigen::Index>(p->size()));
+        for (std::size_t k = 0; k < p->size(); ++k) {
           const auto x = p->get(k)->value<double>();
           if (!x || !std::isfinite(*x))
             hr.fail("waypoints", "entry " + std::to_string(i) + " must hold finite numbers");

@@ -378,6 +378,24 @@ TEST(Haptics, TwoProbeSceneRecordsAndReplaysEachProbe) {
   EXPECT_THROW(ReplayDevice(DeviceSpec{}, dir / "haptics.csv", 2), InputError) << "no columns hx_2, hy_2";
 }
 
+TEST(Haptics, WorldWaypointsInA3DSceneAreTakenToTheDevicePlane) {
+  // The slab press with its hand's path given as world points (x, 0.025, z) on the device's
+  // plane instead of device coordinates (x, z): the same session, sample for sample.
+  HapticsOptions o;
+  o.lockstep = true;
+  Scene device = scene_named("haptic_slab_press");
+  device.duration = 1.2;
+  Scene world = device;
+  for (auto& w : world.haptics->hand->waypoints) w = Eigen::Vector3d(w[0], 0.025, w[1]);
+  const HapticsReport a = run_haptics(device, o), b = run_haptics(world, o);
+  ASSERT_EQ(a.t.size(), b.t.size());
+  for (std::size_t k = 0; k < a.t.size(); ++k) ASSERT_EQ(a.probes[0].fy[k], b.probes[0].fy[k]) << k;
+  EXPECT_GT(a.max_force, 0.1) << "the path reaches the surface";
+  Scene flat = press_scene();
+  flat.haptics->hand->waypoints.front() = Eigen::Vector3d(0.05, 0.08, 0.0);
+  EXPECT_THROW(run_haptics(flat, o), InputError) << "[x, y, z] waypoints in a 2D scene";
+}
+
 TEST(Haptics, APlaneInA2DSceneIsRefused) {
   Scene s = press_scene();
   s.haptics->plane = DevicePlaneDesc{};

@@ -269,7 +269,10 @@ HapticsOptions::Fault parse_fault(const std::string& spec, double& time) {
 namespace {
 
 /// The devices: one per probe, all simulated ProCATs held by scripted hands, or all replays.
-std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, const HapticsOptions& opt) {
+/// 3D waypoints are world points, taken to the device's plane.
+template <int dim>
+std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, const HapticsOptions& opt,
+                                                        const DevicePlane<dim>& plane) {
   const std::string file = scene.file.string();
   const HapticsDesc& h = *scene.haptics;
   DeviceSpec spec;
@@ -286,7 +289,16 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
   for (int i = 0; i < probes; ++i) {
     const HandDesc& desc = i == 0 ? *h.hand : h.probes[static_cast<std::size_t>(i - 1)];
     HandScript hand;
-    for (const auto& w : desc.waypoints) hand.waypoints.emplace_back(w[0], w[1]);
+    for (const auto& w : desc.waypoints) {
+      if (w.size() == 2) {
+        hand.waypoints.emplace_back(w[0], w[1]);
+      } else if constexpr (dim == 3) {
+        hand.waypoints.emplace_back(plane.axes.transpose() * (Eigen::Vector3d(w[0], w[1], w[2]) - plane.origin));
+      } else {
+        throw InputError(file + ": [haptics] waypoints of " + (i == 0 ? std::string("[haptics.hand]") : "[[haptics.probe]] #" + std::to_string(i)) +
+                         " are [x, y, z]; this mesh is 2D");
+      }
+    }
     hand.duration = desc.duration;
     hand.grip_stiffness = desc.grip_stiffness;
     devices.push_back(std::make_unique<SimulatedProCAT>(spec, hand));
@@ -304,8 +316,12 @@ template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<
       plane.origin = scene.haptics->plane->origin;
       plane.axes << scene.haptics->plane->x_axis, scene.haptics->plane->y_axis;
     } else {
-      // The device's x-y plane through the middle of the body in z.
+      // The device's x-y plane through the first waypoint given as a 3D point, else through
+      // the middle of the body in z.
       plane.origin.z() = 0.5 * (mesh.points.row(2).minCoeff() + mesh.points.row(2).maxCoeff());
+      const auto& hand = scene.haptics->hand;
+      if (hand && !hand->waypoints.empty() && hand->waypoints.front().size() == 3)
+        plane.origin.z() = hand->waypoints.front()[2];
     }
   }
   return plane;
@@ -315,7 +331,7 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   const HapticsDesc& h = *scene.haptics;
   const DevicePlane<dim> plane = device_plane(scene, mesh);
   const Model<dim> model = build_model<dim>(scene, std::move(mesh));
-  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt);
+  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
 
   IntegratorOptions o = integrator_options(scene.solver);
   // The physics of a session steps at a fixed dt: CVODE and the FEM fall back to the filter.

@@ -81,6 +81,7 @@ struct SolverDesc {
 };
 
 struct HandDesc {
+  /// [x, y] in the device's plane, or [x, y, z] points of a 3D scene (projected onto the plane).
   std::vector<Eigen::VectorXd> waypoints;
   double duration = 0;
   double grip_stiffness = 0;
