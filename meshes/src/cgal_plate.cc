@@ -53,12 +53,12 @@ void mark_domain(CDT& cdt) {
 }
 
 /// Refines with a size bound; returns the vertex count.
-int refine(CDT& cdt, const Polygon& poly, double size, int capacity) {
+int refine(CDT& cdt, const Polygon& poly, double size) {
   cdt.clear();
-  // One block each for vertices and faces: CGAL's refinement queue breaks ties by handle
-  // address, which must not depend on the heap's history for reproducible output.
-  cdt.tds().vertices().reserve(static_cast<std::size_t>(capacity));
-  cdt.tds().faces().reserve(static_cast<std::size_t>(2 * capacity));
+  // No reserve(): CGAL orders handles by the time stamps of the Delaunay_mesh_*_base_2 types
+  // (creation order, independent of the heap), but Compact_container::reserve in CGAL 5.5
+  // leaves the reserved elements' time stamps uninitialised, so the order then depended on
+  // whatever the heap held before (a test failed or passed with the build folder's path).
   insert_polygon(cdt, poly);
   Mesher mesher(cdt);
   mesher.set_criteria(Criteria(0.125, size)); // B = sin^2(20.7 deg)
@@ -209,13 +209,13 @@ Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
   std::vector<std::pair<int, double>> candidates; // (missing nodes, size)
   for (int s = 0; s <= 400; ++s) {
     const double size = h0 * std::pow(4.0, s / 400.0) * 0.7;
-    const int n = refine(cdt, poly, size, 4 * nodes);
+    const int n = refine(cdt, poly, size);
     if (n <= nodes) candidates.push_back({nodes - n, size});
   }
   std::sort(candidates.begin(), candidates.end());
   for (const auto& [missing, size] : candidates) {
     if (missing > std::max(3, nodes / 20)) break; // too far: quality would suffer
-    refine(cdt, poly, size, 4 * nodes);
+    refine(cdt, poly, size);
     mark_domain(cdt);
     add_nodes(cdt, missing);
     mark_domain(cdt);
