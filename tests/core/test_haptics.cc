@@ -337,8 +337,9 @@ TEST(Haptics, TwoProbesAtOnePointShareTheLoad) {
   // pushed deeper by the other), and the two together push more than one alone. Compared at
   // the end of the hold (t = 1.9 s), when the body is at rest. The plate is made ten times
   // stiffer and pressed 1 mm, so the indentation stays a fraction of a millimetre (linear
-  // regime: in the linear estimate F2 = F1 (1 + a) / (1 + 2a), a = k c, the margins are ~40 %
-  // of F1, far above the ~0.01 N the handles' Coulomb friction can shift them).
+  // regime. Here F1 = 0.125 N and F2 = 0.077 N, as the linear estimate F2 = k d / (1 + 2a),
+  // a = k d / F1 - 1 = 2.0, predicts to 0.5 %; the margins, 39 % and 23 % of F1, are far above
+  // the ~0.01 N that the handles' Coulomb friction can shift them by).
   HapticsOptions o;
   o.lockstep = true;
   Scene one = press_scene();
