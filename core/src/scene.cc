@@ -95,9 +95,10 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       s.mesh.size = gr.vector("size", d, d);
       if ((s.mesh.size.array() <= 0).any()) gr.fail("size", "entries must be > 0");
       const Eigen::VectorXd div = gr.vector("divisions", d, d);
-      s.mesh.divisions = div.cast<int>();
+      // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).
       if ((div.array() != div.array().round()).any() || (div.array() < 1).any() || (div.array() > 2000).any())
         gr.fail("divisions", "entries must be whole numbers in [1, 2000]");
+      s.mesh.divisions = div.cast<int>();
     }
   }
 

@@ -106,6 +106,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "[material].young_modulus: must be a number a double can hold exactly"},
         BadCase{"total_force = [1.0, 0.0]", "total_force = [9007199254740993, 0.0]",
                 "total_force: entry 0 must be a number a double can hold exactly"},
+        // Found by fuzzing: divisions beyond int's range were cast before they were checked.
+        BadCase{"divisions = [4, 2]", "divisions = [411111111111111.0, 2]",
+                "[mesh].generate.divisions: entries must be whole numbers in [1, 2000]"},
         // Haptics: further probes and the device's plane in a 3D body.
         BadCase{"grip_stiffness = 2000.0",
                 "grip_stiffness = 2000.0\n[[haptics.probe]]\nwaypoints = [[0.1, 0.08]]\nduration = 1.0\n"
