@@ -20,9 +20,11 @@
 // Prescribed displacements (fixes, drives) are imposed by lifting: u+ = u_bar + delta, with
 // u_bar holding the prescribed values, and A0 delta = b - A u_bar, where A0 is A with the
 // constrained rows and columns replaced by the identity (factorised once, UMFPACK).
+// The scheme's formulas are in time_scheme.hh, shared with the distributed solver.
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include "grid.hh"
+#include "time_scheme.hh"
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/timer.h>
@@ -57,7 +59,8 @@ using namespace dealii;
 template <int dim> class KelvinVoigtProblem {
 public:
   KelvinVoigtProblem(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options)
-      : m_model(model), m_mat(material), m_opt(options), m_fe(FE_SimplexP<dim>(options.degree), dim),
+      : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt),
+        m_fe(FE_SimplexP<dim>(options.degree), dim),
         m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
         m_timer(m_timer_stream, TimerOutput::never, TimerOutput::wall_times) {}
 
@@ -78,6 +81,7 @@ private:
   const Model<dim>& m_model;
   const MaterialDesc& m_mat;
   const FemOptions m_opt;
+  const TimeScheme m_scheme;
 
   Triangulation<dim> m_tria;
   FESystem<dim> m_fe;
@@ -97,10 +101,6 @@ private:
   std::vector<std::vector<types::global_dof_index>> m_point_load_dofs;
 
   Vector<double> m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
-  /// Newmark-family weights (unused by backward Euler and the static solve).
-  double m_am = 0, m_af = 0, m_beta = 0.25, m_gamma = 0.5;
-  bool newmark_family() const { return !m_opt.static_solve && m_opt.scheme != "backward-euler"; }
-
   std::ostringstream m_timer_stream;
   TimerOutput m_timer;
 };
@@ -295,7 +295,7 @@ template <int dim> void KelvinVoigtProblem<dim>::initial_state() {
       m_v[d] = s.driven ? ramp_rate(0.0, s.start, s.ramp) * s.displacement[m_component[d]] : 0.0;
     }
   // Newmark needs a(0) = M^-1 (f(0-) - C v - K u) on the free dofs.
-  if (newmark_family()) {
+  if (m_scheme.newmark_family) {
     // The loads as they are just before t = 0: a step at t = 0 acts from the first step on. Its
     // instantaneous acceleration M^-1 F is an impulse that a one-step scheme cannot represent;
     // taken as a(0) it throws the first steps of Newmark (beta = 1/4) and generalized-alpha
@@ -326,40 +326,9 @@ template <int dim> void KelvinVoigtProblem<dim>::initial_state() {
 
 /// One step to t_new: u+ from A u+ = b with the prescribed values lifted, then v+ and a+.
 template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
-  const double dt = m_opt.dt;
   const auto n = m_dofs.n_dofs();
-  const double c1 = 1 / (m_beta * dt * dt), c2 = m_gamma / (m_beta * dt);
-  if (newmark_family()) {
-    // d_a = -(u + dt v + dt^2 (1/2 - beta) a) c1,  d_v = v + dt (1 - gamma) a + gamma dt d_a.
-    m_da = m_u;
-    m_da.add(dt, m_v, dt * dt * (0.5 - m_beta), m_a);
-    m_da *= -c1;
-    m_dv = m_v;
-    m_dv.add(dt * (1 - m_gamma), m_a, m_gamma * dt, m_da);
-    load_vector(t_new - m_af * dt, m_rhs);
-    m_tmp = m_a; // - am M a - (1 - am) M d_a
-    m_tmp *= -m_am;
-    m_tmp.add(-(1 - m_am), m_da);
-    m_M.vmult_add(m_rhs, m_tmp);
-    m_tmp = m_v; // - af C v - (1 - af) C d_v
-    m_tmp *= -m_af;
-    m_tmp.add(-(1 - m_af), m_dv);
-    m_C.vmult_add(m_rhs, m_tmp);
-    m_tmp = m_u; // - af K u
-    m_tmp *= -m_af;
-    m_K.vmult_add(m_rhs, m_tmp);
-  } else if (m_opt.static_solve) {
-    load_vector(t_new, m_rhs); // K u = f
-  } else {
-    load_vector(t_new, m_rhs);
-    m_tmp = m_u;
-    m_tmp *= 1 / (dt * dt);
-    m_tmp.add(1 / dt, m_v);
-    m_M.vmult_add(m_rhs, m_tmp);
-    m_tmp = m_u;
-    m_tmp *= 1 / dt;
-    m_C.vmult_add(m_rhs, m_tmp);
-  }
+  load_vector(m_scheme.load_time(t_new), m_rhs);
+  m_scheme.add_history(m_M, m_C, m_K, m_u, m_v, m_a, m_da, m_dv, m_tmp, m_rhs);
   // Lift the prescribed values: u+ = u_bar + delta, A0 delta = rhs - A u_bar, delta = 0 on them.
   m_ubar = m_u;
   for (types::global_dof_index d = 0; d < n; ++d)
@@ -375,25 +344,16 @@ template <int dim> void KelvinVoigtProblem<dim>::solve_step(double t_new) {
     m_u = u_new;
     return;
   }
-  if (newmark_family()) {
-    // a+ = c1 u+ + d_a, v+ = c2 u+ + d_v. On prescribed dofs the motion is known: its rate and
-    // (piecewise linear ramps) zero acceleration; the update would ring there after a kink.
-    for (types::global_dof_index d = 0; d < n; ++d) {
-      if (m_support_of[d] >= 0) {
-        const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of[d])];
-        m_v[d] = s.driven ? ramp_rate(t_new, s.start, s.ramp) * s.displacement[m_component[d]] : 0.0;
-        m_a[d] = 0;
-        continue;
-      }
-      m_a[d] = c1 * u_new[d] + m_da[d];
-      m_v[d] = c2 * u_new[d] + m_dv[d];
+  for (types::global_dof_index d = 0; d < n; ++d) {
+    if (m_scheme.newmark_family && m_support_of[d] >= 0) {
+      // On prescribed dofs the motion is known: its rate and (piecewise linear ramps) zero
+      // acceleration; the Newmark update would ring there after a kink.
+      const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of[d])];
+      m_v[d] = s.driven ? ramp_rate(t_new, s.start, s.ramp) * s.displacement[m_component[d]] : 0.0;
+      m_a[d] = 0;
+      continue;
     }
-  } else {
-    for (types::global_dof_index d = 0; d < n; ++d) {
-      const double v_new = (u_new[d] - m_u[d]) / dt;
-      m_a[d] = (v_new - m_v[d]) / dt;
-      m_v[d] = v_new;
-    }
+    m_scheme.update(u_new[d], m_u[d], m_da[d], m_dv[d], m_v[d], m_a[d]);
   }
   m_u = u_new;
 }
@@ -480,23 +440,10 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
   }
   {
     TimerOutput::Scope s(m_timer, "factorisation");
-    const double dt = m_opt.dt;
-    if (m_opt.scheme == "generalized-alpha") {
-      const double rho = 0.0;
-      m_am = (2 * rho - 1) / (rho + 1);
-      m_af = rho / (rho + 1);
-      m_gamma = 0.5 - m_am + m_af;
-      m_beta = 0.25 * (1 - m_am + m_af) * (1 - m_am + m_af);
-    }
     m_A.copy_from(m_K);
-    if (newmark_family()) {
-      m_A *= 1 - m_af;
-      m_A.add((1 - m_am) / (m_beta * dt * dt), m_M);
-      m_A.add((1 - m_af) * m_gamma / (m_beta * dt), m_C);
-    } else if (!m_opt.static_solve) {
-      m_A.add(1 / (dt * dt), m_M);
-      m_A.add(1 / dt, m_C);
-    }
+    m_A *= m_scheme.ck();
+    m_A.add(m_scheme.cm(), m_M);
+    m_A.add(m_scheme.cc(), m_C);
     m_A0.copy_from(m_A);
     const auto n = m_dofs.n_dofs();
     for (types::global_dof_index d = 0; d < n; ++d) {

@@ -5,6 +5,7 @@
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include "grid.hh"
+#include "time_scheme.hh"
 
 #include <deal.II/base/mpi.h>
 #include <deal.II/base/quadrature_lib.h>
@@ -40,7 +41,7 @@ using Mat_t = TrilinosWrappers::SparseMatrix;
 template <int dim> class DistributedProblem {
 public:
   DistributedProblem(const Model<dim>& model, const MaterialDesc& mat, const FemOptions& o)
-      : m_model(model), m_mat(mat), m_opt(o), m_comm(MPI_COMM_WORLD), m_tria(m_comm),
+      : m_model(model), m_mat(mat), m_opt(o), m_scheme(o.scheme, o.static_solve, o.dt), m_comm(MPI_COMM_WORLD), m_tria(m_comm),
         m_fe(FE_SimplexP<dim>(o.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria), m_solver(m_control) {}
 
   RunReport run(Trajectory<dim>& out, bool record_field) {
@@ -172,19 +173,7 @@ private:
   /// K, M, C and the scheme's matrix A; A0 and M0 with the prescribed rows and columns
   /// eliminated (identity-like diagonal), for the lifted solves.
   void assemble() {
-    const double dt = m_opt.dt;
-    if (m_opt.scheme == "generalized-alpha") {
-      m_am = -1, m_af = 0, m_gamma = 1.5, m_beta = 1; // rho_inf = 0
-    }
-    double ck = 1, cm = 0, cc = 0;
-    if (newmark_family()) {
-      ck = 1 - m_af;
-      cm = (1 - m_am) / (m_beta * dt * dt);
-      cc = (1 - m_af) * m_gamma / (m_beta * dt);
-    } else if (!m_opt.static_solve) {
-      cm = 1 / (dt * dt);
-      cc = 1 / dt;
-    }
+    const double ck = m_scheme.ck(), cm = m_scheme.cm(), cc = m_scheme.cc();
     const QGaussSimplex<dim> quad(static_cast<unsigned int>(m_opt.degree + 1));
     FEValues<dim> fev(m_mapping, m_fe, quad, update_values | update_gradients | update_JxW_values);
     const unsigned int nd = m_fe.n_dofs_per_cell();
@@ -211,8 +200,6 @@ private:
     for (auto* A : {&m_K, &m_M, &m_C, &m_A, &m_A0, &m_M0}) A->compress(VectorOperation::add);
     m_solver.initialize(m_A0);
   }
-
-  bool newmark_family() const { return !m_opt.static_solve && m_opt.scheme != "backward-euler"; }
 
   double prescribed(types::global_dof_index d, double t) const {
     const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of.at(d))];
@@ -287,7 +274,7 @@ private:
     }
     m_u.compress(VectorOperation::insert);
     m_v.compress(VectorOperation::insert);
-    if (newmark_family()) {
+    if (m_scheme.newmark_family) {
       load_vector(-1e-12 * m_opt.dt, m_rhs); // the loads just before t = 0 (see kelvin_voigt.cc)
       m_C.vmult(m_tmp, m_v);
       m_rhs -= m_tmp;
@@ -308,43 +295,8 @@ private:
   }
 
   void step(double t_new) {
-    const double dt = m_opt.dt;
-    const double c1 = 1 / (m_beta * dt * dt), c2 = m_gamma / (m_beta * dt);
-    if (newmark_family()) {
-      m_da = m_u;
-      m_da.add(dt, m_v, dt * dt * (0.5 - m_beta), m_a);
-      m_da *= -c1;
-      m_dv = m_v;
-      m_dv.add(dt * (1 - m_gamma), m_a, m_gamma * dt, m_da);
-      load_vector(t_new - m_af * dt, m_rhs);
-      m_tmp = m_a;
-      m_tmp *= -m_am;
-      m_tmp.add(-(1 - m_am), m_da);
-      m_M.vmult(m_f, m_tmp);
-      m_rhs += m_f;
-      m_tmp = m_v;
-      m_tmp *= -m_af;
-      m_tmp.add(-(1 - m_af), m_dv);
-      m_C.vmult(m_f, m_tmp);
-      m_rhs += m_f;
-      m_tmp = m_u;
-      m_tmp *= -m_af;
-      m_K.vmult(m_f, m_tmp);
-      m_rhs += m_f;
-    } else if (m_opt.static_solve) {
-      load_vector(t_new, m_rhs);
-    } else {
-      load_vector(t_new, m_rhs);
-      m_tmp = m_u;
-      m_tmp *= 1 / (dt * dt);
-      m_tmp.add(1 / dt, m_v);
-      m_M.vmult(m_f, m_tmp);
-      m_rhs += m_f;
-      m_tmp = m_u;
-      m_tmp *= 1 / dt;
-      m_C.vmult(m_f, m_tmp);
-      m_rhs += m_f;
-    }
+    load_vector(m_scheme.load_time(t_new), m_rhs);
+    m_scheme.add_history(m_M, m_C, m_K, m_u, m_v, m_a, m_da, m_dv, m_tmp, m_rhs);
     m_ubar = m_u;
     for (const auto& [d, s] : m_support_of)
       if (m_owned.is_element(d)) m_ubar[d] = prescribed(d, t_new);
@@ -354,25 +306,20 @@ private:
     zero_prescribed(m_rhs);
     m_solver.solve(m_delta, m_rhs);
     m_ubar += m_delta;
-    if (newmark_family()) {
+    if (!m_opt.static_solve)
       for (const auto d : m_owned) {
         const auto it = m_support_of.find(d);
-        if (it != m_support_of.end()) {
+        if (m_scheme.newmark_family && it != m_support_of.end()) { // the known motion (see kelvin_voigt.cc)
           const auto& s = m_model.supports[static_cast<std::size_t>(it->second)];
           m_v[d] = s.driven ? ramp_rate(t_new, s.start, s.ramp) * s.displacement[m_comp.at(d)] : 0.0;
           m_a[d] = 0;
-        } else {
-          m_a[d] = c1 * m_ubar[d] + m_da[d];
-          m_v[d] = c2 * m_ubar[d] + m_dv[d];
+          continue;
         }
+        double v = m_v[d], a = m_a[d];
+        m_scheme.update(m_ubar[d], m_u[d], m_da[d], m_dv[d], v, a);
+        m_v[d] = v;
+        m_a[d] = a;
       }
-    } else if (!m_opt.static_solve) {
-      for (const auto d : m_owned) {
-        const double v_new = (m_ubar[d] - m_u[d]) / dt;
-        m_a[d] = (v_new - m_v[d]) / dt;
-        m_v[d] = v_new;
-      }
-    }
     m_a.compress(VectorOperation::insert);
     m_v.compress(VectorOperation::insert);
     m_u = m_ubar;
@@ -434,6 +381,7 @@ private:
   const Model<dim>& m_model;
   const MaterialDesc& m_mat;
   const FemOptions m_opt;
+  const TimeScheme m_scheme;
   MPI_Comm m_comm;
   parallel::fullydistributed::Triangulation<dim> m_tria;
   FESystem<dim> m_fe;
@@ -449,7 +397,6 @@ private:
   SolverControl m_control{1, 0};
   TrilinosWrappers::SolverDirect m_solver;
   Vec_t m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
-  double m_am = 0, m_af = 0, m_beta = 0.25, m_gamma = 0.5;
 };
 
 } // namespace
