@@ -275,13 +275,8 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   CVodeGetNumNonlinSolvConvFails(h.mem(), &nncf);
   rep.steps = rep.steps_taken = nst;
   rep.dt = nst > 0 ? model.duration / static_cast<double>(nst) : 0.0; // mean step
+  rep.step_seconds = step_stats(std::move(per_step));
   rep.step_seconds.mean = nst > 0 ? total / static_cast<double>(nst) : 0.0;
-  if (!per_step.empty()) {
-    std::sort(per_step.begin(), per_step.end());
-    rep.step_seconds.median = per_step[per_step.size() / 2];
-    rep.step_seconds.p99 =
-        per_step[std::min(per_step.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(per_step.size())))];
-  }
   rep.extra = {{"rtol", o.rtol},
                {"atol", o.atol},
                {"cvode_steps", static_cast<double>(nst)},

@@ -43,9 +43,7 @@ double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<di
   return max_strain(model.net, s.u);
 }
 
-namespace {
-
-StepStats stats(std::vector<double> t) {
+StepStats step_stats(std::vector<double> t) {
   StepStats s;
   if (t.empty()) return s;
   double sum = 0;
@@ -61,8 +59,6 @@ StepStats stats(std::vector<double> t) {
   s.p99 = at(0.99);
   return s;
 }
-
-} // namespace
 
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
@@ -133,7 +129,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
       }
     }
   }
-  rep.step_seconds = stats(std::move(step_time));
+  rep.step_seconds = step_stats(std::move(step_time));
   return rep;
 }
 

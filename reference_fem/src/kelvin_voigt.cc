@@ -24,6 +24,7 @@
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include "grid.hh"
+#include "time_loop.hh"
 #include "time_scheme.hh"
 
 #include <deal.II/base/quadrature_lib.h>
@@ -462,52 +463,17 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
                {"degree", static_cast<double>(m_opt.degree)},
                {"refinements", static_cast<double>(m_opt.refinements)}};
 
-  std::vector<double> step_time;
-  double t = 0;
-  if (m_opt.static_solve) {
-    TimerOutput::Scope s(m_timer, "time stepping");
-    const auto a = clock::now();
-    solve_step(m_model.duration);
-    step_time.push_back(std::chrono::duration<double>(clock::now() - a).count());
-    rep.steps = rep.steps_taken = 1;
-    record(m_model.duration, out, record_field, rep);
-  } else {
-    const long steps = std::max(1L, std::lround(m_model.duration / m_opt.dt));
-    rep.steps = steps;
-    step_time.reserve(static_cast<std::size_t>(steps));
-    long next_sample = 0;
-    const double eps = 1e-6 * m_opt.dt;
-    record(0.0, out, record_field, rep);
-    ++next_sample;
-    for (long k = 0; k < steps; ++k) {
-      {
+  march(
+      m_scheme, m_model.duration, m_model.output_interval, rep,
+      [&](double t) {
         TimerOutput::Scope s(m_timer, "time stepping");
-        const auto a = clock::now();
-        t = static_cast<double>(k + 1) * m_opt.dt;
         solve_step(t);
-        step_time.push_back(std::chrono::duration<double>(clock::now() - a).count());
-      }
-      ++rep.steps_taken;
-      if (!std::isfinite(m_u.l2_norm())) {
-        rep.stable = false;
-        rep.failure = "non-finite displacement";
-        rep.failure_time = t;
-        break;
-      }
-      if (t + eps >= static_cast<double>(next_sample) * m_model.output_interval) {
+      },
+      [&] { return std::isfinite(m_u.l2_norm()); },
+      [&](double t) {
         TimerOutput::Scope s(m_timer, "output");
         record(t, out, record_field, rep);
-        ++next_sample;
-      }
-    }
-  }
-  std::sort(step_time.begin(), step_time.end());
-  double sum = 0;
-  for (double x : step_time) sum += x;
-  rep.step_seconds.mean = sum / static_cast<double>(step_time.size());
-  rep.step_seconds.median = step_time[step_time.size() / 2];
-  rep.step_seconds.p99 =
-      step_time[std::min(step_time.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(step_time.size())))];
+      });
   for (const auto& [phase, seconds] : m_timer.get_summary_data(TimerOutput::total_wall_time)) {
     std::string key = "phase_" + phase + "_seconds";
     std::replace(key.begin(), key.end(), ' ', '_');

@@ -5,6 +5,7 @@
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include "grid.hh"
+#include "time_loop.hh"
 #include "time_scheme.hh"
 
 #include <deal.II/base/mpi.h>
@@ -62,44 +63,10 @@ public:
                  {"degree", static_cast<double>(m_opt.degree)},
                  {"refinements", static_cast<double>(m_opt.refinements)},
                  {"mpi_ranks", static_cast<double>(Utilities::MPI::n_mpi_processes(m_comm))}};
-    std::vector<double> times;
-    if (m_opt.static_solve) {
-      step(m_model.duration);
-      record(m_model.duration, out, record_field);
-      rep.steps = rep.steps_taken = 1;
-    } else {
-      const long steps = std::max(1L, std::lround(m_model.duration / m_opt.dt));
-      rep.steps = steps;
-      long next = 1;
-      record(0.0, out, record_field);
-      for (long k = 0; k < steps; ++k) {
-        const double t = static_cast<double>(k + 1) * m_opt.dt;
-        const auto a = clock::now();
-        step(t);
-        times.push_back(std::chrono::duration<double>(clock::now() - a).count());
-        ++rep.steps_taken;
-        if (!std::isfinite(m_u.l2_norm())) {
-          rep.stable = false;
-          rep.failure = "non-finite displacement";
-          rep.failure_time = t;
-          break;
-        }
-        if (t + 1e-6 * m_opt.dt >= static_cast<double>(next) * m_model.output_interval) {
-          record(t, out, record_field);
-          ++next;
-        }
-      }
-    }
+    march(
+        m_scheme, m_model.duration, m_model.output_interval, rep, [&](double t) { step(t); },
+        [&] { return std::isfinite(m_u.l2_norm()); }, [&](double t) { record(t, out, record_field); });
     rep.max_strain = m_max_strain;
-    if (!times.empty()) {
-      std::sort(times.begin(), times.end());
-      double sum = 0;
-      for (double x : times) sum += x;
-      rep.step_seconds.mean = sum / static_cast<double>(times.size());
-      rep.step_seconds.median = times[times.size() / 2];
-      rep.step_seconds.p99 =
-          times[std::min(times.size() - 1, static_cast<std::size_t>(0.99 * static_cast<double>(times.size())))];
-    }
     return rep;
   }
 

@@ -17,7 +17,6 @@
 #include <fstream>
 #include <iomanip>
 #include <limits>
-#include <numeric>
 #include <sstream>
 #include <thread>
 
@@ -241,13 +240,6 @@ private:
   std::vector<double> m_step_us;
 };
 
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const auto k =
-      static_cast<std::size_t>(std::min<double>(static_cast<double>(v.size() - 1), q * static_cast<double>(v.size())));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
-}
 
 } // namespace
 
@@ -415,17 +407,15 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     rep.nonfinite_samples += p.nonfinite_samples;
     rep.energy_to_user += p.energy_to_user;
   }
-  rep.rate_hz_mean =
-      periods.empty()
-          ? 0
-          : 1e6 / (std::accumulate(periods.begin(), periods.end(), 0.0) / static_cast<double>(periods.size()));
-  rep.period_p99_us = percentile(periods, 0.99);
   rep.period_max_us = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
+  const StepStats cycle = step_stats(std::move(periods)), tick = step_stats(std::move(tick_us));
+  rep.rate_hz_mean = cycle.mean > 0 ? 1e6 / cycle.mean : 0.0;
+  rep.period_p99_us = cycle.p99;
   rep.deadline_misses = misses;
-  rep.tick_median_us = percentile(tick_us, 0.5);
-  rep.tick_p99_us = percentile(tick_us, 0.99);
+  rep.tick_median_us = tick.median;
+  rep.tick_p99_us = tick.p99;
   rep.physics_steps = static_cast<long>(physics.step_times().size());
-  rep.physics_step_median_us = percentile(physics.step_times(), 0.5);
+  rep.physics_step_median_us = step_stats(physics.step_times()).median;
   return rep;
 }
 

@@ -20,6 +20,9 @@ struct StepStats {
   double mean = 0, median = 0, p99 = 0; ///< seconds per step
 };
 
+/// Mean, median and 99th percentile (the sample at floor(q n)) of per-step wall times.
+StepStats step_stats(std::vector<double> seconds);
+
 /// The outcome of one run; what summary.json reports.
 struct RunReport {
   std::string solver;
