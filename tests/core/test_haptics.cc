@@ -397,6 +397,26 @@ TEST(Haptics, WorldWaypointsInA3DSceneAreTakenToTheDevicePlane) {
   EXPECT_THROW(run_haptics(flat, o), InputError) << "[x, y, z] waypoints in a 2D scene";
 }
 
+TEST(Haptics, TheHandleStaysInTheWorkspaceAndTooStiffACouplingIsRefused) {
+  // The hand pulls the handle far beyond the workspace's right edge (0.3 m): the mechanical
+  // stop holds it there exactly.
+  HandScript hand;
+  hand.waypoints = {Eigen::Vector2d(0.2, 0.0), Eigen::Vector2d(0.8, 0.0)};
+  hand.duration = 0.5;
+  SimulatedProCAT dev(DeviceSpec{}, hand);
+  for (int k = 0; k < 1000; ++k) dev.advance(1e-3);
+  EXPECT_EQ(dev.true_position().x(), DeviceSpec{}.workspace_max.x());
+  Scene s = press_scene();
+  s.haptics->coupling_stiffness = 5000;
+  try {
+    run_haptics(s, HapticsOptions{});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[haptics].coupling_stiffness = 5000 N/m exceeds the stiffness the ProCAT renders stably (2000 N/m)"),
+              std::string::npos) << e.what();
+  }
+}
+
 TEST(Haptics, APlaneInA2DSceneIsRefused) {
   Scene s = press_scene();
   s.haptics->plane = DevicePlaneDesc{};

@@ -21,7 +21,8 @@ Eigen::Vector2d HandScript::at(double t) const {
 }
 
 SimulatedProCAT::SimulatedProCAT(const DeviceSpec& spec, HandScript hand, Physical physical)
-    : m_spec(spec), m_hand(std::move(hand)), m_phys(physical), m_x(m_hand.at(0)), m_measured(m_x),
+    : m_spec(spec), m_hand(std::move(hand)), m_phys(physical),
+      m_x(m_hand.at(0).cwiseMax(spec.workspace_min).cwiseMin(spec.workspace_max)), m_measured(m_x),
       m_measured_prev(m_x) {}
 
 void SimulatedProCAT::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
@@ -52,6 +53,14 @@ void SimulatedProCAT::advance(double dt) {
     const double denom = m_phys.mass + h * m_phys.viscous + h * h * m_hand.grip_stiffness;
     m_v += h * f / denom;
     m_x += h * m_v;
+    // The linkage's mechanical stops: the handle stays in the workspace, and a stop takes the
+    // velocity into it (an inelastic end stop).
+    for (int a = 0; a < 2; ++a) {
+      if (m_x[a] < m_spec.workspace_min[a] || m_x[a] > m_spec.workspace_max[a]) {
+        m_x[a] = std::clamp(m_x[a], m_spec.workspace_min[a], m_spec.workspace_max[a]);
+        m_v[a] = 0;
+      }
+    }
   }
   m_t += dt;
   // Encoder: positions quantised to counts; velocity by a first-order filtered difference.

@@ -270,6 +270,12 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
   DeviceSpec spec;
   spec.max_force = h.max_force;
   spec.rate_hz = h.rate;
+  if (h.coupling_stiffness > spec.max_stiffness) {
+    std::ostringstream msg;
+    msg << file << ": [haptics].coupling_stiffness = " << h.coupling_stiffness
+        << " N/m exceeds the stiffness the ProCAT renders stably (" << spec.max_stiffness << " N/m)";
+    throw InputError(msg.str());
+  }
   std::vector<std::unique_ptr<HapticDevice>> devices;
   const int probes = 1 + static_cast<int>(h.probes.size());
   if (h.device == "replay") {
