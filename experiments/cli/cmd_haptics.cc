@@ -27,6 +27,7 @@ Action add_haptics(CLI::App& app) {
     ho.lockstep = o->lockstep;
     ho.replay = o->replay;
     const HapticsReport r = run_haptics(scene, ho);
+    for (const auto& note : r.notes) std::cerr << "note: " << note << '\n';
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-haptics") : std::filesystem::path(o->out);
     write_haptics(r, out, scene.name);
