@@ -188,9 +188,9 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
   }
 
   if ((t = top.table("haptics"))) {
-    const TableReader r(*t, "[haptics]", name,
-                        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand", "probe",
-                         "plane"});
+    const TableReader r(
+        *t, "[haptics]", name,
+        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand", "probe", "plane"});
     HapticsDesc h;
     h.device = r.string("device", "procat-sim", {"procat-sim", "replay"});
     h.rate = r.number("rate", 1000.0, positive);
@@ -205,7 +205,8 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       for (std::size_t i = 0; i < w->size(); ++i) {
         const toml::array* p = w->get(i)->as_array();
         if (!p || p->size() < 2 || p->size() > 3)
-          hr.fail("waypoints", "entry " + std::to_string(i) + " must be [x, y] (device) or [x, y, z] (a point of a 3D scene)");
+          hr.fail("waypoints",
+                  "entry " + std::to_string(i) + " must be [x, y] (device) or [x, y, z] (a point of a 3D scene)");
         if (i > 0 && static_cast<Eigen::Index>(p->size()) != hand.waypoints.front().size())
           hr.fail("waypoints", "entry " + std::to_string(i) + " has " + std::to_string(p->size()) +
                                    " coordinates, entry 0 has " + std::to_string(hand.waypoints.front().size()));

@@ -38,7 +38,12 @@ void BM_tree_rebuild(benchmark::State& st) {
   st.counters["triangles"] = static_cast<double>(tree.facets().size());
   st.counters["builds"] = static_cast<double>(tree.builds());
 }
-BENCHMARK(BM_tree_rebuild)->Args({500, 1})->Args({500, 100})->Args({2000, 1})->Args({2000, 100})->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_tree_rebuild)
+    ->Args({500, 1})
+    ->Args({500, 100})
+    ->Args({2000, 1})
+    ->Args({2000, 100})
+    ->Unit(benchmark::kMicrosecond);
 
 void BM_inside(benchmark::State& st) {
   const vtb::Mesh3 m = slab(static_cast<int>(st.range(0)));

@@ -7,8 +7,8 @@
 
 #include <benchmark/benchmark.h>
 
-#include <atomic>
 #include <array>
+#include <atomic>
 #include <filesystem>
 #include <thread>
 

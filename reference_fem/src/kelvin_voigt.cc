@@ -61,8 +61,7 @@ template <int dim> class KelvinVoigtProblem {
 public:
   KelvinVoigtProblem(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options)
       : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt),
-        m_fe(FE_SimplexP<dim>(options.degree), dim),
-        m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
+        m_fe(FE_SimplexP<dim>(options.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
         m_timer(m_timer_stream, TimerOutput::never, TimerOutput::wall_times) {}
 
   RunReport run(Trajectory<dim>& out, bool record_field);

@@ -42,8 +42,9 @@ using Mat_t = TrilinosWrappers::SparseMatrix;
 template <int dim> class DistributedProblem {
 public:
   DistributedProblem(const Model<dim>& model, const MaterialDesc& mat, const FemOptions& o)
-      : m_model(model), m_mat(mat), m_opt(o), m_scheme(o.scheme, o.static_solve, o.dt), m_comm(MPI_COMM_WORLD), m_tria(m_comm),
-        m_fe(FE_SimplexP<dim>(o.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria), m_solver(m_control) {}
+      : m_model(model), m_mat(mat), m_opt(o), m_scheme(o.scheme, o.static_solve, o.dt), m_comm(MPI_COMM_WORLD),
+        m_tria(m_comm), m_fe(FE_SimplexP<dim>(o.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
+        m_solver(m_control) {}
 
   RunReport run(Trajectory<dim>& out, bool record_field) {
     using clock = std::chrono::steady_clock;

@@ -37,8 +37,8 @@ struct TimeScheme {
   /// rhs -= am M a + (1 - am) M d_a + af C v + (1 - af) C d_v + af K u.
   /// Backward Euler: rhs += M (u / dt^2 + v / dt) + C u / dt. Static: nothing.
   template <class Vec, class Mat>
-  void add_history(const Mat& M, const Mat& C, const Mat& K, const Vec& u, const Vec& v, const Vec& a, Vec& da,
-                   Vec& dv, Vec& tmp, Vec& rhs) const {
+  void add_history(const Mat& M, const Mat& C, const Mat& K, const Vec& u, const Vec& v, const Vec& a, Vec& da, Vec& dv,
+                   Vec& tmp, Vec& rhs) const {
     if (newmark_family) {
       da = u;
       da.add(dt, v, dt * dt * (0.5 - beta), a);

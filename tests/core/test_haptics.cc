@@ -54,7 +54,9 @@ TEST(ForceShaping, RampsInAndOutAndStaysOff) {
 Scene scene_named(const std::string& name) {
   return read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments" / "scenes" / (name + ".toml"));
 }
-Scene press_scene() { return scene_named("haptic_press"); }
+Scene press_scene() {
+  return scene_named("haptic_press");
+}
 
 /// (scene, fault): the 2D plate press and the 3D slab press, each with both faults.
 class Watchdog : public ::testing::TestWithParam<std::tuple<std::string, std::string>> {};

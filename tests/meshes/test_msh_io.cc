@@ -65,7 +65,9 @@ struct Broken {
 
 /// Names the case in test output (gtest would otherwise dump the struct's raw bytes, padding
 /// included, which valgrind reports as reads of uninitialised memory).
-void PrintTo(const Broken& b, std::ostream* os) { *os << b.name; }
+void PrintTo(const Broken& b, std::ostream* os) {
+  *os << b.name;
+}
 
 class BrokenMsh : public ::testing::TestWithParam<Broken> {};
 

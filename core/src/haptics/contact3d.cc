@@ -20,8 +20,12 @@ struct Geometry {
   Nodal<3> x;
 };
 
-K::Point_3 point(const Nodal<3>& x, int node) { return {x(0, node), x(1, node), x(2, node)}; }
-K::Point_3 point(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+K::Point_3 point(const Nodal<3>& x, int node) {
+  return {x(0, node), x(1, node), x(2, node)};
+}
+K::Point_3 point(const Eigen::Vector3d& p) {
+  return {p.x(), p.y(), p.z()};
+}
 
 /// A surface triangle by index; its coordinates come from the tree's Geometry, so refitting
 /// the tree to a new shape only needs the positions replaced and build() called.
@@ -98,7 +102,10 @@ SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
   // wider boxes would make every query slower: 7 us against 11 us for inside() at half an edge).
   double edges = 0;
   for (const auto& t : m_triangles)
-    for (int k = 0; k < 3; ++k) edges += (mesh.points.col(t[static_cast<std::size_t>(k)]) - mesh.points.col(t[static_cast<std::size_t>((k + 1) % 3)])).norm();
+    for (int k = 0; k < 3; ++k)
+      edges +=
+          (mesh.points.col(t[static_cast<std::size_t>(k)]) - mesh.points.col(t[static_cast<std::size_t>((k + 1) % 3)]))
+              .norm();
   m_impl->margin = m_triangles.empty() ? 0.0 : 0.25 * edges / (3.0 * static_cast<double>(m_triangles.size()));
   std::vector<int> ids(m_triangles.size());
   for (std::size_t f = 0; f < ids.size(); ++f) ids[f] = static_cast<int>(f);
@@ -121,7 +128,9 @@ void SurfaceTree::rebuild(const Nodal<3>& x) {
   }
 }
 
-double SurfaceTree::margin() const { return m_impl->margin; }
+double SurfaceTree::margin() const {
+  return m_impl->margin;
+}
 
 bool SurfaceTree::inside(const Eigen::Vector3d& p) const {
   // Parity of the crossings of three rays in generic directions, majority vote: a ray through

@@ -4,8 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <cstdlib>
+#include <fstream>
 #include <sstream>
 #include <string>
 
@@ -101,7 +101,9 @@ ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& 
     for (std::string cell; std::getline(is, cell, ',');) {
       char* end = nullptr;
       const double v = std::strtod(cell.c_str(), &end);
-      const bool whole = end != cell.c_str() && cell.find_first_not_of(" \r", static_cast<std::size_t>(end - cell.c_str())) == std::string::npos;
+      const bool whole =
+          end != cell.c_str() &&
+          cell.find_first_not_of(" \r", static_cast<std::size_t>(end - cell.c_str())) == std::string::npos;
       values.push_back(whole ? v : std::nan(""));
     }
     const auto at = [&](std::size_t c) { return c < values.size() ? values[c] : std::nan(""); };

@@ -93,8 +93,8 @@ public:
     m_rep.t.reserve(static_cast<std::size_t>(max_samples));
     m_rep.probes.resize(devices.size());
     for (std::size_t i = 0; i < devices.size(); ++i) {
-      m_shapers.emplace_back(typename BasicForceShaper<dim>::Params{
-          std::min(h.max_force, devices[i]->spec().max_force), 0.5, 0.03, 0.01});
+      m_shapers.emplace_back(
+          typename BasicForceShaper<dim>::Params{std::min(h.max_force, devices[i]->spec().max_force), 0.5, 0.03, 0.01});
       for (auto* v : {&m_rep.probes[i].hx, &m_rep.probes[i].hy, &m_rep.probes[i].fx, &m_rep.probes[i].fy})
         v->reserve(static_cast<std::size_t>(max_samples));
     }
@@ -152,7 +152,8 @@ private:
     Vec<dim> proxy_velocity = Vec<dim>::Zero();
     for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k)
       proxy_velocity += c.weights[k] * node_velocity.col(facet[k]);
-    Vec<dim> f = m_h.coupling_stiffness * (c.proxy - handle) + m_h.coupling_damping * (proxy_velocity - handle_velocity);
+    Vec<dim> f =
+        m_h.coupling_stiffness * (c.proxy - handle) + m_h.coupling_damping * (proxy_velocity - handle_velocity);
     const Vec<dim> depth = c.proxy - handle;
     const double d2 = depth.squaredNorm();
     if (d2 > 0) {
@@ -211,7 +212,8 @@ public:
     for (const ContactCommand<dim>& c : m_cmd.front()) {
       if (c.facet < 0) continue;
       const auto& f = m_facets[static_cast<std::size_t>(c.facet)];
-      for (int k = 0; k < dim; ++k) m_state.applied.col(f[static_cast<std::size_t>(k)]) += c.weights[static_cast<std::size_t>(k)] * c.force_on_body;
+      for (int k = 0; k < dim; ++k)
+        m_state.applied.col(f[static_cast<std::size_t>(k)]) += c.weights[static_cast<std::size_t>(k)] * c.force_on_body;
     }
     const auto a = steady::now();
     m_integ->step(m_state);
@@ -239,7 +241,6 @@ private:
   HapticsOptions m_faults;
   std::vector<double> m_step_us;
 };
-
 
 } // namespace
 
@@ -287,7 +288,8 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
       } else if constexpr (dim == 3) {
         hand.waypoints.emplace_back(plane.axes.transpose() * (Eigen::Vector3d(w[0], w[1], w[2]) - plane.origin));
       } else {
-        throw InputError(file + ": [haptics] waypoints of " + (i == 0 ? std::string("[haptics.hand]") : "[[haptics.probe]] #" + std::to_string(i)) +
+        throw InputError(file + ": [haptics] waypoints of " +
+                         (i == 0 ? std::string("[haptics.hand]") : "[[haptics.probe]] #" + std::to_string(i)) +
                          " are [x, y, z]; this mesh is 2D");
       }
     }
@@ -435,7 +437,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
 } // namespace
 
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
-  if (!scene.haptics) throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
+  if (!scene.haptics)
+    throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
   AnyMesh any = load_mesh(scene);
   if (auto* m2 = std::get_if<Mesh2>(&any)) return run_session<2>(scene, opt, std::move(*m2));
   return run_session<3>(scene, opt, std::get<Mesh3>(std::move(any)));

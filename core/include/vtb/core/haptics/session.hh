@@ -43,10 +43,10 @@ struct HapticsReport {
   long physics_steps = 0;
   double physics_step_median_us = 0;
   double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
-  double coupling_stiffness = 0;  ///< N/m rendered: the scene's, limited to the device's max stiffness
-  std::vector<std::string> notes; ///< what the run changed from the scene, one line each
-  std::vector<double> t;          ///< servo sample times
-  std::vector<ProbeTrace> probes; ///< probe 0 is [haptics.hand], then [[haptics.probe]] in order
+  double coupling_stiffness = 0;              ///< N/m rendered: the scene's, limited to the device's max stiffness
+  std::vector<std::string> notes;             ///< what the run changed from the scene, one line each
+  std::vector<double> t;                      ///< servo sample times
+  std::vector<ProbeTrace> probes;             ///< probe 0 is [haptics.hand], then [[haptics.probe]] in order
 };
 
 /// Runs the scene's [haptics] session for [scene].duration: a 2D scene, or a 3D one with the
