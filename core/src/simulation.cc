@@ -165,26 +165,22 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
 RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
   const Scene scene = with_overrides(scene_in, ov);
   const IntegratorOptions o = integrator_options(scene.solver);
-  AnyMesh mesh = load_mesh(scene);
-  return std::visit(
-      [&](auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        const Model<dim> model = build_model<dim>(scene, std::move(m));
-        Trajectory<dim> traj;
-        RunReport rep = simulate(model, o, traj, ov.frames);
-        write_run_outputs(out_dir, model, traj, rep, scene.name);
-        if (ov.frames) {
-          std::filesystem::create_directories(out_dir / "frames");
-          for (std::size_t k = 0; k < traj.field.size(); ++k) {
-            char name[32];
-            std::snprintf(name, sizeof name, "frame_%04zu.vtu", k);
-            write_vtu(model.mesh, out_dir / "frames" / name, traj.field[k]);
-          }
-          write_pvd(out_dir, traj.t);
-        }
-        return rep;
-      },
-      mesh);
+  return with_model(scene, [&](const auto& model) {
+    constexpr int dim = std::decay_t<decltype(model)>::dimension;
+    Trajectory<dim> traj;
+    RunReport rep = simulate(model, o, traj, ov.frames);
+    write_run_outputs(out_dir, model, traj, rep, scene.name);
+    if (ov.frames) {
+      std::filesystem::create_directories(out_dir / "frames");
+      for (std::size_t k = 0; k < traj.field.size(); ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%04zu.vtu", k);
+        write_vtu(model.mesh, out_dir / "frames" / name, traj.field[k]);
+      }
+      write_pvd(out_dir, traj.t);
+    }
+    return rep;
+  });
 }
 
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);

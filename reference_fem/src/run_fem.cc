@@ -7,24 +7,20 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
   const Scene scene = with_overrides(scene_in, ov);
   FemOptions o = options_from(scene.solver);
   if (ov.frames) o.frames_dir = out_dir / "frames";
-  AnyMesh mesh = load_mesh(scene);
-  return std::visit(
-      [&](auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        const Model<dim> model = build_model<dim>(scene, std::move(m));
-        Trajectory<dim> traj;
-        if (mpi_size() > 1) {
-          if (ov.frames) throw InputError("--frames is not available under MPI yet");
-          const RunReport rep = simulate_distributed<dim>(model, scene.material, o, traj);
-          if (mpi_rank() == 0) write_run_outputs(out_dir, model, traj, rep, scene.name);
-          return rep;
-        }
-        const RunReport rep = simulate<dim>(model, scene.material, o, traj);
-        write_run_outputs(out_dir, model, traj, rep, scene.name);
-        if (ov.frames) write_pvd(out_dir, traj.t);
-        return rep;
-      },
-      mesh);
+  return with_model(scene, [&](const auto& model) {
+    constexpr int dim = std::decay_t<decltype(model)>::dimension;
+    Trajectory<dim> traj;
+    if (mpi_size() > 1) {
+      if (ov.frames) throw InputError("--frames is not available under MPI yet");
+      const RunReport rep = simulate_distributed<dim>(model, scene.material, o, traj);
+      if (mpi_rank() == 0) write_run_outputs(out_dir, model, traj, rep, scene.name);
+      return rep;
+    }
+    const RunReport rep = simulate<dim>(model, scene.material, o, traj);
+    write_run_outputs(out_dir, model, traj, rep, scene.name);
+    if (ov.frames) write_pvd(out_dir, traj.t);
+    return rep;
+  });
 }
 
 } // namespace vtb::fem

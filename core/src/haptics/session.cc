@@ -321,9 +321,8 @@ template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<
   return plane;
 }
 
-template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, Mesh<dim> mesh) {
-  const DevicePlane<dim> plane = device_plane(scene, mesh);
-  const Model<dim> model = build_model<dim>(scene, std::move(mesh));
+template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, const Model<dim>& model) {
+  const DevicePlane<dim> plane = device_plane(scene, model.mesh);
   std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
   // A coupling stiffer than the device renders stably is limited to its maximum, as a device
   // driver does; the summary and the CLI say so.
@@ -439,9 +438,7 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
   if (!scene.haptics)
     throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
-  AnyMesh any = load_mesh(scene);
-  if (auto* m2 = std::get_if<Mesh2>(&any)) return run_session<2>(scene, opt, std::move(*m2));
-  return run_session<3>(scene, opt, std::get<Mesh3>(std::move(any)));
+  return with_model(scene, [&](const auto& model) { return run_session(scene, opt, model); });
 }
 
 void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, const std::string& scene_name) {

@@ -75,14 +75,10 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
     if (!known_solver(s))
       throw InputError("--solvers: unknown solver \"" + s +
                        "\" (explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem)");
-  AnyMesh mesh = load_mesh(scene);
-  return std::visit(
-      [&](auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        const Model<dim> model = build_model<dim>(scene, std::move(m));
-        return compare_impl<dim>(scene, model, solvers, reference, dt, progress);
-      },
-      mesh);
+  return with_model(scene, [&](const auto& model) {
+    constexpr int dim = std::decay_t<decltype(model)>::dimension;
+    return compare_impl<dim>(scene, model, solvers, reference, dt, progress);
+  });
 }
 
 void write_compare(const CompareResult& r, const std::filesystem::path& dir) {

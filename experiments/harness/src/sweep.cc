@@ -58,13 +58,10 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
   for (double scale : scales) {
     Scene scene = scene_in;
     scene.material.young_modulus *= scale;
-    AnyMesh mesh = load_mesh(scene);
-    std::visit(
-        [&](auto& m) {
-          constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-          sweep_scale<dim>(scene, build_model<dim>(scene, std::move(m)), scale, dts, solvers, cells, progress);
-        },
-        mesh);
+    with_model(scene, [&](auto& model) {
+      constexpr int dim = std::decay_t<decltype(model)>::dimension;
+      sweep_scale<dim>(scene, std::move(model), scale, dts, solvers, cells, progress);
+    });
   }
   return cells;
 }

@@ -6,6 +6,9 @@
 #include "vtb/core/spring_network.hh"
 #include "vtb/meshes/region.hh"
 
+#include <type_traits>
+#include <variant>
+
 namespace vtb {
 
 /// Switch-on profile of loads and drives: 0 before `start`, then a linear ramp to 1 over
@@ -43,6 +46,7 @@ template <int dim> struct Load {
 };
 
 template <int dim> struct Model {
+  static constexpr int dimension = dim;
   Mesh<dim> mesh;
   SpringNetwork<dim> net;
   std::vector<Support<dim>> supports;
@@ -70,5 +74,19 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
 
 /// Loads the scene's mesh (file or generator).
 AnyMesh load_mesh(const Scene& scene);
+
+/// Loads the scene's mesh, builds the model in the mesh's dimension and returns f(model); f
+/// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)
+/// and may move the model away.
+template <class F> auto with_model(const Scene& scene, F&& f) {
+  AnyMesh mesh = load_mesh(scene);
+  return std::visit(
+      [&](auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        Model<dim> model = build_model<dim>(scene, std::move(m));
+        return f(model);
+      },
+      mesh);
+}
 
 } // namespace vtb
