@@ -1,12 +1,15 @@
 #pragma once
 // Internal to reference_fem: what the serial and the distributed solvers share: the
-// triangulation of a scene's mesh, the material's Lame constants, the element matrices and
-// the rule for support points on a support's facets.
+// triangulation of a scene's mesh, the material's Lame constants, the element matrices, the
+// rule for support points on a support's facets, and the strain measure of the summary.
 
 #include "vtb/core/model.hh"
 
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_handler.h>
 #include <deal.II/fe/fe_system.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping.h>
 #include <deal.II/grid/tria.h>
 #include <deal.II/lac/full_matrix.h>
 
@@ -15,6 +18,7 @@
 #include <algorithm>
 #include <map>
 #include <set>
+#include <vector>
 
 namespace vtb::fem {
 
@@ -111,6 +115,29 @@ bool on_facet(const Mesh<dim>& mesh, const dealii::Point<dim>& p, const std::arr
   const Eigen::Matrix<double, dim - 1, 1> lam = (B.transpose() * B).ldlt().solve(B.transpose() * (x - a));
   if ((lam.array() < -1e-9).any() || lam.sum() > 1 + 1e-9) return false;
   return (a + B * lam - x).norm() <= tol;
+}
+
+/// The largest principal strain magnitude of the displacement u, at the centres of the cells
+/// this process owns (all of them in a serial run).
+template <int dim, class Vector>
+double max_principal_strain(const dealii::Mapping<dim>& mapping, const dealii::FiniteElement<dim>& fe,
+                            const dealii::DoFHandler<dim>& dofs, const Vector& u) {
+  const dealii::QGaussSimplex<dim> centre(1);
+  dealii::FEValues<dim> fev(mapping, fe, centre, dealii::update_gradients);
+  std::vector<std::vector<dealii::Tensor<1, dim>>> grads(1, std::vector<dealii::Tensor<1, dim>>(dim));
+  double worst = 0;
+  for (const auto& cell : dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    fev.reinit(cell);
+    fev.get_function_gradients(u, grads);
+    Eigen::Matrix<double, dim, dim> g;
+    for (int a = 0; a < dim; ++a)
+      for (int b = 0; b < dim; ++b) g(a, b) = grads[0][static_cast<std::size_t>(a)][b];
+    const Eigen::Matrix<double, dim, dim> eps = 0.5 * (g + g.transpose());
+    worst = std::max(
+        worst, Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, dim, dim>>(eps).eigenvalues().cwiseAbs().maxCoeff());
+  }
+  return worst;
 }
 
 } // namespace vtb::fem

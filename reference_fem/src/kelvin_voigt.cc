@@ -402,22 +402,7 @@ void KelvinVoigtProblem<dim>::record(double t, Trajectory<dim>& out, bool record
       for (int a = 0; a < dim; ++a) field(a, i) = m_u[m_node[static_cast<std::size_t>(i)][static_cast<std::size_t>(a)]];
     out.field.push_back(std::move(field));
   }
-  // Largest principal strain magnitude, at cell centres.
-  const QGaussSimplex<dim> centre(1);
-  FEValues<dim> fev(m_mapping, m_fe, centre, update_gradients);
-  std::vector<std::vector<Tensor<1, dim>>> grads(1, std::vector<Tensor<1, dim>>(dim));
-  double worst = 0;
-  for (const auto& cell : m_dofs.active_cell_iterators()) {
-    fev.reinit(cell);
-    fev.get_function_gradients(m_u, grads);
-    Eigen::Matrix<double, dim, dim> g;
-    for (int a = 0; a < dim; ++a)
-      for (int b = 0; b < dim; ++b) g(a, b) = grads[0][static_cast<std::size_t>(a)][b];
-    const Eigen::Matrix<double, dim, dim> eps = 0.5 * (g + g.transpose());
-    worst = std::max(
-        worst, Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, dim, dim>>(eps).eigenvalues().cwiseAbs().maxCoeff());
-  }
-  rep.max_strain = std::max(rep.max_strain, worst);
+  rep.max_strain = std::max(rep.max_strain, max_principal_strain(m_mapping, m_fe, m_dofs, m_u));
 }
 
 template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, bool record_field) {

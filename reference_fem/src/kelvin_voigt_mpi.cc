@@ -325,23 +325,8 @@ private:
     // Largest principal strain magnitude at the centres of this rank's cells, max over ranks.
     Vec_t ghosted(m_owned, m_relevant, m_comm);
     ghosted = m_u;
-    const QGaussSimplex<dim> centre(1);
-    FEValues<dim> fev(m_mapping, m_fe, centre, update_gradients);
-    std::vector<std::vector<Tensor<1, dim>>> grads(1, std::vector<Tensor<1, dim>>(dim));
-    double worst = 0;
-    for (const auto& cell : m_dofs.active_cell_iterators()) {
-      if (!cell->is_locally_owned()) continue;
-      fev.reinit(cell);
-      fev.get_function_gradients(ghosted, grads);
-      Eigen::Matrix<double, dim, dim> g;
-      for (int a = 0; a < dim; ++a)
-        for (int b = 0; b < dim; ++b) g(a, b) = grads[0][static_cast<std::size_t>(a)][b];
-      const Eigen::Matrix<double, dim, dim> eps = 0.5 * (g + g.transpose());
-      worst = std::max(
-          worst,
-          Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, dim, dim>>(eps).eigenvalues().cwiseAbs().maxCoeff());
-    }
-    m_max_strain = std::max(m_max_strain, Utilities::MPI::max(worst, m_comm));
+    m_max_strain =
+        std::max(m_max_strain, Utilities::MPI::max(max_principal_strain(m_mapping, m_fe, m_dofs, ghosted), m_comm));
   }
 
   double m_max_strain = 0;
