@@ -152,9 +152,8 @@ private:
     Vec<dim> proxy_velocity = Vec<dim>::Zero();
     for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k)
       proxy_velocity += c.weights[k] * node_velocity.col(facet[k]);
-    Vec<dim> f =
-        m_h.coupling_stiffness * (c.proxy - handle) + m_h.coupling_damping * (proxy_velocity - handle_velocity);
     const Vec<dim> depth = c.proxy - handle;
+    Vec<dim> f = m_h.coupling_stiffness * depth + m_h.coupling_damping * (proxy_velocity - handle_velocity);
     const double d2 = depth.squaredNorm();
     if (d2 > 0) {
       const double normal = f.dot(depth) / d2;
