@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace vtb {
@@ -287,6 +288,37 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
                {"total_seconds", total}};
   return rep;
 }
+
+template <int dim> Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y) {
+  SpringOde<dim> ode(model);
+  if (y.size() != ode.size()) throw std::invalid_argument("cvode_rhs: y has the wrong size");
+  Eigen::VectorXd g(ode.size());
+  if (ode.rhs(t, y.data(), g.data()) != 0) g.setConstant(std::numeric_limits<double>::quiet_NaN());
+  return g;
+}
+
+template <int dim> Eigen::MatrixXd cvode_jacobian(const Model<dim>& model, double t, const Eigen::VectorXd& y) {
+  SpringOde<dim> ode(model);
+  if (y.size() != ode.size()) throw std::invalid_argument("cvode_jacobian: y has the wrong size");
+  SUNContext ctx = nullptr;
+  if (SUNContext_Create(nullptr, &ctx) != 0) throw std::runtime_error("cvode: SUNContext_Create failed");
+  SUNMatrix J = SUNSparseMatrix(ode.size(), ode.size(), ode.nonzeros(), CSC_MAT, ctx);
+  ode.jacobian(t, y.data(), J);
+  Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(ode.size(), ode.size());
+  const sunindextype* colptr = SUNSparseMatrix_IndexPointers(J);
+  const sunindextype* rowval = SUNSparseMatrix_IndexValues(J);
+  const double* data = SUNSparseMatrix_Data(J);
+  for (sunindextype c = 0; c < ode.size(); ++c)
+    for (sunindextype k = colptr[c]; k < colptr[c + 1]; ++k) dense(rowval[k], c) += data[k];
+  SUNMatDestroy(J);
+  SUNContext_Free(&ctx);
+  return dense;
+}
+
+template Eigen::VectorXd cvode_rhs<2>(const Model<2>&, double, const Eigen::VectorXd&);
+template Eigen::VectorXd cvode_rhs<3>(const Model<3>&, double, const Eigen::VectorXd&);
+template Eigen::MatrixXd cvode_jacobian<2>(const Model<2>&, double, const Eigen::VectorXd&);
+template Eigen::MatrixXd cvode_jacobian<3>(const Model<3>&, double, const Eigen::VectorXd&);
 
 template RunReport simulate_cvode<2>(const Model<2>&, const CvodeOptions&, Trajectory<2>&, bool);
 template RunReport simulate_cvode<3>(const Model<3>&, const CvodeOptions&, Trajectory<3>&, bool);

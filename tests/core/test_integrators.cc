@@ -2,6 +2,7 @@
 // stretch, momentum of a free body, the explicit Courant limit, the filtered scheme at
 // large steps.
 #include "support/small_models.hh"
+#include "vtb/core/cvode_solver.hh"
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/simulation.hh"
 
@@ -45,13 +46,16 @@ class Creep : public ::testing::TestWithParam<std::pair<std::string, std::string
 TEST_P(Creep, SingleVoigtElementFollowsTheCreepLaw) {
   // With negligible mass (m k / c^2 = 1e-8) the element obeys c x' + k x = F, whose solution
   // is x = F/k (1 - exp(-t/tau)), tau = c/k. Backward Euler's global error is first order:
-  // |e| <= dt/(2 tau) * max_t (t/tau) e^(-t/tau) * F/k * (1 + O(dt/tau)) <= dt/(2 e tau) F/k;
-  // we allow dt/tau * F/k, and check the order by halving dt (ratio 2 within 10 %).
+  // |e| <= dt/(2 tau) * max_t (t/tau) e^(-t/tau) * F/k * (1 + O(dt/tau)) <= dt/(2 e tau) F/k
+  // (3.68e-5 here, measured 3.66e-5); we allow the first-order correction, a factor
+  // 1 + dt/tau. On one free node the filter is 1x1 and is implicit Euler, so all three agree.
+  // Halving dt: e(dt) = A dt + B dt^2 with B/A ~ 1/tau, so the ratio is 2 (1 + dt/(2 tau))
+  // to first order: 2 within 2 dt/tau = 0.02.
   const auto& [kind, filter] = GetParam();
-  const double tau = 0.1, Fk = 0.02;
-  const double e1 = creep_error(kind, filter, 1e-3), e2 = creep_error(kind, filter, 5e-4);
-  EXPECT_LT(e1, 1e-3 / tau * Fk);
-  EXPECT_NEAR(e1 / e2, 2.0, 0.2);
+  const double tau = 0.1, Fk = 0.02, dt = 1e-3;
+  const double e1 = creep_error(kind, filter, dt), e2 = creep_error(kind, filter, dt / 2);
+  EXPECT_LT(e1, dt / (2 * std::exp(1.0) * tau) * Fk * (1 + dt / tau));
+  EXPECT_NEAR(e1 / e2, 2.0, 2 * dt / tau);
 }
 
 INSTANTIATE_TEST_SUITE_P(ImplicitSchemes, Creep,
@@ -113,9 +117,12 @@ TEST_P(Strip, StretchesByFLOverEffectiveEA) {
   //   two lengths, so the stretch difference of L = 0.4 and 0.2 is F dL / K, with K the axial
   //   stiffness per length of the strip;
   // - the free edges add a fixed stiffness per length each, so K(W) = E_eff t W + 2 s_edge is
-  //   linear in the width and (K(0.04) - K(0.02)) / 0.02 is the bulk E_eff t.
-  // What remains: the strain (~1e-5) times O(1) geometric nonlinearity, edge layers that
-  // interact across 4 rows, and the static residual (< 1e-8). We allow 1e-3 relative.
+  //   linear in the width and (K(0.08) - K(0.04)) / 0.04 is the bulk E_eff t.
+  // What remains: the strain (~1e-5) times O(1) geometric nonlinearity (~1e-5), the static
+  // residual (< 1e-8), and the interaction of the two edge layers, which decays exponentially
+  // with the rows between them: 9.0e-4 (lloyd) with widths of 4 and 8 rows, 3e-5 and 1e-5
+  // (lloyd, van Gelder) with 8 and 16 rows, i.e. a factor >= 30 per doubling. We allow 1e-4:
+  // the 4/8-row value divided by that factor (3e-5) plus the nonlinearity, with a factor 2.
   // The calibration's own error is E_eff / E, printed, and exact for van Gelder.
   const std::string springs = GetParam();
   const double F = 5e-6;
@@ -125,8 +132,8 @@ TEST_P(Strip, StretchesByFLOverEffectiveEA) {
     EXPECT_NEAR(e_t, e_other, 1e-12 * e_t);
     return F * 0.2 / dtip;
   };
-  const double bulk = (stiffness(0.04) - stiffness(0.02)) / 0.02;
-  EXPECT_NEAR(bulk, e_t, 1e-3 * e_t);
+  const double bulk = (stiffness(0.08) - stiffness(0.04)) / 0.04;
+  EXPECT_NEAR(bulk, e_t, 1e-4 * e_t);
   const double ratio = e_t / (5.0e4 * 0.001);
   std::cout << springs << ": E_eff / E = " << ratio << " on the union-jack lattice, measured " << bulk / (5.0e4 * 0.001)
             << "\n";
@@ -363,6 +370,138 @@ total_force = [0.0, -0.01, 0.005]
   EXPECT_LT((a.field.back() - b.field.back()).norm(), 1e-4 * b.field.back().norm());
   EXPECT_LT((b.reaction.back()[0] + Eigen::Vector3d(0.0, -0.01, 0.005)).norm(), 1e-4 * 0.01);
 }
+
+} // namespace
+} // namespace vtb
+
+namespace vtb {
+namespace {
+
+struct DriveCase {
+  std::string kind, filter;
+};
+std::ostream& operator<<(std::ostream& os, const DriveCase& c) {
+  return os << c.kind << " " << c.filter;
+}
+
+class EverySolver : public ::testing::TestWithParam<DriveCase> {};
+
+/// A plate clamped on the left whose right-edge midpoint is driven (ramped) to a prescribed
+/// displacement, with mass damping 20/s so that it settles.
+Model<2> driven_plate() {
+  Model<2> model = test::model_from(test::plate_scene(8, 2, R"(
+[[fix]]
+name = "clamp"
+group = "left"
+[[drive]]
+name = "probe"
+point = [0.2, 0.025]
+displacement = [0.002, -0.001]
+start = 0.0
+ramp = 0.2
+)",
+                                                      0.02, "0.2, 0.05", 20.0));
+  model.duration = 2.0;
+  model.output_interval = 0.1;
+  return model;
+}
+
+TEST_P(EverySolver, HonoursADriveAndBalancesItsReactionAtRest) {
+  // Every spring solver holds the driven node exactly on its prescribed path, and all settle
+  // on the one static state, where the drive's and the clamp's reactions cancel. After the
+  // ramp (0.2 s) the slowest mode decays at least like exp(-gamma t / 2) with gamma = 20/s:
+  // exp(-18) ~ 2e-8 of the reaction by t = 2 s; we allow 1e-6 of it, for the balance and for
+  // the agreement with implicit Euler's static reaction.
+  const auto& c = GetParam();
+  const Model<2> model = driven_plate();
+  IntegratorOptions o = opts(c.kind, 1e-3, c.filter);
+  if (c.kind == "explicit" || c.filter == "neighbors")
+    o.dt = 0.5 * explicit_critical_dt(max_omega_squared(model, true), 0.02, 20.0);
+  Trajectory<2> tr;
+  const RunReport r =
+      c.kind == "cvode" ? simulate_cvode(model, CvodeOptions{}, tr, true) : simulate(model, o, tr, true);
+  ASSERT_TRUE(r.stable) << r.failure;
+  const int node = model.supports[1].nodes.at(0);
+  for (std::size_t k = 0; k < tr.t.size(); ++k) {
+    const double f = ramp_factor(tr.t[k], 0.0, 0.2);
+    ASSERT_NEAR(tr.field[k](0, node), 0.002 * f, 1e-15) << "t = " << tr.t[k];
+    ASSERT_NEAR(tr.field[k](1, node), -0.001 * f, 1e-15) << "t = " << tr.t[k];
+  }
+  const Vec<2> clamp = tr.reaction.back()[0], drive = tr.reaction.back()[1];
+  EXPECT_GT(drive.norm(), 1e-3) << "the drive pulls";
+  EXPECT_LT((clamp + drive).norm(), 1e-6 * drive.norm());
+  Trajectory<2> ie;
+  simulate(model, opts("implicit-euler", 1e-3), ie, false);
+  EXPECT_LT((drive - ie.reaction.back()[1]).norm(), 1e-6 * drive.norm());
+}
+
+INSTANTIATE_TEST_SUITE_P(Solvers, EverySolver,
+                         ::testing::Values(DriveCase{"explicit", "full"}, DriveCase{"filtered", "full"},
+                                           DriveCase{"filtered", "neighbors"}, DriveCase{"implicit-euler", "full"},
+                                           DriveCase{"cvode", "full"}),
+                         [](const auto& pinfo) {
+                           std::string n = pinfo.param.kind + "_" + pinfo.param.filter;
+                           std::replace(n.begin(), n.end(), '-', '_');
+                           return n;
+                         });
+
+class StrainLimit : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(StrainLimit, ProjectsAnOverstretchedSpringToTheLimitInOneStep) {
+  // One Voigt element, node 0 fixed, node 1 free and held at 50 % stretch with no velocity.
+  // One step of 1 us moves node 1 by O(dt^2 k/m x) ~ 1e-10 of L; then the post-step pass
+  // (Provot 1995) moves the free end back onto (1 + limit) L0 = 1.1 exactly and gives it the
+  // velocity of that move over dt. Without the limit the spring stays at 1.5.
+  const std::string filter = GetParam();
+  const Model<2> model = test::single_element(1.0, 0.0, 1.0, 0.0);
+  for (double limit : {0.0, 0.1}) {
+    IntegratorOptions o = opts("filtered", 1e-6, filter);
+    o.strain_limit = limit;
+    auto integ = make_integrator(model, o);
+    State<2> s = initial_state(model);
+    s.u(0, 1) = 0.5;
+    integ->step(s);
+    const double l = (model.net.rest.col(1) + s.u.col(1) - model.net.rest.col(0)).norm();
+    if (limit > 0) {
+      EXPECT_NEAR(l, 1.1, 1e-12);
+      EXPECT_NEAR(s.v(0, 1), (1.1 - 1.5) / 1e-6, 1e-3) << "the projection's velocity, -4e5 m/s";
+    } else {
+      EXPECT_NEAR(l, 1.5, 1e-9);
+    }
+  }
+}
+
+TEST_P(StrainLimit, LowersTheStretchOfAFastPull) {
+  // A plate's corner driven 1.5 cm in 0.01 s (a 7.5 % mean stretch of the top edge, so a
+  // 10 % cap is feasible): unlimited, the corner's springs reach about 20 %. One projection
+  // pass per step cannot hold every spring at the cap (a later projection stretches an earlier
+  // spring again through the node they share), so what is asserted is that the pass lowers
+  // the worst stretch, not that it removes the excess.
+  const std::string filter = GetParam();
+  Model<2> model = test::model_from(test::plate_scene(8, 2, R"(
+[[fix]]
+group = "left"
+[[drive]]
+point = [0.2, 0.05]
+displacement = [0.015, 0.0]
+ramp = 0.01
+)",
+                                                      0.02));
+  model.duration = 0.2;
+  model.output_interval = 0.01;
+  IntegratorOptions o = opts("filtered", 1e-3, filter);
+  if (filter == "neighbors") o.dt = 0.5 * explicit_critical_dt(max_omega_squared(model, true), 0.02, 0.0);
+  Trajectory<2> free, limited;
+  const RunReport a = simulate(model, o, free);
+  o.strain_limit = 0.1;
+  const RunReport b = simulate(model, o, limited);
+  ASSERT_TRUE(b.stable) << b.failure;
+  std::cout << filter << ": max strain " << a.max_strain << " free, " << b.max_strain << " limited to 0.1\n";
+  EXPECT_GT(a.max_strain, 0.15);
+  EXPECT_LT(b.max_strain, a.max_strain - 0.25 * (a.max_strain - 0.1));
+}
+
+INSTANTIATE_TEST_SUITE_P(Filters, StrainLimit, ::testing::Values("full", "neighbors"));
 
 } // namespace
 } // namespace vtb

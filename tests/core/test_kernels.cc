@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace vtb {
 namespace {
 
@@ -56,19 +58,46 @@ TEST_P(KernelFd, JacobianMatchesForceDifferences) {
   EXPECT_TRUE(K.isApprox(K.transpose()));
 }
 
-TEST_P(KernelFd, DashpotJacobianMatchesVelocityDifferences) {
-  const double ratio = GetParam();
-  const Eigen::Vector2d xi(0.0, 0.0), xj = ratio * Eigen::Vector2d(0.3, 0.4);
-  const Eigen::Vector2d vi(0.1, 0.2), vj(-0.3, 0.05);
-  const double c = 1.5;
-  const Eigen::Matrix2d C = dashpot_jacobian<2>(xi, xj, c);
-  for (int b = 0; b < 2; ++b) {
-    Eigen::Vector2d e = Eigen::Vector2d::Zero();
-    e[b] = kH;
-    const Eigen::Vector2d d =
-        (voigt_force<2>(xi, xj, vi, vj + e, 0.5, 0.0, c) - voigt_force<2>(xi, xj, vi, vj - e, 0.5, 0.0, c)) / (2 * kH);
-    for (int a = 0; a < 2; ++a) EXPECT_NEAR(C(a, b), d[a], kTol * c);
+/// The Voigt element with spring and dashpot together, in 2D and 3D: d f_i / d v_j is the
+/// dashpot block (the force is linear in v, so the difference is exact but for round-off), and
+/// at v = 0 d f_i / d x_j is the spring block even with c != 0. The element's direction turns
+/// with the stretch parameter, so each case probes another n.
+template <int dim> void check_voigt_element(double ratio) {
+  Vec<dim> dir, xi, vi, vj;
+  for (int a = 0; a < dim; ++a) {
+    dir[a] = std::cos(3.0 * ratio + 1.7 * a);
+    xi[a] = 0.1 * (a + 1);
+    vi[a] = 0.2 * std::sin(1.0 + a);
+    vj[a] = -0.3 * std::cos(2.0 * a);
   }
+  dir.normalize();
+  const double L0 = 0.4, k = 2.5, c = 1.5;
+  const Vec<dim> xj = xi + ratio * L0 * dir, z = Vec<dim>::Zero();
+  const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, c), K = spring_jacobian<dim>(xi, xj, L0, k, false);
+  for (int b = 0; b < dim; ++b) {
+    Vec<dim> e = Vec<dim>::Zero();
+    e[b] = kH;
+    const Vec<dim> dv =
+        (voigt_force<dim>(xi, xj, vi, vj + e, L0, k, c) - voigt_force<dim>(xi, xj, vi, vj - e, L0, k, c)) / (2 * kH);
+    const Vec<dim> dx =
+        (voigt_force<dim>(xi, xj + e, z, z, L0, k, c) - voigt_force<dim>(xi, xj - e, z, z, L0, k, c)) / (2 * kH);
+    for (int a = 0; a < dim; ++a) {
+      EXPECT_NEAR(C(a, b), dv[a], kTol * c) << "d f_i / d v_j, dim " << dim;
+      EXPECT_NEAR(K(a, b), dx[a], kTol * k) << "d f_i / d x_j with the dashpot present, dim " << dim;
+    }
+  }
+  // The dashpot acts along the element: a relative velocity across it does nothing.
+  Vec<dim> across = Vec<dim>::Zero();
+  across[0] = -dir[1];
+  across[1] = dir[0];
+  EXPECT_LT((C * across).norm(), 1e-14 * c);
+}
+
+TEST_P(KernelFd, VoigtElementJacobiansMatchDifferences2D) {
+  check_voigt_element<2>(GetParam());
+}
+TEST_P(KernelFd, VoigtElementJacobiansMatchDifferences3D) {
+  check_voigt_element<3>(GetParam());
 }
 
 INSTANTIATE_TEST_SUITE_P(StretchedAndCompressed, KernelFd, ::testing::Values(0.6, 1.0, 1.3));

@@ -1,4 +1,5 @@
 // vtb run's files: names, headers, reactions in balance with the loads at rest.
+#include "support/fresh_dir.hh"
 #include "support/small_models.hh"
 #include "vtb/core/simulation.hh"
 
@@ -37,8 +38,8 @@ dt = 2e-3
 )",
                                              0.05, "0.2, 0.05", 20.0);
   const Scene scene = parse_scene(text, "plate.toml", ".");
-  const auto dir = std::filesystem::temp_directory_path() / "vtb_run_outputs";
-  std::filesystem::remove_all(dir);
+  const test::FreshDir fresh;
+  const auto dir = fresh / "out";
   const RunReport r = run_scene(scene, {}, dir);
   ASSERT_TRUE(r.stable);
   const std::string probes = slurp(dir / "probes.csv"), reactions = slurp(dir / "reactions.csv");
@@ -67,7 +68,8 @@ TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
                                              "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = "
                                              "[0.3, 0.0]\n[solver]\nkind = \"explicit\"\ndt = 1e-3\n");
   const Scene scene = parse_scene(text, "plate.toml", ".");
-  const auto dir = std::filesystem::temp_directory_path() / "vtb_run_unstable";
+  const test::FreshDir fresh;
+  const auto dir = fresh / "out";
   const RunReport r = run_scene(scene, {}, dir);
   EXPECT_FALSE(r.stable);
   EXPECT_FALSE(r.failure.empty());

@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 
 namespace vtb {
 namespace {
@@ -59,39 +60,60 @@ dt = 0.01
   const auto res = harness::run_compare(s, {"filtered-full", "implicit-euler", "cvode"}, "fem");
   ASSERT_EQ(res.rows.size(), 4u);
   ASSERT_EQ(res.decomposition.size(), 3u);
-  for (const auto& row : res.rows) EXPECT_TRUE(row.report.stable) << row.solver;
-  // The reference against itself is exact; every other error is finite and below 100 %.
+  for (const auto& row : res.rows) {
+    EXPECT_TRUE(row.report.stable) << row.solver;
+    std::cout << row.solver << ": max " << row.error.displacement_max << ", final " << row.error.displacement_final
+              << ", probe " << row.error.probe_max << "\n";
+  }
+  // The reference against itself is exact.
   EXPECT_EQ(res.rows.back().error.displacement_max, 0.0);
-  for (const auto& row : res.rows) EXPECT_LT(row.error.displacement_max, 1.0) << row.solver;
-  // The decomposition's three terms are present, in order, and the time error is non-zero.
-  EXPECT_GT(res.decomposition[0].error.displacement_max, 0.0);
+  // Model error: Lloyd's springs on this union-jack lattice are E_eff / E = 1.305 stiff in
+  // uniaxial tension (lattice theory; test_integrators measures it), so a field scaled by
+  // 1 / 1.305 is off by 1 - 1 / 1.305 = 0.234 in relative L2. Both models creep with the same
+  // tau, so the ratio holds at every time up to inertia (t / tau = 4: the transient is gone).
+  // The clamp's boundary layer, within about one width W of it (W / L = 1/4 of the strip)
+  // where the lateral strain departs from nu times the axial one, shifts it by at most
+  // ~ (W / L) nu 0.234 = 0.02.
+  const double lattice = 1 - 1 / 1.305;
+  EXPECT_NEAR(res.rows[2].error.displacement_final, lattice, 0.02) << "cvode vs fem";
+  EXPECT_NEAR(res.rows[0].error.displacement_final, lattice, 0.02) << "filtered vs fem";
+  EXPECT_NEAR(res.rows[1].error.displacement_final, lattice, 0.02) << "implicit Euler vs fem";
+  // The decomposition's three terms are present, in order. The time error (filtered vs
+  // cvode) is first order in dt. With c = tau k every mode creeps alike in the quasi-static
+  // limit, x = F/k (1 - exp(-t/tau)), and backward Euler's error on that is
+  // dt/(2 tau) (t/tau) exp(-t/tau) F/k (1 + O(dt/tau)): at t/tau = 4 (dt = 0.01, tau = 0.05)
+  // 0.0073 of the final displacement, which we allow with the factor 1 + dt/tau.
+  const double creep_bound = 0.01 / (2 * 0.05) * 4 * std::exp(-4.0) * (1 + 0.01 / 0.05);
+  EXPECT_GT(res.decomposition[0].error.displacement_final, 0.0);
+  EXPECT_LT(res.decomposition[0].error.displacement_final, creep_bound);
+  std::cout << "filtered vs cvode: max " << res.decomposition[0].error.displacement_max << ", final "
+            << res.decomposition[0].error.displacement_final << "\n";
   EXPECT_EQ(res.decomposition[1].a, "cvode");
   EXPECT_EQ(res.decomposition[1].b, "fem");
 }
 
-TEST(Sweep, FindsTheExplicitBoundaryWithinTwentyPercentOfThePrediction) {
-  // Undamped tiny plate: the predicted limit 2 / omega_max is exact for the linear problem;
-  // the sweep's boundary (largest stable dt, smallest unstable dt) must bracket it within 20 %.
+TEST(Sweep, FindsTheExplicitBoundaryWhereThePredictionPutsIt) {
+  // Undamped tiny plate: symplectic Euler on the linearised model is stable iff
+  // dt < 2 / omega_max, and max_omega_squared is the exact largest eigenvalue, so the limit is
+  // exact up to the geometric nonlinearity at the perturbation's 1e-6 amplitude (relative
+  // ~1e-6). On a 2 % grid the boundary must fall between the two grid points around it:
+  // 0.98 x stable and 1.02 x unstable. At 1.02 x the unstable mode grows by 1.49 per step
+  // (|lambda| of lambda^2 - (2 - h^2) lambda + 1 = 0, h = 2.04), so the 2000 steps take any
+  // round-off seed past the 1000 % strain criterion; at 0.98 x every mode is bounded.
   Scene s = parse_scene(test::plate_scene(4, 1, "[[fix]]\ngroup = \"left\"\n", 0.0), "tiny.toml", ".");
   s.duration = 0.2;
   s.output_interval = 0.01;
   const Model<2> model = build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
   const double predicted = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
-  // The model starts at rest without load: perturb it with a tiny initial velocity, and run
-  // about 2000 steps so that a mode growing by >= 10 % per step (1.05x the limit) passes the
-  // 1000 % strain criterion from 1e-6.
   s.initial_velocity = Eigen::Vector2d(1e-6, 1e-6);
   s.duration = 2000 * predicted;
   s.output_interval = s.duration / 20;
   std::vector<double> dts;
-  for (double f = 0.5; f <= 1.6; f += 0.1) dts.push_back(f * predicted);
+  for (int k = -5; k <= 5; ++k)
+    if (k != 0) dts.push_back((1.0 + 0.02 * k) * predicted);
   const auto cells = harness::run_sweep(s, dts, {1.0}, {"explicit"});
-  double stable_max = 0, unstable_min = 1e9;
-  for (const auto& c : cells)
-    (c.stable ? stable_max : unstable_min) = c.stable ? std::max(stable_max, c.dt) : std::min(unstable_min, c.dt);
-  EXPECT_GT(stable_max, 0.8 * predicted);
-  EXPECT_LT(unstable_min, 1.2 * predicted);
-  EXPECT_LE(stable_max, unstable_min);
+  ASSERT_EQ(cells.size(), dts.size());
+  for (const auto& c : cells) EXPECT_EQ(c.stable, c.dt < predicted) << "dt / predicted = " << c.dt / predicted;
   EXPECT_NEAR(cells.front().courant_dt, predicted, 1e-9 * predicted);
 }
 

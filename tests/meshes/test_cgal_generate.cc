@@ -1,5 +1,6 @@
 // CGAL-generated meshes: the paper's plates (exact node counts, quality, bit-for-bit
 // regeneration of the committed files) and the Mesh_3 solids.
+#include "support/fresh_dir.hh"
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
@@ -43,7 +44,8 @@ TEST_P(Plate, HasTheExactNodeCountQualityAndGroups) {
 
 TEST_P(Plate, RegeneratesTheCommittedFileBitForBit) {
   const int n = GetParam();
-  const auto out = std::filesystem::temp_directory_path() / ("vtb_plate_" + std::to_string(n) + ".msh");
+  const test::FreshDir fresh;
+  const auto out = fresh / ("plate_" + std::to_string(n) + ".msh");
   write_msh(mesh_polygon(paper_plate(), n), out);
   const auto committed = kData / ("plate_" + std::to_string(n) + ".msh");
   ASSERT_TRUE(std::filesystem::exists(committed)) << committed;

@@ -113,7 +113,15 @@ TEST(Region, BoxGroupAndPointSelection) {
   EXPECT_EQ(s.facets.size(), 2u);
   RegionSpec<2> pt;
   pt.point = Eigen::Vector2d(0.11, 0.026);
-  EXPECT_EQ(select(m, pt, "probe").nodes, std::vector<int>{nearest_node<2>(m, {0.1, 0.025})});
+  // The lattice's nodes are 0.05 x 0.025 apart: (0.1, 0.025) is the nearest to (0.11, 0.026),
+  // by coordinates (not by asking nearest_node again).
+  const auto picked = select(m, pt, "probe").nodes;
+  ASSERT_EQ(picked.size(), 1u);
+  EXPECT_NEAR(m.points(0, picked[0]), 0.1, 1e-15);
+  EXPECT_NEAR(m.points(1, picked[0]), 0.025, 1e-15);
+  for (int i = 0; i < m.num_nodes(); ++i)
+    EXPECT_GE((m.points.col(i) - Eigen::Vector2d(0.11, 0.026)).norm(),
+              (m.points.col(picked[0]) - Eigen::Vector2d(0.11, 0.026)).norm());
   RegionSpec<2> grp;
   grp.group = "nope";
   EXPECT_THROW(select(m, grp, "fix"), InputError);

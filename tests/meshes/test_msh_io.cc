@@ -1,4 +1,5 @@
 // .msh round trip through the gmsh API and refusal of broken files.
+#include "support/fresh_dir.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
@@ -7,17 +8,26 @@
 
 #include <ostream>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <memory>
 
 namespace vtb {
 namespace {
 
+/// A path in a folder of this test's own (fresh, removed when the test ends): tests that
+/// write the same file name cannot race under ctest -j or read an old run's file.
 std::filesystem::path temp(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "vtb_tests";
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  static thread_local std::unique_ptr<test::FreshDir> dir;
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  static thread_local const void* owner = nullptr;
+  if (!dir || owner != info) {
+    dir = std::make_unique<test::FreshDir>();
+    owner = info;
+  }
+  return *dir / name;
 }
 
 template <int dim> void expect_same(const Mesh<dim>& a, const Mesh<dim>& b) {
@@ -114,8 +124,13 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(MshIo, ReorientsInvertedCellsWithAWarning) {
   const auto path = temp("inverted.msh");
   std::ofstream(path) << kHeader << kNodes << "$Elements\n2\n1 2 2 0 1 1 3 2\n2 2 2 0 1 1 3 4\n$EndElements\n";
+  ::testing::internal::CaptureStderr();
   const Mesh2 m = std::get<Mesh2>(read_msh(path));
+  const std::string err = ::testing::internal::GetCapturedStderr();
   for (const auto& c : m.cells) EXPECT_GT(signed_measure(m, c), 0.0);
+  // One of the two cells was inverted: the warning names the file and the count, on one line.
+  EXPECT_NE(err.find("vtb: warning: " + path.string() + ": 1 inverted cells re-oriented\n"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
 }
 
 TEST(MshIo, RefusesMissingAndBrokenFiles) {

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `vtb run --solver fem` under `mpirun -np 2` (distributed triangulation, Trilinos) gives the
 # serial answer to direct-solver precision: probes and reactions agree to 1e-9 relative
-# (measured ~3e-11), on the 123-node plate (2D, dynamic) and the 458-node slab (3D, drive).
+# (measured ~3e-11), on the 123-node plate (2D, dynamic), the 458-node slab (3D, drive) and a
+# generated strip with P2 elements, one refinement and the static solve.
 set -u
 vtb=$1
 src=$2
@@ -9,10 +10,40 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 fail=0
-for case in "plate123_step.toml 0.5" "slab_press.toml 0.6"; do
+# A third case takes the other paths of the distributed code: P2, a refinement, the static solve.
+cat > "$work/p2_static.toml" <<'TOML'
+[scene]
+name = "p2-refined-static"
+duration = 1.0
+output_interval = 1.0
+[mesh]
+generate = { shape = "rectangle", size = [0.2, 0.05], divisions = [8, 2] }
+[material]
+young_modulus = 5.0e4
+poisson_ratio = 0.3333
+density = 1000.0
+thickness = 0.001
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.0, -0.01]
+[[probe]]
+name = "tip"
+point = [0.2, 0.025]
+[solver]
+kind = "fem"
+degree = 2
+refinements = 1
+static = true
+TOML
+for case in "$src/experiments/scenes/plate123_step.toml 0.5" "$src/experiments/scenes/slab_press.toml 0.6" \
+  "$work/p2_static.toml 1.0"; do
   set -- $case
-  "$vtb" run "$src/experiments/scenes/$1" --solver fem --duration "$2" --out "$work/serial_$1" > /dev/null || fail=1
-  timeout 300 mpirun -np 2 "$vtb" run "$src/experiments/scenes/$1" --solver fem --duration "$2" --out "$work/mpi_$1" > /dev/null || fail=1
+  name=$(basename "$1")
+  "$vtb" run "$1" --solver fem --duration "$2" --out "$work/serial_$name" > /dev/null || fail=1
+  timeout 300 mpirun -np 2 "$vtb" run "$1" --solver fem --duration "$2" --out "$work/mpi_$name" > /dev/null || fail=1
+  set -- "$name"
   python3 - "$work/serial_$1" "$work/mpi_$1" "$1" <<'PY' || fail=1
 import csv, sys, json
 a_dir, b_dir, name = sys.argv[1:4]

@@ -1,10 +1,12 @@
 // The deal.II Kelvin-Voigt reference against analytic and published values, and its
 // convergence orders in space and time.
+#include "support/fresh_dir.hh"
 #include "vtb/core/model.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/msh_io.hh"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -98,8 +100,14 @@ TEST(KelvinVoigtFem, TimeConvergenceOrdersAreOneAndTwo) {
   // which damps the higher modes strongly, is not yet asymptotic: measured order 2.6), the error ratio for halving dt
   // is 2^p: p = 1 for backward Euler, p = 2 for Newmark's average acceleration and for generalized-alpha. Orders within
   // 0.15.
+  //
+  // Each scheme measured against its own fine run would hide a scheme that converges, at its
+  // order, to a wrong limit. So the fine runs are cross-checked: at dt/512 each is off the
+  // common limit by about its dt/32 error times (1/16)^p (p its order), and any two must agree
+  // within twice the sum of those estimates.
   const Case c = make(bar_scene(1.0, 0.01, "start = 0.0\nramp = 0.2\n"));
   const int tip = nearest_node<2>(c.model.mesh, {1.0, 0.05});
+  std::vector<std::pair<double, double>> fine; // (dt/512 value, its error estimate)
   for (const std::string scheme : {"backward-euler", "newmark", "generalized-alpha"}) {
     fem::FemOptions o;
     o.scheme = scheme;
@@ -119,7 +127,15 @@ TEST(KelvinVoigtFem, TimeConvergenceOrdersAreOneAndTwo) {
     } else {
       EXPECT_NEAR(order, scheme == "backward-euler" ? 1.0 : 2.0, 0.15) << scheme;
     }
+    const double p = scheme == "backward-euler" ? 1.0 : 2.0;
+    fine.emplace_back(ref, e2 * std::pow(1.0 / 16, p));
   }
+  for (std::size_t a = 0; a < fine.size(); ++a)
+    for (std::size_t b = a + 1; b < fine.size(); ++b) {
+      std::cout << "fine runs " << a << " vs " << b << ": " << std::abs(fine[a].first - fine[b].first) << ", allowed "
+                << 2 * (fine[a].second + fine[b].second) << "\n";
+      EXPECT_NEAR(fine[a].first, fine[b].first, 2 * (fine[a].second + fine[b].second)) << a << " vs " << b;
+    }
 }
 
 /// Cook's membrane: the trapezoid (0,0) (48,44) (48,60) (0,44), clamped at x = 0, unit total
@@ -129,7 +145,8 @@ Case cook(int nodes) {
   Polygon p;
   p.vertices = {{0, 0}, {48, 44}, {48, 52}, {48, 60}, {0, 44}};
   p.edge_groups = {{"clamp", {4}}, {"load", {1, 2}}};
-  const auto file = std::filesystem::temp_directory_path() / ("cook_" + std::to_string(nodes) + ".msh");
+  const test::FreshDir fresh; // the mesh is read in make(), before the folder goes
+  const auto file = fresh / ("cook_" + std::to_string(nodes) + ".msh");
   write_msh(mesh_polygon(p, nodes), file);
   return make(R"(
 [scene]
@@ -154,12 +171,13 @@ static = true
 }
 
 TEST(KelvinVoigtFem, CooksMembraneConvergesToThePublishedValue) {
-  // Published plane-stress value: v(48, 52) = 23.96 (middle of the loaded edge); the top
-  // corner (48, 60), next to a stress singularity, converges to about 25.19. P2 on a 40-node
-  // mesh refined 1, 2, 3 times. The tolerance is the method's own error estimate: with the
-  // observed reduction ratio r of successive differences, the remaining error after the last
-  // refinement is about d_last / (r - 1) (Richardson); add 0.005 for the published value's
-  // rounding to four digits. The differences must shrink (convergence) at both points.
+  // Published plane-stress value: v(48, 52) = 23.96 (middle of the loaded edge; Simo and
+  // Armero 1992, Zienkiewicz and Taylor). P2 on a 40-node mesh refined 1, 2, 3 times. The
+  // tolerance is the method's own error estimate: with the observed reduction ratio r of
+  // successive differences, the remaining error after the last refinement is about
+  // d_last / (r - 1) (Richardson); add 0.005 for the published value's rounding to four
+  // digits. The top corner (48, 60) sits next to a stress singularity; no independent value
+  // of it is cited here, so there the test asserts convergence only.
   const Case c = cook(40);
   const int mid = nearest_node<2>(c.model.mesh, {48, 52});
   const int corner = nearest_node<2>(c.model.mesh, {48, 60});
@@ -176,15 +194,14 @@ TEST(KelvinVoigtFem, CooksMembraneConvergesToThePublishedValue) {
     vc.push_back(tr.field.back()(1, corner));
     std::cout << "Cook P2, " << r << " refinements: v(48,52) = " << vm.back() << ", v(48,60) = " << vc.back() << "\n";
   }
-  auto check = [](const std::vector<double>& v, double published, const char* where) {
+  auto remaining = [](const std::vector<double>& v, const char* where) {
     const double d1 = v[1] - v[0], d2 = v[2] - v[1];
-    ASSERT_GT(std::abs(d1), 1.5 * std::abs(d2)) << where << ": not converging";
-    const double remaining = std::abs(d2) / (std::abs(d1 / d2) - 1);
-    EXPECT_NEAR(v[2], published, remaining + 0.005) << where;
+    EXPECT_GT(std::abs(d1), 1.5 * std::abs(d2)) << where << ": not converging";
     std::cout << where << ": extrapolated " << v[2] + d2 / (d1 / d2 - 1) << "\n";
+    return std::abs(d2) / (std::abs(d1 / d2) - 1);
   };
-  check(vm, 23.96, "(48, 52)");
-  check(vc, 25.19, "(48, 60)");
+  EXPECT_NEAR(vm[2], 23.96, remaining(vm, "(48, 52)") + 0.005);
+  remaining(vc, "(48, 60)");
 }
 
 } // namespace
@@ -262,8 +279,16 @@ namespace {
 TEST(KelvinVoigtFem, ClampedSlabIn3DBalancesItsLoadAndIsNoSofterThanTheUniaxialBar) {
   // The committed CGAL slab (0.2 x 0.05 x 0.02), clamped at x = 0, pulled by F = 1 N at
   // x = 0.2, static. Reactions come from the residual, so they balance the load to solver
-  // precision. By minimum potential energy, the clamp (extra constraint) and the conforming
-  // discretisation can only stiffen: the mean end displacement is at most F L / (E A).
+  // precision. Bounds from the energy principles, each exact for these discretisations:
+  // - upper: the uniform stress F/A in x is statically admissible (the clamp takes any
+  //   reaction), so by complementary energy the compliance, F x (mean end displacement), is
+  //   at most F^2 L / (E A); the clamp and the conforming discretisation only stiffen;
+  // - P1 <= P2: the P2 space on the same mesh contains the P1 space, so its minimum potential
+  //   energy is lower and its compliance larger;
+  // - lower: the field u = (e x, 0, 0) (no lateral contraction) is in the P1 space and
+  //   satisfies the clamp; its energy bounds the P1 minimum, which gives a compliance of at
+  //   least F^2 L / (C11 A), C11 = E (1 - nu) / ((1 + nu)(1 - 2 nu)): the mean end
+  //   displacement is at least (1 + nu)(1 - 2 nu) / (1 - nu) = 0.833 of F L / (E A).
   const auto file = std::filesystem::path(VTB_SOURCE_DIR) / "meshes" / "data" / "slab_500.msh";
   const Scene s = parse_scene(R"(
 [scene]
@@ -285,6 +310,8 @@ static = true
 )",
                               "slab.toml", ".");
   const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
+  std::vector<double> tips;
+  const double uniaxial = 1.0 * 0.2 / (5.0e4 * 0.05 * 0.02), nu = 0.25;
   for (int degree : {1, 2}) {
     fem::FemOptions o;
     o.degree = degree;
@@ -292,14 +319,23 @@ static = true
     Trajectory<3> tr;
     fem::simulate<3>(model, s.material, o, tr, true);
     EXPECT_LT((tr.reaction.back()[0] + Eigen::Vector3d(1, 0, 0)).norm(), 1e-9);
-    double tip = 0;
-    const auto& right = model.mesh.groups.at("right").nodes;
-    for (int i : right) tip += tr.field.back()(0, i) / static_cast<double>(right.size());
-    const double uniaxial = 1.0 * 0.2 / (5.0e4 * 0.05 * 0.02);
+    // The loaded face's area-weighted mean of the vertex displacements: the work of the
+    // uniform traction on the P1 field, exactly (and on P2's vertex interpolant).
+    double tip = 0, area = 0;
+    for (const auto& f : model.mesh.groups.at("right").facets) {
+      const Eigen::Vector3d a = model.mesh.points.col(f[0]), b = model.mesh.points.col(f[1]),
+                            c = model.mesh.points.col(f[2]);
+      const double A = 0.5 * (b - a).cross(c - a).norm();
+      for (int v : f) tip += A / 3 * tr.field.back()(0, v);
+      area += A;
+    }
+    tip /= area;
     std::cout << "P" << degree << ": mean end displacement / (F L / E A) = " << tip / uniaxial << "\n";
-    EXPECT_LE(tip, uniaxial);
-    EXPECT_GT(tip, 0.0);
+    tips.push_back(tip);
   }
+  EXPECT_GE(tips[0], (1 + nu) * (1 - 2 * nu) / (1 - nu) * uniaxial) << "P1 above the kinematic bound";
+  EXPECT_LE(tips[0], tips[1]) << "P2 is softer than P1 on the same mesh";
+  EXPECT_LE(tips[1], uniaxial) << "below the static bound";
 }
 
 } // namespace

@@ -25,4 +25,11 @@ template <int dim>
 RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& options, Trajectory<dim>& out,
                          bool record_field = false);
 
+/// The right-hand side g(t, y) that CVODE integrates, y = [u_free; v_free] (free nodes in
+/// order, node-major), and the analytic Jacobian dg/dy that CVODE's Newton iteration uses, as
+/// dense matrices: CVODE converges with a wrong Jacobian, so only a direct check of it (against
+/// differences of g) can find one.
+template <int dim> Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y);
+template <int dim> Eigen::MatrixXd cvode_jacobian(const Model<dim>& model, double t, const Eigen::VectorXd& y);
+
 } // namespace vtb

@@ -1,0 +1,239 @@
+// Finite-difference checks of the assembled Jacobians (DESIGN.md §5: every force and
+// Jacobian): the reference assembly force_jacobians against add_internal_forces, CVODE's
+// analytic Jacobian against differences of its right-hand side (with supports, ramped drives
+// and mass damping), and implicit Euler's step against a dense solve of the backward-Euler
+// system built from the reference assembly. A Newton iteration converges with a wrong
+// Jacobian, so accuracy tests of the trajectories cannot find one; these can.
+//
+// Tolerances: central differences with step h have truncation error ~ h^2 |f'''| and round-off
+// ~ eps |f| / h. With h = 1e-6 x the mesh size on strains of 0.1, the truncation part is
+// ~ 1e-12 of the stiffness and the round-off ~ eps x 0.1 / 1e-6 ~ 2e-11 of it; 1e-7 of the
+// largest entry bounds both with margin, while a sign error or a dropped term is O(1) of it.
+#include "support/small_models.hh"
+#include "vtb/core/cvode_solver.hh"
+#include "vtb/core/force_jacobian.hh"
+#include "vtb/core/implicit_euler.hh"
+
+#include <Eigen/Dense>
+#include <gtest/gtest.h>
+
+#include <random>
+
+namespace vtb {
+namespace {
+
+constexpr double kTol = 1e-7;
+
+const char* kPlate2 = R"(
+[scene]
+duration = 1.0
+output_interval = 0.1
+[mesh]
+generate = { shape = "rectangle", size = [0.2, 0.05], divisions = [4, 2] }
+[material]
+young_modulus = 5.0e4
+poisson_ratio = 0.3333
+density = 1000.0
+thickness = 0.001
+retardation_time = 0.05
+mass_damping = 3.0
+[[fix]]
+group = "left"
+[[drive]]
+point = [0.2, 0.05]
+displacement = [0.004, -0.006]
+start = 0.1
+ramp = 0.5
+[[load]]
+group = "right"
+total_force = [0.1, -0.05]
+start = 0.0
+ramp = 0.3
+)";
+
+const char* kBox3 = R"(
+[scene]
+duration = 1.0
+output_interval = 0.1
+[mesh]
+generate = { shape = "box", size = [0.1, 0.04, 0.03], divisions = [3, 2, 1] }
+[material]
+young_modulus = 5.0e4
+poisson_ratio = 0.25
+density = 1000.0
+retardation_time = 0.02
+mass_damping = 2.0
+[[fix]]
+group = "left"
+[[drive]]
+point = [0.1, 0.04, 0.03]
+displacement = [0.002, -0.003, 0.001]
+start = 0.1
+ramp = 0.5
+[[load]]
+group = "right"
+total_force = [0.0, -0.01, 0.005]
+ramp = 0.3
+)";
+
+template <int dim> Model<dim> model_of(const char* text) {
+  const Scene s = parse_scene(text, "jac.toml", ".");
+  return build_model<dim>(s, std::get<Mesh<dim>>(load_mesh(s)));
+}
+
+/// A deformed state: every node displaced by up to 15 % of the mesh size (springs both
+/// stretched and compressed), velocities of order 1 mesh size per second.
+template <int dim> State<dim> random_state(const Model<dim>& model, double vscale, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> r(-1.0, 1.0);
+  const double h = model.net.rest_length.minCoeff();
+  State<dim> s = initial_state(model);
+  for (int i = 0; i < model.num_nodes(); ++i)
+    for (int p = 0; p < dim; ++p) {
+      s.u(p, i) = 0.15 * h * r(gen);
+      s.v(p, i) = vscale * h * r(gen);
+    }
+  return s;
+}
+
+template <int dim> Eigen::VectorXd forces(const Model<dim>& m, const Nodal<dim>& u, const Nodal<dim>& v) {
+  Nodal<dim> f = Nodal<dim>::Zero(dim, m.num_nodes());
+  add_internal_forces(m.net, u, v, f);
+  return Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());
+}
+
+template <int dim> void check_force_jacobians(const Model<dim>& m) {
+  // K at v = 0 (the dashpot's direction term, omitted by design, vanishes there); D at any v
+  // (the force is linear in v, so the difference is exact but for round-off).
+  const State<dim> s = random_state(m, 0.0, 7);
+  const State<dim> sv = random_state(m, 1.0, 7);
+  const ForceJacobians<dim> J = force_jacobians(m.net, s.u, false);
+  const Eigen::MatrixXd K(J.K), D(J.D);
+  const double h = 1e-6 * m.net.rest_length.minCoeff();
+  const int n = dim * m.num_nodes();
+  Eigen::MatrixXd Kfd(n, n), Dfd(n, n);
+  for (int c = 0; c < n; ++c) {
+    Nodal<dim> up = s.u, um = s.u, vp = sv.v, vm = sv.v;
+    up.data()[c] += h;
+    um.data()[c] -= h;
+    vp.data()[c] += h;
+    vm.data()[c] -= h;
+    Kfd.col(c) = (forces(m, up, s.v) - forces(m, um, s.v)) / (2 * h);
+    Dfd.col(c) = (forces(m, sv.u, vp) - forces(m, sv.u, vm)) / (2 * h);
+  }
+  EXPECT_LT((K - Kfd).cwiseAbs().maxCoeff(), kTol * K.cwiseAbs().maxCoeff());
+  // D is checked at the velocities' own state (its direction depends on u).
+  const Eigen::MatrixXd Dv(force_jacobians(m.net, sv.u, false).D);
+  EXPECT_LT((Dv - Dfd).cwiseAbs().maxCoeff(), kTol * Dv.cwiseAbs().maxCoeff());
+  EXPECT_GT(D.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_LT((K - K.transpose()).cwiseAbs().maxCoeff(), 1e-12 * K.cwiseAbs().maxCoeff()) << "K is symmetric";
+}
+
+TEST(ForceJacobians, MatchForceDifferences2D) {
+  check_force_jacobians(model_of<2>(kPlate2));
+}
+TEST(ForceJacobians, MatchForceDifferences3D) {
+  check_force_jacobians(model_of<3>(kBox3));
+}
+
+template <int dim> Eigen::VectorXd pack(const Model<dim>& m, const State<dim>& s) {
+  const int nf = static_cast<int>(m.free_nodes.size());
+  Eigen::VectorXd y(2 * dim * nf);
+  for (int a = 0; a < nf; ++a)
+    for (int p = 0; p < dim; ++p) {
+      y[a * dim + p] = s.u(p, m.free_nodes[static_cast<std::size_t>(a)]);
+      y[dim * nf + a * dim + p] = s.v(p, m.free_nodes[static_cast<std::size_t>(a)]);
+    }
+  return y;
+}
+
+template <int dim> void check_cvode_jacobian(const Model<dim>& m) {
+  // At t = 0.05 the drive has not started (constrained nodes at rest, so the omitted dashpot
+  // direction term vanishes with v = 0); the load ramps (its time dependence does not enter
+  // dg/dy). Position columns at v = 0, velocity columns at v != 0.
+  const double t = 0.05;
+  for (double vscale : {0.0, 1.0}) {
+    const Eigen::VectorXd y = pack(m, random_state(m, vscale, 11));
+    const Eigen::MatrixXd J = cvode_jacobian<dim>(m, t, y);
+    const int N = static_cast<int>(y.size()) / 2;
+    const double h = 1e-6 * m.net.rest_length.minCoeff();
+    const int first = vscale == 0 ? 0 : N, last = vscale == 0 ? N : 2 * N;
+    double err = 0, scale = 0;
+    for (int c = first; c < last; ++c) {
+      Eigen::VectorXd yp = y, ym = y;
+      yp[c] += h;
+      ym[c] -= h;
+      const Eigen::VectorXd fd = (cvode_rhs<dim>(m, t, yp) - cvode_rhs<dim>(m, t, ym)) / (2 * h);
+      err = std::max(err, (J.col(c) - fd).cwiseAbs().maxCoeff());
+      scale = std::max(scale, J.col(c).cwiseAbs().maxCoeff());
+    }
+    EXPECT_LT(err, kTol * scale) << (vscale == 0 ? "d/du columns" : "d/dv columns");
+  }
+}
+
+TEST(CvodeJacobian, MatchesRightHandSideDifferences2D) {
+  check_cvode_jacobian(model_of<2>(kPlate2));
+}
+TEST(CvodeJacobian, MatchesRightHandSideDifferences3D) {
+  check_cvode_jacobian(model_of<3>(kBox3));
+}
+
+template <int dim> void check_implicit_euler_step(const Model<dim>& m) {
+  // Linearised backward Euler (Baraff-Witkin) on the free dofs F:
+  //   (M - dt D - dt^2 K)_FF dv = dt (f(u, v) + f_ext(t + dt) + dt K v)_F,
+  //   v+ = v + dv, u+ = u + dt v+, supports prescribed at t + dt,
+  // with K clamped under compression. dt is chosen so that dt D and dt^2 K are of the order of
+  // M: a dropped or sign-flipped term changes dv by O(1). A dense LU solve of the same system
+  // agrees with the sparse one to round-off times the condition number (< 1e4 here): 1e-9.
+  const double dt = 0.01;
+  State<dim> s = random_state(m, 1.0, 5);
+  s.t = 0.2;
+  m.apply_constraints(s.t, s.u, s.v);
+  const ForceJacobians<dim> J = force_jacobians(m.net, s.u, true);
+  const Eigen::MatrixXd K(J.K), D(J.D);
+  const int n = dim * m.num_nodes();
+  Eigen::VectorXd mass(n);
+  for (int i = 0; i < m.num_nodes(); ++i) mass.segment<dim>(dim * i).setConstant(m.net.mass[i]);
+  Nodal<dim> fext(dim, m.num_nodes());
+  m.external_forces(s.t + dt, fext);
+  const Eigen::VectorXd v = Eigen::Map<const Eigen::VectorXd>(s.v.data(), n);
+  const Eigen::VectorXd rhs =
+      dt * (forces(m, s.u, s.v) + Eigen::Map<const Eigen::VectorXd>(fext.data(), n) + dt * K * v);
+  const Eigen::MatrixXd A = Eigen::MatrixXd(mass.asDiagonal()) - dt * D - dt * dt * K;
+  std::vector<int> dofs;
+  for (int i : m.free_nodes)
+    for (int p = 0; p < dim; ++p) dofs.push_back(dim * i + p);
+  const int nf = static_cast<int>(dofs.size());
+  Eigen::MatrixXd Aff(nf, nf);
+  Eigen::VectorXd bf(nf);
+  for (int a = 0; a < nf; ++a) {
+    bf[a] = rhs[dofs[static_cast<std::size_t>(a)]];
+    for (int b = 0; b < nf; ++b) Aff(a, b) = A(dofs[static_cast<std::size_t>(a)], dofs[static_cast<std::size_t>(b)]);
+  }
+  // The terms that matter are of the order of M (so the check is sensitive to each).
+  const double mmax = mass.maxCoeff();
+  EXPECT_GT(dt * dt * K.cwiseAbs().maxCoeff(), 0.3 * mmax);
+  EXPECT_GT(dt * (D + Eigen::MatrixXd(mass.asDiagonal()) * m.net.mass_damping).cwiseAbs().maxCoeff(), 0.3 * mmax);
+  const Eigen::VectorXd dv = Aff.partialPivLu().solve(bf);
+  State<dim> expect = s;
+  for (int a = 0; a < nf; ++a) expect.v.data()[dofs[static_cast<std::size_t>(a)]] += dv[a];
+  for (int i : m.free_nodes) expect.u.col(i) += dt * expect.v.col(i);
+  expect.t = s.t + dt;
+  m.apply_constraints(expect.t, expect.u, expect.v);
+
+  ImplicitEuler<dim> ie(m, dt);
+  ie.step(s);
+  EXPECT_NEAR(s.t, expect.t, 1e-15);
+  EXPECT_LT((s.v - expect.v).cwiseAbs().maxCoeff(), 1e-9 * expect.v.cwiseAbs().maxCoeff());
+  EXPECT_LT((s.u - expect.u).cwiseAbs().maxCoeff(), 1e-9 * expect.u.cwiseAbs().maxCoeff());
+}
+
+TEST(ImplicitEulerStep, IsTheLinearisedBackwardEulerSystem2D) {
+  check_implicit_euler_step(model_of<2>(kPlate2));
+}
+TEST(ImplicitEulerStep, IsTheLinearisedBackwardEulerSystem3D) {
+  check_implicit_euler_step(model_of<3>(kBox3));
+}
+
+} // namespace
+} // namespace vtb
