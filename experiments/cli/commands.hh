@@ -17,5 +17,6 @@ Action add_compare(CLI::App& app);
 Action add_sweep(CLI::App& app);
 Action add_reproduce(CLI::App& app);
 Action add_haptics(CLI::App& app);
+Action add_view(CLI::App& app);
 
 } // namespace vtb::cli

@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action sweep = vtb::cli::add_sweep(app);
   vtb::cli::Action reproduce = vtb::cli::add_reproduce(app);
   vtb::cli::Action haptics = vtb::cli::add_haptics(app);
+  vtb::cli::Action view = vtb::cli::add_view(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -28,6 +29,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("sweep")) return sweep();
     if (app.got_subcommand("reproduce")) return reproduce();
     if (app.got_subcommand("haptics")) return haptics();
+    if (app.got_subcommand("view")) return view();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

@@ -71,5 +71,13 @@ check "haptics refuses a bad fault" '[ $rc -eq 1 ] && grep -q "stall@T or nan@T"
 "$vtb" mesh generate rectangle --size 0.2 0.05 --divisions 4 2 -o "$work/r.msh" > /dev/null; rc=$?
 check "mesh generate + info" '[ $rc -eq 0 ] && "$vtb" mesh info "$work/r.msh" | grep -q "nodes: 15"'
 
+"$vtb" view --help >/dev/null; check "vtb view --help" '[ $? -eq 0 ]'
+env -u DISPLAY -u WAYLAND_DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --screenshot "$work/v.png" 2> "$work/err"; rc=$?
+check "view without a display: exit 3, one line, no picture" '[ $rc -eq 3 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "xvfb-run" "$work/err" && [ ! -e "$work/v.png" ]'
+env -u DISPLAY "$vtb" view "$work/typo.toml" --frames 2 2> "$work/err"; rc=$?
+check "view of a bad scene is bad input before any window" '[ $rc -eq 1 ] && grep -q "youngs_modulus" "$work/err"'
+env -u DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --drag 1,2 2> "$work/err"; rc=$?
+check "view refuses a malformed --drag" '[ $rc -eq 1 ] && grep -q "\-\-drag" "$work/err"'
+
 if [ $fail -eq 0 ]; then echo "cli contract: all checks passed"; fi
 exit $fail

@@ -1,0 +1,44 @@
+#include "commands.hh"
+
+#include "../viewer/viewer.hh"
+
+#include <iostream>
+#include <memory>
+
+namespace vtb::cli {
+
+Action add_view(CLI::App& app) {
+  struct Opts {
+    std::string scene, screenshot, drag, solver, filter;
+    int frames = 0;
+    double dt = 0;
+  };
+  auto o = std::make_shared<Opts>();
+  CLI::App* cmd = app.add_subcommand(
+      "view", "The interactive viewer: the body coloured by strain, pulls by mouse, solvers switched live");
+  cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
+  cmd->add_option("--frames", o->frames, "Render N frames (1/60 s of simulated time each), then exit");
+  cmd->add_option("--screenshot", o->screenshot, "With --frames: write the last frame to this PNG");
+  cmd->add_option("--drag", o->drag, "Hold a pull from the first frame: X0,Y0:X1,Y1 in scene coordinates");
+  cmd->add_option("--solver", o->solver, "Start with this solver: filtered | implicit-euler | explicit");
+  cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors");
+  cmd->add_option("--dt", o->dt, "Start with this time step (s)");
+  return [o]() {
+    const Scene scene = read_scene(o->scene);
+    viewer::ViewOptions v;
+    v.frames = o->frames;
+    v.screenshot = o->screenshot;
+    if (!o->drag.empty()) v.drag = viewer::parse_drag(o->drag);
+    if (!o->solver.empty()) v.solver = o->solver;
+    if (!o->filter.empty()) v.filter = o->filter;
+    if (o->dt != 0) v.dt = o->dt;
+    try {
+      return viewer::run_viewer(scene, v);
+    } catch (const viewer::NoDisplay& e) {
+      std::cerr << "vtb: error: " << e.what() << "\n";
+      return 3;
+    }
+  };
+}
+
+} // namespace vtb::cli

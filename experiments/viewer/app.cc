@@ -1,0 +1,254 @@
+#include "app.hh"
+
+#include "colormap.hh"
+
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace vtb::viewer {
+namespace {
+
+constexpr float kPanelWidth = 330.0f; ///< pixels, the ImGui panel on the left
+constexpr float kBarWidth = 150.0f;   ///< pixels, the colour scale on the right
+const float kEdge[3] = {0.10f, 0.10f, 0.12f};
+const float kFixed[3] = {0.20f, 0.45f, 1.00f};
+const float kProbe[3] = {1.00f, 0.25f, 0.25f};
+const float kLoad[3] = {1.00f, 0.60f, 0.10f};
+const float kArrow[3] = {1.00f, 1.00f, 1.00f};
+
+} // namespace
+
+SimControls initial_controls(const Scene& scene, const ViewOptions& options, std::string* note) {
+  const bool interactive = std::any_of(kInteractiveSolvers.begin(), kInteractiveSolvers.end(),
+                                       [&](const char* k) { return scene.solver.kind == k; });
+  SimControls c;
+  c.solver = options.solver.value_or(interactive ? scene.solver.kind : "filtered");
+  c.filter = options.filter.value_or(scene.solver.filter);
+  c.dt = options.dt.value_or(scene.solver.dt);
+  if (!interactive && !options.solver && note)
+    *note = "the scene's solver \"" + scene.solver.kind + "\" is not interactive; running filtered";
+  return c;
+}
+
+template <int dim>
+App<dim>::App(GLFWwindow* window, const Scene& scene, Mesh<dim> mesh, const ViewOptions& options)
+    : m_window(window), m_surface(make_surface(mesh)) {
+  const SimControls c = initial_controls(scene, options, &m_message);
+  m_sim = std::make_unique<LiveSim<dim>>(scene, std::move(mesh), c);
+  m_edit = c;
+  const auto& model = m_sim->model();
+  for (const auto& sup : model.supports)
+    for (int n : sup.nodes) m_fixed.push_back(n);
+  for (const auto& load : model.loads)
+    for (int n : load.nodes) m_loaded.push_back(n);
+  // Frame the rest shape.
+  const auto& X = model.net.rest;
+  const Vec<dim> lo = X.rowwise().minCoeff(), hi = X.rowwise().maxCoeff();
+  m_cam.perspective = dim == 3;
+  m_cam.center = to3(0.5 * (lo + hi));
+  m_cam.extent = dim == 2 ? 0.8 * (hi - lo)[1] : 0.5 * (hi - lo).norm();
+  if constexpr (dim == 2) {
+    // Fit the width too: the half-width extent * aspect covers the plate with a third of its
+    // length to spare on each side (room for it to stretch and for the pulls).
+    const double aspect = (options.width - kPanelWidth - kBarWidth) / static_cast<double>(options.height);
+    m_cam.extent = std::max(m_cam.extent, 0.5 * (hi - lo)[0] * 1.35 / aspect);
+  }
+}
+
+template <int dim> Eigen::Vector3d App<dim>::to3(const Vec<dim>& p) const {
+  Eigen::Vector3d q = Eigen::Vector3d::Zero();
+  q.head<dim>() = p;
+  return q;
+}
+template <int dim> Vec<dim> App<dim>::from3(const Eigen::Vector3d& p) const {
+  return p.head<dim>();
+}
+
+template <int dim> void App<dim>::start_drag(const Eigen::Vector3d& from, const Eigen::Vector3d& to) {
+  const int node = nearest_of<dim>(m_surface.boundary_nodes, m_sim->model().mesh, m_sim->state().u, from3(from));
+  Vec<dim> target = from3(to);
+  if constexpr (dim == 3) {
+    if (std::abs(to.z()) == 0 && std::abs(from.z()) == 0) target.z() = m_sim->position(node).z();
+  }
+  m_sim->add_pull(node, target, true);
+}
+
+template <int dim> void App<dim>::layout() {
+  int fw = 0, fh = 0, ww = 0, wh = 0;
+  glfwGetFramebufferSize(m_window, &fw, &fh);
+  glfwGetWindowSize(m_window, &ww, &wh);
+  const double scale = ww > 0 ? static_cast<double>(fw) / ww : 1.0;
+  m_cam.left = static_cast<int>(kPanelWidth * scale);
+  m_cam.width = std::max(1, fw - m_cam.left - static_cast<int>(kBarWidth * scale));
+  m_cam.height = std::max(1, fh);
+}
+
+template <int dim> void App<dim>::handle_mouse() {
+  ImGuiIO& io = ImGui::GetIO();
+  double cx = 0, cy = 0;
+  glfwGetCursorPos(m_window, &cx, &cy);
+  int fw = 0, ww = 1;
+  glfwGetFramebufferSize(m_window, &fw, nullptr);
+  glfwGetWindowSize(m_window, &ww, nullptr);
+  const Eigen::Vector2d cursor = Eigen::Vector2d(cx, cy) * (static_cast<double>(fw) / std::max(1, ww));
+  const bool shift = glfwGetKey(m_window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+                     glfwGetKey(m_window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  if (!io.WantCaptureMouse) {
+    if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+      // Grab the boundary node nearest to the cursor on the screen.
+      int best = -1;
+      double d = 1e30;
+      for (int n : m_surface.boundary_nodes) {
+        const double dn = (m_cam.to_window(to3(m_sim->position(n))) - cursor).squaredNorm();
+        if (dn < d) {
+          d = dn;
+          best = n;
+        }
+      }
+      if (best >= 0) m_grab = m_sim->add_pull(best, m_sim->position(best));
+    }
+    if (ImGui::IsMouseClicked(ImGuiMouseButton_Right)) m_orbiting = true;
+    if (io.MouseWheel != 0) m_cam.zoom *= std::pow(1.15, io.MouseWheel);
+    const bool c_down = glfwGetKey(m_window, GLFW_KEY_C) == GLFW_PRESS;
+    if (c_down && !m_c_was_down) // C lets go of every pull, pinned or not
+      while (m_sim->num_pulls() > 0) m_sim->remove_pull(m_sim->num_pulls() - 1);
+    m_c_was_down = c_down;
+  }
+  if (m_grab >= 0) {
+    const Eigen::Vector3d on = to3(m_sim->position(m_sim->pull(m_grab).node));
+    m_sim->move_pull(m_grab, from3(m_cam.from_window(cursor, on)));
+    if (ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
+      if (!shift) m_sim->remove_pull(m_grab);
+      m_grab = -1;
+    }
+  }
+  if (m_orbiting) {
+    const Eigen::Vector2d d = cursor - m_last_cursor;
+    if (m_cam.perspective) {
+      m_cam.yaw -= 0.01 * d.x();
+      m_cam.pitch = std::clamp(m_cam.pitch + 0.01 * d.y(), -1.5, 1.5);
+    } else {
+      const double per_px = 2 * m_cam.extent / m_cam.zoom / m_cam.height;
+      m_cam.center += Eigen::Vector3d(-d.x() * per_px, d.y() * per_px, 0);
+    }
+    if (ImGui::IsMouseReleased(ImGuiMouseButton_Right)) m_orbiting = false;
+  }
+  m_last_cursor = cursor;
+}
+
+template <int dim> void App<dim>::draw_body() {
+  const auto& model = m_sim->model();
+  const auto& u = m_sim->state().u;
+  cell_strains<dim>(model.mesh, u, m_strain);
+  // The colour scale's top is the 98th percentile of the cells' strains, not the maximum: a
+  // pull on one node of a membrane makes a near-singular spot that would otherwise leave the
+  // rest of the body one colour. It follows a rise at once and a fall slowly (3 % a frame,
+  // halving in about 23 frames), so that the colours do not flicker.
+  m_sorted = m_strain;
+  for (float& s : m_sorted)
+    if (!std::isfinite(s)) s = 0;
+  const auto q = m_sorted.begin() + static_cast<std::ptrdiff_t>(0.98 * static_cast<double>(m_sorted.size() - 1));
+  std::nth_element(m_sorted.begin(), q, m_sorted.end());
+  const double smax = m_sorted.empty() ? 0.0 : *q;
+  double dmax = 0;
+  for (int i = 0; i < model.num_nodes(); ++i) dmax = std::max(dmax, u.col(i).norm());
+  m_strain_scale = std::max({0.97 * m_strain_scale, smax, 1e-6});
+  m_disp_scale = std::max({0.97 * m_disp_scale, dmax, 1e-9});
+  m_tris.clear();
+  for (std::size_t t = 0; t < m_surface.tris.size(); ++t) {
+    const auto& tri = m_surface.tris[t];
+    Eigen::Vector3d p[3];
+    for (int k = 0; k < 3; ++k) p[k] = to3(m_sim->position(tri[static_cast<std::size_t>(k)]));
+    Eigen::Vector3d n = (p[1] - p[0]).cross(p[2] - p[0]);
+    n = n.norm() > 0 ? Eigen::Vector3d(n.normalized()) : Eigen::Vector3d::UnitZ();
+    for (int k = 0; k < 3; ++k) {
+      const double s = m_color_by_strain ? m_strain[static_cast<std::size_t>(m_surface.owner[t])] / m_strain_scale
+                                         : u.col(tri[static_cast<std::size_t>(k)]).norm() / m_disp_scale;
+      const auto c = viridis(s);
+      put(m_tris, p[k], c.data(), n);
+    }
+  }
+  // Pushed back a little so that the edges drawn over them win the depth test.
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.0f, 1.0f);
+  m_gl.draw(m_tris, GlDraw::Mode::triangles, m_cam.mvp(), dim == 3);
+  glDisable(GL_POLYGON_OFFSET_FILL);
+  m_lines.clear();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  for (const auto& e : m_surface.edges) {
+    put(m_lines, to3(m_sim->position(e[0])), kEdge, z);
+    put(m_lines, to3(m_sim->position(e[1])), kEdge, z);
+  }
+  m_gl.draw(m_lines, GlDraw::Mode::lines, m_cam.mvp(), false);
+}
+
+template <int dim> void App<dim>::draw_markers() {
+  m_points.clear();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  for (int n : m_fixed) put(m_points, to3(m_sim->position(n)), kFixed, z);
+  for (int n : m_loaded) put(m_points, to3(m_sim->position(n)), kLoad, z);
+  for (const auto& [name, n] : m_sim->model().probes) put(m_points, to3(m_sim->position(n)), kProbe, z);
+  m_gl.draw(m_points, GlDraw::Mode::points, m_cam.mvp(), false, 6.0f);
+}
+
+template <int dim> void App<dim>::draw_pulls() {
+  // Each pull: a line from the grabbed node to the target and an arrowhead at the node (the
+  // force points from the node toward the target), labelled with its force in newtons.
+  m_lines.clear();
+  const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
+  ImDrawList* fg = ImGui::GetForegroundDrawList();
+  const float px = 1.0f / std::max(1.0f, ImGui::GetIO().DisplayFramebufferScale.x);
+  for (int k = 0; k < m_sim->num_pulls(); ++k) {
+    const auto& p = m_sim->pull(k);
+    const Eigen::Vector2d a = m_cam.to_window(to3(m_sim->position(p.node))) * px,
+                          b = m_cam.to_window(to3(p.target)) * px;
+    const Eigen::Vector2d d = b - a;
+    const double len = d.norm();
+    const ImU32 col = p.pinned ? IM_COL32(255, 90, 90, 255) : IM_COL32(255, 255, 255, 255);
+    fg->AddLine(ImVec2(float(a.x()), float(a.y())), ImVec2(float(b.x()), float(b.y())), col, 2.5f);
+    if (len > 1) {
+      const Eigen::Vector2d u = d / len, w(-u.y(), u.x());
+      const Eigen::Vector2d tip = b, l = b - 14 * u + 6 * w, r = b - 14 * u - 6 * w;
+      fg->AddTriangleFilled(ImVec2(float(tip.x()), float(tip.y())), ImVec2(float(l.x()), float(l.y())),
+                            ImVec2(float(r.x()), float(r.y())), col);
+    }
+    fg->AddCircleFilled(ImVec2(float(a.x()), float(a.y())), 4.0f, col);
+    char label[64];
+    std::snprintf(label, sizeof label, "%.3g N", m_sim->pull_force(k).norm());
+    fg->AddText(ImVec2(float(b.x()) + 8, float(b.y()) - 8), col, label);
+    put(m_lines, to3(m_sim->position(p.node)), kArrow, z);
+    put(m_lines, to3(p.target), kArrow, z);
+  }
+}
+
+template <int dim> void App<dim>::frame(double sim_seconds, double wall_budget) {
+  layout();
+  handle_mouse();
+  const double t0 = glfwGetTime();
+  if (!m_paused) m_sim->advance(sim_seconds, wall_budget);
+  m_physics_seconds = glfwGetTime() - t0;
+  int fw = 0, fh = 0;
+  glfwGetFramebufferSize(m_window, &fw, &fh);
+  glViewport(0, 0, fw, fh);
+  glClearColor(0.93f, 0.94f, 0.96f, 1.0f);
+  glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  glViewport(m_cam.left, 0, m_cam.width, m_cam.height);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LEQUAL);
+  draw_body();
+  draw_markers(); // depth-tested: a solid's far side hides its markers
+  glDisable(GL_DEPTH_TEST);
+  draw_pulls();
+  glViewport(0, 0, fw, fh);
+  draw_panel();
+  draw_scale_bar();
+}
+
+template class App<2>;
+template class App<3>;
+
+} // namespace vtb::viewer

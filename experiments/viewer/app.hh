@@ -1,0 +1,67 @@
+#pragma once
+/// \file
+/// One viewer session over a body of dimension dim: the window's frame (physics substeps,
+/// scene drawing, the panel and its overlays) and the mouse. Internal to experiments/viewer.
+
+#include "camera.hh"
+#include "gl_draw.hh"
+#include "live_sim.hh"
+#include "surface.hh"
+#include "viewer.hh"
+
+#include <memory>
+#include <vector>
+
+struct GLFWwindow;
+
+namespace vtb::viewer {
+
+/// The controls a session starts with: the options', else the scene's solver when it can run
+/// interactively (cvode and fem cannot: then filtered, and `note` says so).
+SimControls initial_controls(const Scene& scene, const ViewOptions& options, std::string* note = nullptr);
+
+template <int dim> class App {
+public:
+  App(GLFWwindow* window, const Scene& scene, Mesh<dim> mesh, const ViewOptions& options);
+
+  /// One frame: advance the physics by sim_seconds within wall_budget, then draw.
+  void frame(double sim_seconds, double wall_budget);
+  /// Holds the scripted drag (scene points) as a pinned pull.
+  void start_drag(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
+  const LiveSim<dim>& sim() const { return *m_sim; }
+  double last_physics_seconds() const { return m_physics_seconds; }
+
+private:
+  void layout();
+  void handle_mouse();
+  void draw_body();
+  void draw_markers();
+  void draw_pulls();
+  void draw_panel();
+  void draw_scale_bar();
+  Eigen::Vector3d to3(const Vec<dim>& p) const;
+  Vec<dim> from3(const Eigen::Vector3d& p) const;
+
+  GLFWwindow* m_window;
+  std::unique_ptr<LiveSim<dim>> m_sim;
+  Surface<dim> m_surface;
+  Camera m_cam;
+  GlDraw m_gl;
+  std::vector<float> m_tris, m_lines, m_points; ///< reused vertex arrays
+  std::vector<float> m_strain, m_sorted;        ///< per cell
+  std::vector<int> m_fixed, m_loaded;           ///< marked nodes
+  bool m_paused = false;
+  bool m_color_by_strain = true;
+  int m_grab = -1; ///< pull being dragged by the mouse
+  bool m_orbiting = false;
+  bool m_c_was_down = false;
+  Eigen::Vector2d m_last_cursor = Eigen::Vector2d::Zero();
+  double m_physics_seconds = 0;
+  double m_strain_scale = 0; ///< upper end of the colour bar (grows, never shrinks mid-run)
+  double m_disp_scale = 0;
+  SimControls m_edit; ///< what the panel edits
+  std::string m_message;
+  float m_trace[LiveSim<dim>::kTrace] = {};
+};
+
+} // namespace vtb::viewer

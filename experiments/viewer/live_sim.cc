@@ -1,0 +1,171 @@
+#include "live_sim.hh"
+
+#include "vtb/core/explicit_euler.hh"
+#include "vtb/core/simulation.hh"
+#include "vtb/meshes/input_error.hh"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace vtb::viewer {
+
+template <int dim>
+LiveSim<dim>::LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls)
+    : m_scene(scene), m_mesh(std::move(mesh)), m_controls(std::move(controls)) {
+  rebuild();
+  // A coupling a few times stiffer than a typical spring pulls visibly without dominating
+  // the body; the panel changes it.
+  const auto& k = m_model->net.stiffness;
+  coupling_stiffness = k.size() ? 4.0 * k.mean() : 100.0;
+}
+
+template <int dim> void LiveSim<dim>::rebuild() {
+  if (std::find_if(kInteractiveSolvers.begin(), kInteractiveSolvers.end(),
+                   [&](const char* s) { return m_controls.solver == s; }) == kInteractiveSolvers.end())
+    throw InputError("vtb view: solver \"" + m_controls.solver +
+                     "\" cannot run interactively (filtered, implicit-euler or explicit)");
+  if (!(m_controls.dt > 0) || !std::isfinite(m_controls.dt)) throw InputError("vtb view: dt must be > 0");
+  if (!(m_controls.stiffness_scale > 0)) throw InputError("vtb view: the stiffness scale must be > 0");
+  Scene s = m_scene;
+  s.material.young_modulus *= m_controls.stiffness_scale;
+  auto model = std::make_unique<Model<dim>>(build_model<dim>(s, m_mesh));
+  IntegratorOptions o = integrator_options(s.solver);
+  o.kind = m_controls.solver;
+  o.filter = m_controls.filter;
+  o.dt = m_controls.dt;
+  auto integ = make_integrator(*model, o); // the integrator keeps a reference to *model
+  const bool same_size = m_model && m_model->num_nodes() == model->num_nodes();
+  m_integ = std::move(integ);
+  m_model = std::move(model);
+  if (!same_size || !m_failure.empty()) {
+    m_state = initial_state(*m_model);
+    m_failure.clear();
+  }
+  m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
+  const double tau = m_model->net.stiffness.size() ? m_model->net.damping[0] / m_model->net.stiffness[0] : 0.0;
+  m_courant_dt = explicit_critical_dt(max_omega_squared(*m_model, false), tau, m_model->net.mass_damping);
+  m_probe_node = m_model->probes.empty() ? -1 : m_model->probes.front().second;
+  m_probe_name = m_model->probes.empty() ? "" : m_model->probes.front().first;
+}
+
+template <int dim> void LiveSim<dim>::configure(const SimControls& controls) {
+  const SimControls old = m_controls;
+  m_controls = controls;
+  try {
+    rebuild();
+  } catch (...) {
+    m_controls = old;
+    throw;
+  }
+}
+
+template <int dim> void LiveSim<dim>::reset() {
+  m_state = initial_state(*m_model);
+  m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
+  m_failure.clear();
+  m_stats = SimStats{};
+  m_trace_count = m_trace_head = 0;
+  m_step_count = 0;
+}
+
+template <int dim> Vec<dim> LiveSim<dim>::pull_force(int k) const {
+  const auto& p = m_pulls[static_cast<std::size_t>(k)];
+  return coupling_stiffness * (p.target - position(p.node));
+}
+
+template <int dim> void LiveSim<dim>::step_once() {
+  using clock = std::chrono::steady_clock;
+  m_state.applied.setZero();
+  for (int k = 0; k < m_num_pulls; ++k) m_state.applied.col(m_pulls[static_cast<std::size_t>(k)].node) += pull_force(k);
+  const auto a = clock::now();
+  m_integ->step(m_state);
+  const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();
+  m_step_us[static_cast<std::size_t>(m_step_count % static_cast<int>(m_step_us.size()))] = us;
+  ++m_step_count;
+  ++m_stats.steps;
+  check();
+  if (m_probe_node >= 0) {
+    m_trace[static_cast<std::size_t>(m_trace_head)] = static_cast<float>(m_state.u.col(m_probe_node).norm());
+    m_trace_head = (m_trace_head + 1) % kTrace;
+    m_trace_count = std::min(m_trace_count + 1, kTrace);
+  }
+}
+
+template <int dim> void LiveSim<dim>::check() {
+  const bool finite = m_state.u.allFinite() && m_state.v.allFinite();
+  const double strain = finite ? max_strain(m_model->net, m_state.u) : INFINITY;
+  if (!finite || !(strain <= kRunawayStrain)) {
+    std::ostringstream os;
+    os << m_controls.solver << (m_controls.solver == "filtered" ? " (" + m_controls.filter + ")" : "")
+       << " went unstable at t = " << m_state.t << " s (dt = " << m_controls.dt
+       << " s): " << (finite ? "runaway strain" : "non-finite state");
+    m_failure = os.str();
+  }
+}
+
+template <int dim> void LiveSim<dim>::advance(double sim_seconds, double wall_budget) {
+  using clock = std::chrono::steady_clock;
+  if (!m_failure.empty()) return;
+  const auto start = clock::now();
+  const int steps = static_cast<int>(std::floor(sim_seconds / m_controls.dt + 1e-9));
+  int done = 0;
+  m_stats.behind = false;
+  for (; done < steps && m_failure.empty(); ++done) {
+    if (std::chrono::duration<double>(clock::now() - start).count() > wall_budget) {
+      m_stats.behind = true;
+      break;
+    }
+    step_once();
+  }
+  const double wall = std::chrono::duration<double>(clock::now() - start).count();
+  m_stats.realtime_factor = wall > 0 ? done * m_controls.dt / wall : 0.0;
+  const int n = std::min(m_step_count, static_cast<int>(m_step_us.size()));
+  if (n > 0) {
+    std::array<double, 256> tmp = m_step_us;
+    std::nth_element(tmp.begin(), tmp.begin() + n / 2, tmp.begin() + n);
+    m_stats.step_median_us = tmp[static_cast<std::size_t>(n / 2)];
+  }
+  if (m_failure.empty()) {
+    m_stats.energy = elastic_energy(m_model->net, m_state.u) + kinetic_energy(m_model->net, m_state.v);
+    m_stats.max_strain = max_strain(m_model->net, m_state.u);
+  }
+}
+
+template <int dim> void LiveSim<dim>::single_step() {
+  if (m_failure.empty()) step_once();
+}
+
+template <int dim> int LiveSim<dim>::add_pull(int node, const Vec<dim>& target, bool pinned) {
+  if (m_num_pulls >= kMaxPulls || node < 0 || node >= m_model->num_nodes()) return -1;
+  m_pulls[static_cast<std::size_t>(m_num_pulls)] = Pull<dim>{node, target, pinned};
+  return m_num_pulls++;
+}
+
+template <int dim> void LiveSim<dim>::move_pull(int index, const Vec<dim>& target) {
+  if (index >= 0 && index < m_num_pulls) m_pulls[static_cast<std::size_t>(index)].target = target;
+}
+
+template <int dim> void LiveSim<dim>::remove_pull(int index) {
+  if (index < 0 || index >= m_num_pulls) return;
+  for (int k = index; k + 1 < m_num_pulls; ++k)
+    m_pulls[static_cast<std::size_t>(k)] = m_pulls[static_cast<std::size_t>(k) + 1];
+  --m_num_pulls;
+}
+
+template <int dim> void LiveSim<dim>::clear_unpinned() {
+  for (int k = m_num_pulls - 1; k >= 0; --k)
+    if (!m_pulls[static_cast<std::size_t>(k)].pinned) remove_pull(k);
+}
+
+template <int dim> int LiveSim<dim>::probe_trace(float* out) const {
+  for (int k = 0; k < m_trace_count; ++k)
+    out[k] = m_trace[static_cast<std::size_t>((m_trace_head - m_trace_count + k + kTrace) % kTrace)];
+  return m_trace_count;
+}
+
+template class LiveSim<2>;
+template class LiveSim<3>;
+
+} // namespace vtb::viewer

@@ -1,0 +1,117 @@
+#pragma once
+/// \file
+/// The physics behind `vtb view`: one spring solver advancing a scene at its fixed dt,
+/// decoupled from the frame rate (substeps within a wall-time budget), with forces applied
+/// by hand (pulls through a virtual coupling), live solver switching, and a watch that catches
+/// a diverging solver instead of dying with it. Allocation-free per step.
+
+#include "vtb/core/integrator.hh"
+#include "vtb/core/scene.hh"
+
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace vtb::viewer {
+
+/// The solvers that can run interactively (one step at a time): the fixed-step spring
+/// integrators. cvode and fem produce whole trajectories and are run by `vtb run`/`compare`.
+inline constexpr std::array<const char*, 3> kInteractiveSolvers = {"filtered", "implicit-euler", "explicit"};
+inline constexpr std::array<const char*, 2> kFilters = {"full", "neighbors"};
+
+/// What the panel controls; applying it rebuilds the model and the integrator.
+struct SimControls {
+  std::string solver = "filtered";
+  std::string filter = "full";
+  double dt = 1e-3;
+  double stiffness_scale = 1.0;
+};
+
+/// A hand pull: the node is pulled toward `target` by a spring of stiffness k (N/m).
+template <int dim> struct Pull {
+  int node = -1;
+  Vec<dim> target = Vec<dim>::Zero();
+  bool pinned = false;
+};
+
+/// Rolling readouts of the run.
+struct SimStats {
+  double step_median_us = 0;  ///< over the last steps
+  double realtime_factor = 0; ///< simulated / wall seconds over the last frame
+  bool behind = false;        ///< the last frame could not keep up with real time
+  double energy = 0;          ///< elastic + kinetic, J
+  double max_strain = 0;      ///< max |l/L0 - 1|
+  long steps = 0;
+};
+
+template <int dim> class LiveSim {
+public:
+  static constexpr int kMaxPulls = 8;
+  static constexpr int kTrace = 600; ///< probe samples kept (the last seconds at 1 per step group)
+
+  /// Builds the model of the scene's mesh; throws InputError for a scene the solvers refuse.
+  LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls);
+
+  /// Applies new controls (solver, filter, dt, stiffness): InputError if they are refused
+  /// (the previous configuration is kept); the state is kept when the model is unchanged.
+  void configure(const SimControls& controls);
+  const SimControls& controls() const { return m_controls; }
+
+  /// Advances the simulated time by up to `sim_seconds` in steps of dt, stopping early when
+  /// the steps have taken `wall_budget` seconds of wall time (then stats().behind is set).
+  void advance(double sim_seconds, double wall_budget);
+  /// Exactly one step (when paused); nothing once unstable.
+  void single_step();
+  void reset();
+
+  /// Pulls: add one at the node (returns its index, or -1 when all slots are used).
+  int add_pull(int node, const Vec<dim>& target, bool pinned = false);
+  void move_pull(int index, const Vec<dim>& target);
+  void remove_pull(int index);
+  void clear_unpinned();
+  int num_pulls() const { return m_num_pulls; }
+  const Pull<dim>& pull(int k) const { return m_pulls[static_cast<std::size_t>(k)]; }
+  /// The force the pull exerts on the body now, N.
+  Vec<dim> pull_force(int k) const;
+  double coupling_stiffness = 0; ///< N/m, set from the network's stiffness at construction
+
+  const Model<dim>& model() const { return *m_model; }
+  const State<dim>& state() const { return m_state; }
+  /// Current positions X + u.
+  Vec<dim> position(int node) const { return m_model->net.rest.col(node) + m_state.u.col(node); }
+  const SimStats& stats() const { return m_stats; }
+  /// The explicit scheme's predicted stability limit for the current model (s).
+  double courant_dt() const { return m_courant_dt; }
+  /// Empty while the run is sound; else what went wrong and when.
+  const std::string& failure() const { return m_failure; }
+  /// The first probe's displacement magnitude over the last kTrace samples (oldest first),
+  /// written into `out`; returns the count.
+  int probe_trace(float* out) const;
+  const std::string& probe_name() const { return m_probe_name; }
+
+private:
+  void rebuild();
+  void step_once();
+  void check(); ///< non-finite or runaway state -> failure
+
+  Scene m_scene;
+  Mesh<dim> m_mesh;
+  SimControls m_controls;
+  std::unique_ptr<Model<dim>> m_model;
+  std::unique_ptr<Integrator<dim>> m_integ;
+  State<dim> m_state;
+  std::array<Pull<dim>, kMaxPulls> m_pulls{};
+  int m_num_pulls = 0;
+  SimStats m_stats;
+  std::string m_failure;
+  std::array<double, 256> m_step_us{};
+  int m_step_count = 0;
+  std::array<float, kTrace> m_trace{};
+  int m_trace_head = 0, m_trace_count = 0;
+  int m_probe_node = -1;
+  double m_courant_dt = 0;
+  std::string m_probe_name;
+};
+
+} // namespace vtb::viewer

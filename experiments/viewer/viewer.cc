@@ -1,0 +1,176 @@
+#include "viewer.hh"
+
+#include "app.hh"
+
+#include "vtb/core/model.hh"
+#include "vtb/meshes/input_error.hh"
+
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+#include <imgui.h>
+#include <stb_image_write.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <vector>
+
+namespace vtb::viewer {
+namespace {
+
+/// GLFW and ImGui, set up and torn down in order (RAII); no global state of ours.
+class Window {
+public:
+  Window(const ViewOptions& o, const std::string& title) {
+    glfwSetErrorCallback([](int, const char*) {});
+    if (!glfwInit())
+      throw NoDisplay("vtb view: no display to open a window on (set DISPLAY, or run it under xvfb-run -a)");
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_SAMPLES, 4);
+    m_window = glfwCreateWindow(o.width, o.height, title.c_str(), nullptr, nullptr);
+    if (!m_window) {
+      glfwTerminate();
+      throw NoDisplay("vtb view: cannot create an OpenGL 3.3 core window on this display");
+    }
+    glfwMakeContextCurrent(m_window);
+    glfwSwapInterval(o.frames > 0 ? 0 : 1);
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr; // no imgui.ini written beside the user's files
+    ImGui::StyleColorsDark();
+    ImGui_ImplGlfw_InitForOpenGL(m_window, true);
+    ImGui_ImplOpenGL3_Init("#version 330 core");
+  }
+  ~Window() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    glfwDestroyWindow(m_window);
+    glfwTerminate();
+  }
+  Window(const Window&) = delete;
+  Window& operator=(const Window&) = delete;
+  GLFWwindow* get() const { return m_window; }
+
+private:
+  GLFWwindow* m_window = nullptr;
+};
+
+/// The back buffer as an RGB PNG (rows flipped: OpenGL's origin is bottom left). The file is
+/// written to a temporary name and renamed, so a failed write leaves nothing behind.
+void write_png(GLFWwindow* w, const std::string& path) {
+  int fw = 0, fh = 0;
+  glfwGetFramebufferSize(w, &fw, &fh);
+  std::vector<unsigned char> px(static_cast<std::size_t>(fw) * fh * 3), flipped(px.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  glReadPixels(0, 0, fw, fh, GL_RGB, GL_UNSIGNED_BYTE, px.data());
+  const std::size_t row = static_cast<std::size_t>(fw) * 3;
+  for (int y = 0; y < fh; ++y)
+    std::copy_n(px.begin() + static_cast<std::ptrdiff_t>(row * static_cast<std::size_t>(fh - 1 - y)), row,
+                flipped.begin() + static_cast<std::ptrdiff_t>(row * static_cast<std::size_t>(y)));
+  const std::string tmp = path + ".part";
+  if (!stbi_write_png(tmp.c_str(), fw, fh, 3, flipped.data(), static_cast<int>(row))) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("vtb view: cannot write " + path);
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error("vtb view: cannot write " + path);
+  }
+}
+
+template <int dim> int session(Window& win, const Scene& scene, Mesh<dim> mesh, const ViewOptions& o) {
+  App<dim> app(win.get(), scene, std::move(mesh), o);
+  if (o.drag) app.start_drag(o.drag->first, o.drag->second);
+  const bool headless = o.frames > 0;
+  double last = glfwGetTime(), frame_sum = 0, physics_sum = 0;
+  std::vector<double> frame_times;
+  for (int f = 0; headless ? f < o.frames : !glfwWindowShouldClose(win.get()); ++f) {
+    glfwPollEvents();
+    const double now = glfwGetTime();
+    // Scripted: a fixed 1/60 s of simulated time per frame (deterministic pictures).
+    // Interactive: the wall time since the last frame, at most 1/20 s (a stall is not replayed).
+    const double sim_dt = headless ? 1.0 / 60 : std::min(now - last, 0.05);
+    last = now;
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    app.frame(sim_dt, headless ? 1e9 : 0.6 / 60);
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    if (headless && f + 1 == o.frames && !o.screenshot.empty()) write_png(win.get(), o.screenshot);
+    glfwSwapBuffers(win.get());
+    const double frame = glfwGetTime() - now;
+    frame_times.push_back(frame);
+    frame_sum += frame;
+    physics_sum += app.last_physics_seconds();
+  }
+  if (headless) {
+    std::sort(frame_times.begin(), frame_times.end());
+    const auto& sim = app.sim();
+    std::cout << "vtb view: " << o.frames << " frames of " << scene.name << " (" << sim.model().num_nodes()
+              << " nodes, " << sim.controls().solver << ", dt = " << sim.controls().dt << " s); frame "
+              << frame_times[frame_times.size() / 2] * 1e3 << " ms median, physics " << physics_sum / o.frames * 1e3
+              << " ms/frame, step " << sim.stats().step_median_us << " us median; max strain " << sim.stats().max_strain
+              << "; pulls " << sim.num_pulls();
+    for (int k = 0; k < sim.num_pulls(); ++k) std::cout << (k ? ", " : " (") << sim.pull_force(k).norm() << " N";
+    std::cout << (sim.num_pulls() ? ")" : "") << "\n";
+    if (!sim.failure().empty()) std::cout << "vtb view: unstable: " << sim.failure() << "\n";
+    if (!o.screenshot.empty()) std::cout << "vtb view: wrote " << o.screenshot << "\n";
+  }
+  (void)frame_sum;
+  return 0;
+}
+
+} // namespace
+
+std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_drag(const std::string& text) {
+  const auto colon = text.find(':');
+  auto point = [&](const std::string& part) {
+    std::vector<double> v;
+    std::stringstream ss(part);
+    for (std::string item; std::getline(ss, item, ',');) {
+      char* end = nullptr;
+      const double x = std::strtod(item.c_str(), &end);
+      if (end == item.c_str() || *end != '\0' || !std::isfinite(x))
+        throw InputError("--drag \"" + text + "\": expected X0,Y0:X1,Y1 (or X0,Y0,Z0:X1,Y1,Z1) in scene coordinates");
+      v.push_back(x);
+    }
+    if (v.size() != 2 && v.size() != 3)
+      throw InputError("--drag \"" + text + "\": expected X0,Y0:X1,Y1 (or X0,Y0,Z0:X1,Y1,Z1) in scene coordinates");
+    return Eigen::Vector3d(v[0], v[1], v.size() == 3 ? v[2] : 0.0);
+  };
+  if (colon == std::string::npos)
+    throw InputError("--drag \"" + text + "\": expected X0,Y0:X1,Y1 (or X0,Y0,Z0:X1,Y1,Z1) in scene coordinates");
+  return {point(text.substr(0, colon)), point(text.substr(colon + 1))};
+}
+
+int run_viewer(const Scene& scene, const ViewOptions& o) {
+  if (o.frames < 0) throw InputError("--frames must be >= 0");
+  if (!o.screenshot.empty() && o.frames == 0) throw InputError("--screenshot needs --frames N (the frame to write)");
+  if (o.dt && !(*o.dt > 0)) throw InputError("--dt must be > 0");
+  AnyMesh mesh = load_mesh(scene); // bad input is found before a window opens
+  // The model is built once before the window opens, so that a scene the solvers refuse is
+  // reported as bad input (exit 1) whether or not there is a display.
+  std::visit(
+      [&](const auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        const LiveSim<dim> check(scene, m, initial_controls(scene, o));
+      },
+      mesh);
+  Window win(o, "vtb view: " + scene.name);
+  return std::visit(
+      [&](auto& m) {
+        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+        return session<dim>(win, scene, std::move(m), o);
+      },
+      mesh);
+}
+
+} // namespace vtb::viewer

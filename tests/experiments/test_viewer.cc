@@ -1,0 +1,186 @@
+// The viewer, headless under Xvfb (ctest runs this program through xvfb-run): its pictures are
+// checked for content, not for pixels: the body is drawn where the scene puts it, a drag pulls
+// it toward the cursor and brings out the strain colours, and an unstable solver is reported
+// while the viewer carries on.
+#include "../../experiments/viewer/viewer.hh"
+#include "support/fresh_dir.hh"
+#include "support/small_models.hh"
+
+#include <gtest/gtest.h>
+#include <stb_image.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+
+namespace vtb {
+namespace {
+
+/// An RGB image as loaded from a PNG.
+struct Image {
+  int w = 0, h = 0;
+  std::vector<unsigned char> px;
+  const unsigned char* at(int x, int y) const { return &px[(static_cast<std::size_t>(y) * w + x) * 3]; }
+};
+
+Image load(const std::filesystem::path& file) {
+  Image im;
+  int n = 0;
+  unsigned char* data = stbi_load(file.c_str(), &im.w, &im.h, &n, 3);
+  if (!data) throw std::runtime_error("cannot read " + file.string());
+  im.px.assign(data, data + static_cast<std::size_t>(im.w) * im.h * 3);
+  stbi_image_free(data);
+  return im;
+}
+
+// The drawing area lies between the panel (330 px) and the colour bar (150 px) of a 1280 x 760
+// window; the background is (0.93, 0.94, 0.96).
+constexpr int kLeft = 340, kRight = 1280 - 160;
+bool background(const unsigned char* p) {
+  return std::abs(p[0] - 237) <= 3 && std::abs(p[1] - 240) <= 3 && std::abs(p[2] - 245) <= 3;
+}
+/// Body pixels: neither background nor the (dark) mesh lines; viridis colours.
+bool body(const unsigned char* p) {
+  return !background(p) && (p[0] + p[1] + p[2]) > 90;
+}
+/// The warm end of viridis (green to yellow): strain above about half the scale.
+bool warm(const unsigned char* p) {
+  return p[1] > 140 && p[2] < 140;
+}
+
+struct Box {
+  int x0 = 1 << 30, y0 = 1 << 30, x1 = -1, y1 = -1;
+  long count = 0;
+};
+Box body_box(const Image& im) {
+  Box b;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = kLeft; x < kRight; ++x)
+      if (body(im.at(x, y))) {
+        b.x0 = std::min(b.x0, x), b.x1 = std::max(b.x1, x), b.y0 = std::min(b.y0, y), b.y1 = std::max(b.y1, y);
+        ++b.count;
+      }
+  return b;
+}
+long count_if(const Image& im, bool (*pred)(const unsigned char*)) {
+  long n = 0;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = kLeft; x < kRight; ++x) n += pred(im.at(x, y));
+  return n;
+}
+
+/// A 0.2 x 0.05 plate clamped on the left with a probe at its right end, nothing loading it.
+Scene plate() {
+  return parse_scene(test::plate_scene(16, 4, R"(
+[[fix]]
+group = "left"
+[[probe]]
+name = "tip"
+point = [0.2, 0.025]
+[solver]
+kind = "filtered"
+dt = 1e-3
+)",
+                                       0.02),
+                     "plate.toml", ".");
+}
+
+Image shot(const Scene& s, viewer::ViewOptions o, const test::FreshDir& dir, const std::string& name,
+           std::string* out = nullptr) {
+  o.screenshot = (dir / name).string();
+  ::testing::internal::CaptureStdout();
+  const int code = viewer::run_viewer(s, o);
+  const std::string text = ::testing::internal::GetCapturedStdout();
+  if (out) *out = text;
+  EXPECT_EQ(code, 0) << text;
+  EXPECT_FALSE(std::filesystem::exists(dir / (name + ".part")));
+  return load(dir / name);
+}
+
+TEST(Viewer, AtRestThePlateIsDrawnWhereTheSceneIsWithItsMarkers) {
+  const test::FreshDir dir;
+  viewer::ViewOptions o;
+  o.frames = 5;
+  const Image im = shot(plate(), o, dir, "rest.png");
+  ASSERT_EQ(im.w, 1280);
+  const Box b = body_box(im);
+  // Not blank: the plate covers a good part of the drawing area (it is framed to about 3/4
+  // of the area's width).
+  ASSERT_GT(b.count, 20000) << "the body is drawn";
+  // Its shape: 0.2 x 0.05 at rest, so a 4:1 box (within two pixels' worth at each end).
+  const double aspect = static_cast<double>(b.x1 - b.x0 + 1) / (b.y1 - b.y0 + 1);
+  EXPECT_NEAR(aspect, 4.0, 0.15) << b.x0 << " " << b.x1 << " " << b.y0 << " " << b.y1;
+  // Centred in the drawing area (the camera frames the rest shape's box).
+  EXPECT_NEAR(0.5 * (b.x0 + b.x1), 0.5 * (330 + 1280 - 150), 4);
+  EXPECT_NEAR(0.5 * (b.y0 + b.y1), 380, 4);
+  // The clamp's markers (blue) on the left edge, the probe (red) on the right.
+  long blue_left = 0, red_right = 0;
+  for (int y = b.y0 - 4; y <= b.y1 + 4; ++y)
+    for (int x = kLeft; x < kRight; ++x) {
+      const unsigned char* p = im.at(x, y);
+      if (p[2] > 200 && p[0] < 90 && std::abs(x - b.x0) < 6) ++blue_left;
+      if (p[0] > 200 && p[1] < 100 && p[2] < 100 && std::abs(x - b.x1) < 6) ++red_right;
+    }
+  EXPECT_GT(blue_left, 10);
+  EXPECT_GT(red_right, 4);
+}
+
+TEST(Viewer, ADragPullsThePlateTowardTheCursorAndShowsStrain) {
+  const test::FreshDir dir;
+  viewer::ViewOptions o;
+  o.frames = 60;
+  const Image rest = shot(plate(), o, dir, "rest.png");
+  o.drag = viewer::parse_drag("0.15,0.05:0.15,0.08");
+  std::string text;
+  const Image pulled = shot(plate(), o, dir, "pulled.png", &text);
+  EXPECT_NE(text.find("pulls 1 ("), std::string::npos) << text;
+  // The top edge rises at the pulled column, and much less near the clamp: the plate is
+  // pulled toward the cursor, not moved as a whole.
+  const Box b = body_box(rest);
+  auto rise = [&](int column) {
+    auto top = [&](const Image& im) {
+      for (int y = 0; y < im.h; ++y)
+        if (body(im.at(column, y))) return y;
+      return im.h;
+    };
+    return top(rest) - top(pulled);
+  };
+  const int pulled_column = b.x0 + static_cast<int>(0.75 * (b.x1 - b.x0));
+  const int clamp_column = b.x0 + static_cast<int>(0.1 * (b.x1 - b.x0));
+  EXPECT_GT(rise(pulled_column), 10) << "pulled up by more than 10 px";
+  EXPECT_LT(rise(clamp_column), 0.5 * rise(pulled_column));
+  // At rest the colour scale has nothing to show (uniform dark); pulled, warm colours appear.
+  EXPECT_LT(count_if(rest, warm), 50);
+  EXPECT_GT(count_if(pulled, warm), 500);
+}
+
+TEST(Viewer, AnUnstableSolverIsReportedAndTheViewerCarriesOn) {
+  // The explicit scheme at 1 ms, far beyond its limit on this plate (~1e-6 s): it diverges
+  // within a few steps; the viewer reports which solver and when, keeps drawing, and exits 0.
+  const test::FreshDir dir;
+  viewer::ViewOptions o;
+  o.frames = 10;
+  o.solver = "explicit";
+  o.dt = 1e-3;
+  o.drag = viewer::parse_drag("0.15,0.05:0.15,0.08");
+  std::string text;
+  const Image im = shot(plate(), o, dir, "unstable.png", &text);
+  EXPECT_NE(text.find("vtb view: unstable: explicit went unstable at t = "), std::string::npos) << text;
+  EXPECT_GT(count_if(im, background), 100000) << "the window still draws";
+}
+
+TEST(Viewer, BadOptionsAreInputErrors) {
+  EXPECT_THROW(viewer::parse_drag("0.1,0.2"), InputError);
+  EXPECT_THROW(viewer::parse_drag("0.1,x:0.2,0.3"), InputError);
+  viewer::ViewOptions o;
+  o.frames = 1;
+  o.solver = "cvode";
+  EXPECT_THROW(viewer::run_viewer(plate(), o), InputError) << "cvode does not run interactively";
+  o.solver.reset();
+  o.frames = 0;
+  o.screenshot = "x.png";
+  EXPECT_THROW(viewer::run_viewer(plate(), o), InputError) << "a screenshot needs --frames";
+}
+
+} // namespace
+} // namespace vtb
