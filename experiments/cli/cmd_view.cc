@@ -11,6 +11,7 @@ Action add_view(CLI::App& app) {
   struct Opts {
     std::string scene, screenshot, drag, solver, filter;
     int frames = 0;
+    bool device = false;
     double dt = 0;
   };
   auto o = std::make_shared<Opts>();
@@ -23,6 +24,8 @@ Action add_view(CLI::App& app) {
   cmd->add_option("--solver", o->solver, "Start with this solver: filtered | implicit-euler | explicit");
   cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors");
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
+  cmd->add_flag("--device", o->device,
+                "Device mode (2D): the mouse, or the --drag path, is the hand on the simulated ProCAT");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     viewer::ViewOptions v;
@@ -32,6 +35,7 @@ Action add_view(CLI::App& app) {
     if (!o->solver.empty()) v.solver = o->solver;
     if (!o->filter.empty()) v.filter = o->filter;
     if (o->dt != 0) v.dt = o->dt;
+    v.device = o->device;
     try {
       return viewer::run_viewer(scene, v);
     } catch (const viewer::NoDisplay& e) {

@@ -2,6 +2,8 @@
 
 #include "colormap.hh"
 
+#include "vtb/meshes/input_error.hh"
+
 #include <GLFW/glfw3.h>
 #include <imgui.h>
 
@@ -37,6 +39,9 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
 template <int dim>
 App<dim>::App(GLFWwindow* window, const Scene& scene, Mesh<dim> mesh, const ViewOptions& options)
     : m_window(window), m_surface(make_surface(mesh)) {
+  m_scene = &scene;
+  m_scripted = options.frames > 0; // a scripted run ignores the (absent) mouse
+  m_wall_start = glfwGetTime();
   const SimControls c = initial_controls(scene, options, &m_message);
   m_sim = std::make_unique<LiveSim<dim>>(scene, std::move(mesh), c);
   m_edit = c;
@@ -77,6 +82,20 @@ template <int dim> void App<dim>::start_drag(const Eigen::Vector3d& from, const 
   m_sim->add_pull(node, target, true);
 }
 
+template <int dim> void App<dim>::set_device_mode(bool on) {
+  if constexpr (dim == 2) {
+    if (on && !m_device) m_device = std::make_unique<DeviceMode>(m_sim->model().mesh, *m_scene);
+    m_device_on = on;
+    m_sim->set_hook(on ? m_device.get() : nullptr);
+  } else if (on) {
+    throw InputError("vtb view: device mode needs a 2D scene (the ProCAT is a planar device)");
+  }
+}
+
+template <int dim> void App<dim>::set_hand(const Eigen::Vector3d& p) {
+  if (m_device) m_device->hand = p.head<2>();
+}
+
 template <int dim> void App<dim>::layout() {
   int fw = 0, fh = 0, ww = 0, wh = 0;
   glfwGetFramebufferSize(m_window, &fw, &fh);
@@ -97,8 +116,11 @@ template <int dim> void App<dim>::handle_mouse() {
   const Eigen::Vector2d cursor = Eigen::Vector2d(cx, cy) * (static_cast<double>(fw) / std::max(1, ww));
   const bool shift = glfwGetKey(m_window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
                      glfwGetKey(m_window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+  const bool in_view = cursor.x() > m_cam.left && cursor.x() < m_cam.left + m_cam.width;
+  if (m_device_on && in_view && !io.WantCaptureMouse && !m_scripted)
+    set_hand(m_cam.from_window(cursor, Eigen::Vector3d::Zero()));
   if (!io.WantCaptureMouse) {
-    if (ImGui::IsMouseClicked(ImGuiMouseButton_Left)) {
+    if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !m_device_on) {
       // Grab the boundary node nearest to the cursor on the screen.
       int best = -1;
       double d = 1e30;
@@ -243,9 +265,45 @@ template <int dim> void App<dim>::frame(double sim_seconds, double wall_budget) 
   draw_markers(); // depth-tested: a solid's far side hides its markers
   glDisable(GL_DEPTH_TEST);
   draw_pulls();
+  if (m_device_on) draw_device();
   glViewport(0, 0, fw, fh);
   draw_panel();
   draw_scale_bar();
+}
+
+template <int dim> void App<dim>::draw_device() {
+  // The handle (white), its proxy on the surface (red), and the force sent to the device as
+  // an arrow from the handle, its length 20 px plus 150 px at the device's force limit.
+  if (!m_device) return;
+  ImDrawList* fg = ImGui::GetForegroundDrawList();
+  const float px = 1.0f / std::max(1.0f, ImGui::GetIO().DisplayFramebufferScale.x);
+  auto at = [&](const Eigen::Vector2d& p) {
+    const Eigen::Vector2d w = m_cam.to_window(Eigen::Vector3d(p.x(), p.y(), 0.0)) * px;
+    return ImVec2(static_cast<float>(w.x()), static_cast<float>(w.y()));
+  };
+  const ImVec2 h = at(m_device->handle()), q = at(m_device->proxy());
+  if (m_device->touching()) {
+    fg->AddLine(h, q, IM_COL32(255, 80, 80, 255), 2.0f);
+    fg->AddCircleFilled(q, 6.0f, IM_COL32(255, 60, 60, 255));
+  }
+  fg->AddCircleFilled(h, 7.0f, IM_COL32(255, 255, 255, 255));
+  fg->AddCircle(h, 7.0f, IM_COL32(30, 30, 30, 255), 0, 2.0f);
+  const Eigen::Vector2d f = m_device->force();
+  if (f.norm() > 1e-6) {
+    const double len = 20 + 150 * f.norm() / m_device->max_force();
+    const Eigen::Vector2d dir = f.normalized();
+    const ImVec2 tip(h.x + static_cast<float>(len * dir.x()), h.y - static_cast<float>(len * dir.y()));
+    fg->AddLine(h, tip, IM_COL32(20, 20, 20, 255), 3.0f);
+    const Eigen::Vector2d u = Eigen::Vector2d(f.x(), -f.y()).normalized(), w(-u.y(), u.x());
+    auto off = [&](double a, double b) {
+      return ImVec2(tip.x + static_cast<float>(a * u.x() + b * w.x()),
+                    tip.y + static_cast<float>(a * u.y() + b * w.y()));
+    };
+    fg->AddTriangleFilled(tip, off(-12, 6), off(-12, -6), IM_COL32(20, 20, 20, 255));
+    char label[48];
+    std::snprintf(label, sizeof label, "F = %.3g N", f.norm());
+    fg->AddText(ImVec2(tip.x + 8, tip.y - 8), IM_COL32(20, 20, 20, 255), label);
+  }
 }
 
 template class App<2>;

@@ -4,6 +4,7 @@
 /// scene drawing, the panel and its overlays) and the mouse. Internal to experiments/viewer.
 
 #include "camera.hh"
+#include "device_mode.hh"
 #include "gl_draw.hh"
 #include "live_sim.hh"
 #include "surface.hh"
@@ -29,6 +30,11 @@ public:
   /// Holds the scripted drag (scene points) as a pinned pull.
   void start_drag(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
   const LiveSim<dim>& sim() const { return *m_sim; }
+  /// Device mode (2D): on or off; InputError in 3D.
+  void set_device_mode(bool on);
+  /// Where the hand holds the handle in device mode (scene coordinates).
+  void set_hand(const Eigen::Vector3d& p);
+  const DeviceMode* device() const { return m_device.get(); }
   double last_physics_seconds() const { return m_physics_seconds; }
 
 private:
@@ -37,6 +43,8 @@ private:
   void draw_body();
   void draw_markers();
   void draw_pulls();
+  void draw_device();
+  void draw_device_panel();
   void draw_panel();
   void draw_scale_bar();
   Eigen::Vector3d to3(const Vec<dim>& p) const;
@@ -62,6 +70,12 @@ private:
   SimControls m_edit; ///< what the panel edits
   std::string m_message;
   float m_trace[LiveSim<dim>::kTrace] = {};
+  float m_force_trace[DeviceMode::kTrace] = {};
+  std::unique_ptr<DeviceMode> m_device; ///< 2D only
+  bool m_device_on = false;
+  bool m_scripted = false;
+  const Scene* m_scene = nullptr;
+  double m_wall_start = 0;
 };
 
 } // namespace vtb::viewer

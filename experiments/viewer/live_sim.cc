@@ -79,6 +79,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   using clock = std::chrono::steady_clock;
   m_state.applied.setZero();
   for (int k = 0; k < m_num_pulls; ++k) m_state.applied.col(m_pulls[static_cast<std::size_t>(k)].node) += pull_force(k);
+  if (m_hook) m_hook->before_step(*m_model, m_state, m_controls.dt, m_state.applied);
   const auto a = clock::now();
   m_integ->step(m_state);
   const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();

@@ -45,6 +45,14 @@ struct SimStats {
   long steps = 0;
 };
 
+/// Called before every step with the state and the forces about to be applied (pulls already
+/// in): adds its own, e.g. the device's contact force. Must not allocate.
+template <int dim> class StepHook {
+public:
+  virtual ~StepHook() = default;
+  virtual void before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) = 0;
+};
+
 template <int dim> class LiveSim {
 public:
   static constexpr int kMaxPulls = 8;
@@ -75,6 +83,8 @@ public:
   /// The force the pull exerts on the body now, N.
   Vec<dim> pull_force(int k) const;
   double coupling_stiffness = 0; ///< N/m, set from the network's stiffness at construction
+  /// The hook called before each step (not owned; nullptr for none).
+  void set_hook(StepHook<dim>* hook) { m_hook = hook; }
 
   const Model<dim>& model() const { return *m_model; }
   const State<dim>& state() const { return m_state; }
@@ -111,6 +121,7 @@ private:
   int m_trace_head = 0, m_trace_count = 0;
   int m_probe_node = -1;
   double m_courant_dt = 0;
+  StepHook<dim>* m_hook = nullptr;
   std::string m_probe_name;
 };
 

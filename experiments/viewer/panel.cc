@@ -98,11 +98,32 @@ template <int dim> void App<dim>::draw_panel() {
     ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "%s", m_message.c_str());
     ImGui::PopTextWrapPos();
   }
+  draw_device_panel();
   ImGui::Separator();
   ImGui::TextDisabled("mouse");
   ImGui::TextWrapped("left drag: pull the nearest boundary point; right drag: %s; wheel: zoom",
                      dim == 3 ? "orbit" : "pan");
   ImGui::End();
+}
+
+template <int dim> void App<dim>::draw_device_panel() {
+  ImGui::Separator();
+  ImGui::TextDisabled("device");
+  if constexpr (dim == 2) {
+    bool on = m_device_on;
+    if (ImGui::Checkbox("device mode: the mouse holds the ProCAT", &on)) set_device_mode(on);
+  } else {
+    ImGui::TextWrapped("device mode needs a 2D scene (the ProCAT is planar)");
+  }
+  if (!m_device_on || !m_device) return;
+  const DeviceMode& d = *m_device;
+  const double wall = glfwGetTime() - m_wall_start;
+  ImGui::Text("servo: 1 kHz of simulated time (lockstep)");
+  ImGui::Text("%ld ticks, %.0f per wall second", d.ticks(), wall > 0 ? d.ticks() / wall : 0.0);
+  ImGui::Text("%s, |F| = %.3g N (limit %.3g N)", d.touching() ? "in contact" : "free", d.force().norm(), d.max_force());
+  ImGui::Text("saturated ticks: %ld%s", d.saturated(), d.faulted() ? ", WATCHDOG TRIPPED" : "");
+  const int n = d.force_trace(m_force_trace);
+  if (n > 0) ImGui::PlotLines("|F| N", m_force_trace, n, 0, nullptr, 0.0f, FLT_MAX, ImVec2(260, 70));
 }
 
 template <int dim> void App<dim>::draw_scale_bar() {
@@ -133,6 +154,8 @@ template <int dim> void App<dim>::draw_scale_bar() {
 template void App<2>::draw_panel();
 template void App<3>::draw_panel();
 template void App<2>::draw_scale_bar();
+template void App<2>::draw_device_panel();
+template void App<3>::draw_device_panel();
 template void App<3>::draw_scale_bar();
 
 } // namespace vtb::viewer

@@ -87,7 +87,8 @@ void write_png(GLFWwindow* w, const std::string& path) {
 
 template <int dim> int session(Window& win, const Scene& scene, Mesh<dim> mesh, const ViewOptions& o) {
   App<dim> app(win.get(), scene, std::move(mesh), o);
-  if (o.drag) app.start_drag(o.drag->first, o.drag->second);
+  if (o.device) app.set_device_mode(true);
+  if (o.drag && !o.device) app.start_drag(o.drag->first, o.drag->second);
   const bool headless = o.frames > 0;
   double last = glfwGetTime(), frame_sum = 0, physics_sum = 0;
   std::vector<double> frame_times;
@@ -101,6 +102,10 @@ template <int dim> int session(Window& win, const Scene& scene, Mesh<dim> mesh, 
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
+    // A scripted device session: the hand moves from the drag's first point to its second
+    // over the first half of the frames, then holds.
+    if (headless && o.device && o.drag)
+      app.set_hand(o.drag->first + std::min(1.0, 2.0 * f / o.frames) * (o.drag->second - o.drag->first));
     app.frame(sim_dt, headless ? 1e9 : 0.6 / 60);
     ImGui::Render();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
@@ -121,6 +126,9 @@ template <int dim> int session(Window& win, const Scene& scene, Mesh<dim> mesh, 
               << "; pulls " << sim.num_pulls();
     for (int k = 0; k < sim.num_pulls(); ++k) std::cout << (k ? ", " : " (") << sim.pull_force(k).norm() << " N";
     std::cout << (sim.num_pulls() ? ")" : "") << "\n";
+    if (const DeviceMode* d = app.device())
+      std::cout << "vtb view: device: " << d->ticks() << " servo ticks, |F| = " << d->force().norm() << " N, saturated "
+                << d->saturated() << ", " << (d->touching() ? "in contact" : "free") << "\n";
     if (!sim.failure().empty()) std::cout << "vtb view: unstable: " << sim.failure() << "\n";
     if (!o.screenshot.empty()) std::cout << "vtb view: wrote " << o.screenshot << "\n";
   }
@@ -155,6 +163,8 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
   if (o.frames < 0) throw InputError("--frames must be >= 0");
   if (!o.screenshot.empty() && o.frames == 0) throw InputError("--screenshot needs --frames N (the frame to write)");
   if (o.dt && !(*o.dt > 0)) throw InputError("--dt must be > 0");
+  if (o.device && dimension(load_mesh(scene)) != 2)
+    throw InputError("--device needs a 2D scene (the ProCAT is a planar device)");
   AnyMesh mesh = load_mesh(scene); // bad input is found before a window opens
   // The model is built once before the window opens, so that a scene the solvers refuse is
   // reported as bad input (exit 1) whether or not there is a display.

@@ -23,6 +23,7 @@ struct ViewOptions {
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> drag; ///< scene points: grab at first, pull to second
   std::optional<std::string> solver, filter;
   std::optional<double> dt;
+  bool device = false; ///< device mode: the mouse (or the drag) is the hand on the simulated ProCAT (2D)
   int width = 1280, height = 760;
 };
 

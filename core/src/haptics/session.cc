@@ -2,6 +2,7 @@
 
 #include "vtb/core/haptics/contact2d.hh"
 #include "vtb/core/haptics/contact3d.hh"
+#include "vtb/core/haptics/coupling.hh"
 #include "vtb/core/haptics/device.hh"
 #include "vtb/core/haptics/force_shaping.hh"
 #include "vtb/core/haptics/triple_buffer.hh"
@@ -142,24 +143,10 @@ public:
   const std::vector<std::array<int, dim>>& facets() const { return m_contacts.facets(); }
 
 private:
-  /// Virtual coupling between handle and proxy: a spring, and a damper on their relative
-  /// velocity (the proxy moves with the surface: the weighted velocities of the touched facet's
-  /// nodes). Contact pushes and never pulls: a negative normal part (the handle withdrawing
-  /// faster than the surface follows) is dropped, so the surface is not sticky.
   Vec<dim> coupling(const ContactResult<dim>& c, const Vec<dim>& handle, const Vec<dim>& handle_velocity,
                     const Nodal<dim>& node_velocity) const {
-    const auto& facet = m_contacts.facets()[static_cast<std::size_t>(c.facet)];
-    Vec<dim> proxy_velocity = Vec<dim>::Zero();
-    for (std::size_t k = 0; k < static_cast<std::size_t>(dim); ++k)
-      proxy_velocity += c.weights[k] * node_velocity.col(facet[k]);
-    const Vec<dim> depth = c.proxy - handle;
-    Vec<dim> f = m_h.coupling_stiffness * depth + m_h.coupling_damping * (proxy_velocity - handle_velocity);
-    const double d2 = depth.squaredNorm();
-    if (d2 > 0) {
-      const double normal = f.dot(depth) / d2;
-      if (normal < 0) f -= normal * depth;
-    }
-    return f;
+    return virtual_coupling<dim>(c, m_contacts.facets()[static_cast<std::size_t>(c.facet)], handle, handle_velocity,
+                                 node_velocity, m_h.coupling_stiffness, m_h.coupling_damping);
   }
 
   void log(ProbeTrace& p, const BasicForceShaper<dim>& shaper, const Eigen::Vector2d& pos, const Eigen::Vector2d& vel,

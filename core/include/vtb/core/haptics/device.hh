@@ -57,6 +57,12 @@ public:
   void advance(double dt) override;
   double time() const { return m_t; }
   const Eigen::Vector2d& true_position() const { return m_x; }
+  /// The hand holds still at p from now on (a live user, e.g. the viewer's mouse, instead of
+  /// the script). Allocation-free once the script has one waypoint.
+  void hold_hand_at(const Eigen::Vector2d& p) {
+    m_hand.waypoints.resize(1);
+    m_hand.waypoints[0] = p;
+  }
 
 private:
   DeviceSpec m_spec;

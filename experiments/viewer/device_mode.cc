@@ -1,0 +1,81 @@
+#include "device_mode.hh"
+
+#include "vtb/core/haptics/coupling.hh"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vtb::viewer {
+namespace {
+
+HandScript still_hand(const Scene& scene) {
+  HandScript h;
+  h.waypoints = {Eigen::Vector2d(0.0, 0.0)};
+  if (scene.haptics && scene.haptics->hand) h.grip_stiffness = scene.haptics->hand->grip_stiffness;
+  return h;
+}
+
+} // namespace
+
+DeviceMode::DeviceMode(const Mesh2& mesh, const Scene& scene)
+    : m_params{scene.haptics ? scene.haptics->max_force : 4.0, 0.2, 0.03, 0.05},
+      m_k(std::min(scene.haptics ? scene.haptics->coupling_stiffness : 400.0, DeviceSpec{}.max_stiffness)),
+      m_b(scene.haptics ? scene.haptics->coupling_damping : 2.0),
+      m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_hand(still_hand(scene)), m_contact(mesh),
+      m_shaper(m_params), m_x(mesh.points) {}
+
+void DeviceMode::before_step(const Model<2>& model, const State<2>& s, double dt, Nodal<2>& applied) {
+  // The ticks that fall in [t, t + dt): at least one per step.
+  const int n = std::max(1, static_cast<int>(std::lround(dt / m_period)));
+  const double h = dt / n;
+  if (!m_device) { // the handle starts where the hand is (not dragged in from the origin)
+    m_hand.waypoints = {hand};
+    m_device.emplace(DeviceSpec{}, m_hand);
+  }
+  SimulatedProCAT& device = *m_device;
+  device.hold_hand_at(hand);
+  m_x = model.net.rest + s.u;
+  const bool finite = m_x.allFinite() && s.v.allFinite();
+  Eigen::Vector2d on_body_sum = Eigen::Vector2d::Zero();
+  int facet = -1;
+  std::array<double, 2> weights{};
+  for (int k = 0; k < n; ++k) {
+    Eigen::Vector2d pos, vel;
+    device.read(pos, vel);
+    ContactResult<2> c;
+    if (finite) c = m_contact.update(pos, m_x);
+    Eigen::Vector2d raw = Eigen::Vector2d::Zero();
+    if (c.touching)
+      raw = virtual_coupling<2>(c, m_contact.facets()[static_cast<std::size_t>(c.facet)], pos, vel, s.v, m_k, m_b);
+    m_force = m_shaper.shape(raw, m_t, m_t, finite);
+    m_saturated += m_shaper.last_saturated();
+    device.command(m_force);
+    device.advance(h);
+    m_t += h;
+    ++m_ticks;
+    m_touching = c.touching;
+    m_proxy = c.proxy;
+    if (c.touching) {
+      facet = c.facet;
+      weights = c.weights;
+      on_body_sum -= m_force;
+    }
+    m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force.norm());
+    m_head = (m_head + 1) % kTrace;
+    m_count = std::min(m_count + 1, kTrace);
+  }
+  // The step's force on the body: the ticks' mean, on the last touched facet's nodes.
+  if (facet >= 0) {
+    const auto& e = m_contact.facets()[static_cast<std::size_t>(facet)];
+    for (int k = 0; k < 2; ++k)
+      applied.col(e[static_cast<std::size_t>(k)]) += weights[static_cast<std::size_t>(k)] * on_body_sum / n;
+  }
+}
+
+int DeviceMode::force_trace(float* out) const {
+  for (int k = 0; k < m_count; ++k)
+    out[k] = m_trace[static_cast<std::size_t>((m_head - m_count + k + kTrace) % kTrace)];
+  return m_count;
+}
+
+} // namespace vtb::viewer

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The README's viewer pictures, made by the viewer's headless mode under Xvfb (needs the
+# packages of setup.sh): the paper's 517-node plate under its step load with a pull held on
+# its top edge, and the press scene in device mode (the ProCAT's handle pressing the edge).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
+img="$VTB_ROOT/docs/img"
+mkdir -p "$img"
+run() { xvfb-run -a -s "-screen 0 1280x800x24" "$VTB_BUILD/bin/vtb" view "$@"; }
+run "$VTB_ROOT/experiments/scenes/plate517_step.toml" --frames 120 --drag 0.1,0.05:0.11,0.07 \
+  --screenshot "$img/viewer_plate517.png"
+run "$VTB_ROOT/experiments/scenes/haptic_press.toml" --device --frames 120 --drag 0.05,0.08:0.05,0.045 \
+  --screenshot "$img/viewer_device.png"
