@@ -236,7 +236,8 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   check(CVodeSetStopTime(h.mem(), model.duration), "CVodeSetStopTime");
   rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
-  const long samples = static_cast<long>(std::floor(model.duration / model.output_interval + 1e-9)) + 1;
+  const std::vector<double> times = sample_times(model.duration, model.output_interval);
+  const long samples = static_cast<long>(times.size());
   std::vector<double> per_step; // wall time per CVODE step, per output interval
   long last_steps = 0;
   auto record = [&](double t) {
@@ -250,7 +251,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   record(0.0);
   const auto start = clock::now();
   for (long k = 1; k < samples; ++k) {
-    const double tout = std::min(model.duration, static_cast<double>(k) * model.output_interval);
+    const double tout = times[static_cast<std::size_t>(k)];
     double t = 0;
     const auto a = clock::now();
     const int flag = CVode(h.mem(), tout, h.y(), &t, CV_NORMAL);

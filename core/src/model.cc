@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <set>
+#include <sstream>
 
 namespace vtb {
 
@@ -38,6 +39,31 @@ template <int dim> Vec<dim> as_vec(const Eigen::VectorXd& v, const std::string& 
   return v;
 }
 
+/// The distance from a scene point to the node it is snapped to; InputError naming `what`
+/// and the distance when it exceeds the mesh's longest edge (a typo in a coordinate, or the
+/// wrong units, rather than a point on the body).
+template <int dim> double longest_edge(const Mesh<dim>& mesh) {
+  double longest = 0;
+  for (const auto& e : unique_edges(mesh))
+    longest = std::max(longest, (mesh.points.col(e[1]) - mesh.points.col(e[0])).norm());
+  return longest;
+}
+
+template <int dim>
+double snap_distance(const Mesh<dim>& mesh, const Vec<dim>& x, int node, const std::string& what,
+                     const std::string& file) {
+  const double d = (mesh.points.col(node) - x).norm();
+  const double longest = longest_edge(mesh);
+  if (d > longest) {
+    std::ostringstream os;
+    os << file << ": " << what << ".point is " << d << " m from the mesh (nearest node " << node << " at [";
+    for (int a = 0; a < dim; ++a) os << (a ? ", " : "") << mesh.points(a, node);
+    os << "]); a point must lie within the longest edge (" << longest << " m) of a node";
+    throw InputError(os.str());
+  }
+  return d;
+}
+
 template <int dim> Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDesc& r, const std::string& file) {
   RegionSpec<dim> spec;
   const std::string what = file + ": " + r.label;
@@ -48,6 +74,7 @@ template <int dim> Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDes
   if (r.point) spec.point = as_vec<dim>(*r.point, r.label + ".point", file);
   Selection<dim> s = select(mesh, spec, what);
   if (s.nodes.empty()) throw InputError(what + ": the region selects no node of mesh " + mesh.source);
+  if (spec.point) snap_distance(mesh, *spec.point, s.nodes.front(), r.label, file);
   return s;
 }
 
@@ -185,8 +212,12 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
       }
     }
   }
-  for (const auto& p : scene.probes)
-    model.probes.push_back({p.name, nearest_node(mesh, as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file))});
+  for (const auto& p : scene.probes) {
+    const Vec<dim> x = as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file);
+    const int node = nearest_node(mesh, x);
+    model.probes.push_back({p.name, node});
+    model.probe_distance.push_back(snap_distance(mesh, x, node, "probe \"" + p.name + "\"", file));
+  }
   model.mesh = std::move(mesh);
   return model;
 }

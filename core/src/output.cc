@@ -2,6 +2,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
@@ -36,7 +37,15 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["calibration"] = r.calibration;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }
-  for (const auto& [key, value] : r.extra) j[key] = value;
+  // Counts (cells, dofs, steps, iterations, degree...) print as integers, not 600.0; times,
+  // tolerances and ratios as numbers.
+  for (const auto& [key, value] : r.extra) {
+    const bool time = key.size() > 8 && key.compare(key.size() - 8, 8, "_seconds") == 0;
+    if (!time && std::isfinite(value) && value == std::floor(value) && std::abs(value) < 9.0e15)
+      j[key] = static_cast<long long>(value);
+    else
+      j[key] = value;
+  }
   if (r.solver == "filtered") {
     j["filter"] = r.filter;
     j["momentum_correction"] = r.momentum_correction;
@@ -70,6 +79,17 @@ void write_pvd(const std::filesystem::path& dir, const std::vector<double>& time
   std::filesystem::rename(dir / "frames.pvd.part", dir / "frames.pvd");
 }
 
+/// The summary with each probe's node and its distance from the probe's scene point.
+template <int dim> std::string with_probes(const std::string& summary, const Model<dim>& model) {
+  auto j = nlohmann::ordered_json::parse(summary);
+  j["probes"] = nlohmann::ordered_json::array();
+  for (std::size_t p = 0; p < model.probes.size(); ++p)
+    j["probes"].push_back({{"name", model.probes[p].first},
+                           {"node", model.probes[p].second},
+                           {"distance", p < model.probe_distance.size() ? model.probe_distance[p] : 0.0}});
+  return j.dump(2) + "\n";
+}
+
 template <int dim>
 void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
                        const RunReport& report, const std::string& scene_name) {
@@ -91,9 +111,10 @@ void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model
                 << (dim == 3 ? f[dim - 1] : 0.0) << '\n';
     }
   }
-  const std::pair<const char*, std::string> files[] = {{"probes.csv", probes.str()},
-                                                       {"reactions.csv", reactions.str()},
-                                                       {"summary.json", summary_json(report, scene_name)}};
+  const std::pair<const char*, std::string> files[] = {
+      {"probes.csv", probes.str()},
+      {"reactions.csv", reactions.str()},
+      {"summary.json", with_probes(summary_json(report, scene_name), model)}};
   for (const auto& [name, text] : files) write_file(dir / (std::string(name) + ".part"), text);
   for (const auto& [name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
 }

@@ -43,6 +43,54 @@ double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<di
   return max_strain(model.net, s.u);
 }
 
+std::vector<double> sample_times(double duration, double interval) {
+  std::vector<double> t;
+  const long n = static_cast<long>(std::floor(duration / interval + 1e-9));
+  for (long k = 0; k <= n; ++k) t.push_back(std::min(duration, static_cast<double>(k) * interval));
+  if (duration - t.back() > 1e-9 * interval) t.push_back(duration);
+  return t;
+}
+
+template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const double* times, int count) {
+  const std::size_t n = traj.t.size();
+  const std::size_t a = n - 2, b = n - 1;
+  const double t0 = traj.t[a], t1 = traj.t[b];
+  Trajectory<dim> out;
+  for (int k = 0; k < count; ++k) {
+    const double ts = times[k];
+    const bool at_end = t1 - ts <= 1e-9 * (t1 - t0);
+    const double w = at_end ? 1.0 : (ts - t0) / (t1 - t0);
+    auto mix = [&](const auto& x, const auto& y) {
+      using T = std::decay_t<decltype(x)>;
+      return at_end ? T(y) : T((1 - w) * x + w * y);
+    };
+    out.t.push_back(ts);
+    std::vector<Vec<dim>> pu(traj.probe_u[a].size()), re(traj.reaction[a].size());
+    for (std::size_t i = 0; i < pu.size(); ++i) pu[i] = mix(traj.probe_u[a][i], traj.probe_u[b][i]);
+    for (std::size_t i = 0; i < re.size(); ++i) re[i] = mix(traj.reaction[a][i], traj.reaction[b][i]);
+    out.probe_u.push_back(std::move(pu));
+    out.reaction.push_back(std::move(re));
+    if (traj.field.size() == n) out.field.push_back(mix(traj.field[a], traj.field[b]));
+  }
+  const bool fields = traj.field.size() == n;
+  for (int drop = 0; drop < 2; ++drop) {
+    traj.t.pop_back();
+    traj.probe_u.pop_back();
+    traj.reaction.pop_back();
+    if (fields) traj.field.pop_back();
+  }
+  for (int k = 0; k < count; ++k) {
+    const auto i = static_cast<std::size_t>(k);
+    traj.t.push_back(out.t[i]);
+    traj.probe_u.push_back(std::move(out.probe_u[i]));
+    traj.reaction.push_back(std::move(out.reaction[i]));
+    if (fields) traj.field.push_back(std::move(out.field[i]));
+  }
+}
+
+template void interpolate_last_step<2>(Trajectory<2>&, const double*, int);
+template void interpolate_last_step<3>(Trajectory<3>&, const double*, int);
+
 StepStats step_stats(std::vector<double> t) {
   StepStats s;
   if (t.empty()) return s;
@@ -90,27 +138,28 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
   State<dim> s = initial_state(model);
-  const long steps = std::max(1L, std::lround(model.duration / o.dt));
+  // Enough steps to reach the duration; each sample time is interpolated within its step.
+  const long steps = std::max(1L, static_cast<long>(std::ceil(model.duration / o.dt - 1e-9)));
   rep.steps = steps;
-  const long samples = static_cast<long>(std::floor(model.duration / model.output_interval + 1e-9)) + 1;
-  traj.t.reserve(static_cast<std::size_t>(samples));
-  traj.probe_u.reserve(static_cast<std::size_t>(samples));
-  traj.reaction.reserve(static_cast<std::size_t>(samples));
-  if (record_field) traj.field.reserve(static_cast<std::size_t>(samples));
+  const std::vector<double> times = sample_times(model.duration, model.output_interval);
+  traj.t.reserve(times.size() + 1);
+  traj.probe_u.reserve(times.size() + 1);
+  traj.reaction.reserve(times.size() + 1);
+  if (record_field) traj.field.reserve(times.size() + 1);
   std::vector<double> step_time;
   step_time.reserve(static_cast<std::size_t>(steps));
 
-  long next_sample = 0;
-  auto record = [&]() {
-    rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field));
-    ++next_sample;
-  };
+  std::size_t next = 1;
+  auto record = [&]() { rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field)); };
   record();
   for (long k = 0; k < steps; ++k) {
+    const double t1 = static_cast<double>(k + 1) * o.dt; // no drift from summing dt
+    const bool crossing = next < times.size() && times[next] <= t1 + 1e-9 * o.dt;
+    if (crossing) record(); // the state at the step's start, to interpolate from
     const auto a = clock::now();
     integrator->step(s);
     step_time.push_back(std::chrono::duration<double>(clock::now() - a).count());
-    s.t = static_cast<double>(k + 1) * o.dt; // no drift from summing dt: samples line up across solvers
+    s.t = t1;
     ++rep.steps_taken;
     if (!s.u.allFinite() || !s.v.allFinite()) {
       rep.stable = false;
@@ -118,8 +167,14 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
       rep.failure_time = s.t;
       break;
     }
-    if (next_sample < samples && s.t + 1e-6 * o.dt >= static_cast<double>(next_sample) * model.output_interval) {
+    if (crossing) {
       record();
+      int count = 0;
+      while (next + static_cast<std::size_t>(count) < times.size() &&
+             times[next + static_cast<std::size_t>(count)] <= t1 + 1e-9 * o.dt)
+        ++count;
+      interpolate_last_step(traj, &times[next], count);
+      next += static_cast<std::size_t>(count);
       if (!(rep.max_strain <= kRunawayStrain)) {
         rep.stable = false;
         rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +

@@ -77,6 +77,7 @@ private:
   void solve_step(double t_new);
   void initial_state();
   void record(double t, Trajectory<dim>& out, bool record_field, RunReport& rep);
+  void write_frame(const Vector<double>& u, std::size_t index);
 
   const Model<dim>& m_model;
   const MaterialDesc& m_mat;
@@ -101,11 +102,28 @@ private:
   std::vector<std::vector<types::global_dof_index>> m_point_load_dofs;
 
   Vector<double> m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
+  Vector<double> m_frame_prev, m_frame_last, m_frame_mix;
   std::ostringstream m_timer_stream;
   TimerOutput m_timer;
 };
 
 /// The scene's mesh as a deal.II triangulation (see make_triangulation).
+template <int dim> void KelvinVoigtProblem<dim>::write_frame(const Vector<double>& u, std::size_t index) {
+  // The displacement on the (refined, possibly P2) FE mesh, as deal.II writes it.
+  DataOut<dim> data_out;
+  data_out.attach_dof_handler(m_dofs);
+  const std::vector<std::string> names(dim, "displacement");
+  const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
+      dim, DataComponentInterpretation::component_is_part_of_vector);
+  data_out.add_data_vector(u, names, DataOut<dim>::type_dof_data, kinds);
+  data_out.build_patches(m_mapping, static_cast<unsigned int>(m_opt.degree));
+  char name[32];
+  std::snprintf(name, sizeof name, "frame_%04zu.vtu", index);
+  std::filesystem::create_directories(m_opt.frames_dir);
+  std::ofstream f(m_opt.frames_dir / name);
+  data_out.write_vtu(f);
+}
+
 template <int dim> void KelvinVoigtProblem<dim>::make_grid() {
   make_triangulation(m_model, m_opt.refinements, m_tria, m_loads_of_id);
 }
@@ -382,19 +400,8 @@ void KelvinVoigtProblem<dim>::record(double t, Trajectory<dim>& out, bool record
     if (m_support_of[d] >= 0) reac[static_cast<std::size_t>(m_support_of[d])][m_component[d]] += m_rhs[d];
   out.reaction.push_back(reac);
   if (!m_opt.frames_dir.empty()) {
-    // The displacement on the (refined, possibly P2) FE mesh, as deal.II writes it.
-    DataOut<dim> data_out;
-    data_out.attach_dof_handler(m_dofs);
-    const std::vector<std::string> names(dim, "displacement");
-    const std::vector<DataComponentInterpretation::DataComponentInterpretation> kinds(
-        dim, DataComponentInterpretation::component_is_part_of_vector);
-    data_out.add_data_vector(m_u, names, DataOut<dim>::type_dof_data, kinds);
-    data_out.build_patches(m_mapping, static_cast<unsigned int>(m_opt.degree));
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%04zu.vtu", out.t.size() - 1);
-    std::filesystem::create_directories(m_opt.frames_dir);
-    std::ofstream f(m_opt.frames_dir / name);
-    data_out.write_vtu(f);
+    m_frame_prev = m_frame_last; // the FE fields of the last two samples, for the frames
+    m_frame_last = m_u;
   }
   if (record_field) {
     Nodal<dim> field(dim, m_model.num_nodes());
@@ -457,6 +464,19 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
       [&](double t) {
         TimerOutput::Scope s(m_timer, "output");
         record(t, out, record_field, rep);
+        if (!m_opt.frames_dir.empty() && out.t.size() == 1) write_frame(m_u, 0);
+      },
+      [&](const double* times, int count) {
+        TimerOutput::Scope s(m_timer, "output");
+        const double ta = out.t[out.t.size() - 2], tb = out.t.back();
+        interpolate_last_step(out, times, count);
+        if (m_opt.frames_dir.empty()) return;
+        for (int k = 0; k < count; ++k) {
+          const double w = tb - times[k] <= 1e-9 * (tb - ta) ? 1.0 : (times[k] - ta) / (tb - ta);
+          m_frame_mix = m_frame_last;
+          m_frame_mix.sadd(w, 1 - w, m_frame_prev);
+          write_frame(m_frame_mix, out.t.size() - static_cast<std::size_t>(count - k));
+        }
       });
   for (const auto& [phase, seconds] : m_timer.get_summary_data(TimerOutput::total_wall_time)) {
     std::string key = "phase_" + phase + "_seconds";

@@ -66,7 +66,8 @@ public:
                  {"mpi_ranks", static_cast<double>(Utilities::MPI::n_mpi_processes(m_comm))}};
     march(
         m_scheme, m_model.duration, m_model.output_interval, rep, [&](double t) { step(t); },
-        [&] { return std::isfinite(m_u.l2_norm()); }, [&](double t) { record(t, out, record_field); });
+        [&] { return std::isfinite(m_u.l2_norm()); }, [&](double t) { record(t, out, record_field); },
+        [&](const double* times, int count) { interpolate_last_step(out, times, count); });
     rep.max_strain = m_max_strain;
     return rep;
   }

@@ -12,13 +12,16 @@
 
 namespace vtb::fem {
 
-/// The static solve once at `duration`, or steps of the scheme's dt up to it, with a sample at
-/// t = 0 and then every output_interval, stopping at the first step whose displacement is not
-/// finite (rep.stable = false, with the time). step(t) advances to t, finite() says whether the
-/// displacement is finite, record(t) takes a sample. Fills rep's step counts and step times.
-template <class Step, class Finite, class Record>
+/// The static solve once at `duration`, or steps of the scheme's dt up to it (ceil(D / dt)
+/// steps), with samples at sample_times(duration, output_interval): each is interpolated
+/// within its step from the states at the step's ends (record(t) appends a sample of the
+/// current state, interpolate(times, count) replaces the last two by the samples at times),
+/// stopping at the first step whose displacement is not finite (rep.stable = false, with the
+/// time). step(t) advances to t, finite() says whether the displacement is finite. Fills rep's
+/// step counts and step times.
+template <class Step, class Finite, class Record, class Interpolate>
 void march(const TimeScheme& scheme, double duration, double output_interval, RunReport& rep, Step&& step,
-           Finite&& finite, Record&& record) {
+           Finite&& finite, Record&& record, Interpolate&& interpolate) {
   std::vector<double> seconds;
   const auto timed_step = [&](double t) {
     const auto a = std::chrono::steady_clock::now();
@@ -30,24 +33,34 @@ void march(const TimeScheme& scheme, double duration, double output_interval, Ru
     rep.steps = rep.steps_taken = 1;
     record(duration);
   } else {
-    const long steps = std::max(1L, std::lround(duration / scheme.dt));
+    const long steps = std::max(1L, static_cast<long>(std::ceil(duration / scheme.dt - 1e-9)));
     rep.steps = steps;
     seconds.reserve(static_cast<std::size_t>(steps));
-    long next_sample = 1;
+    const std::vector<double> times = sample_times(duration, output_interval);
+    std::size_t next = 1;
     record(0.0);
+    double t0 = 0.0;
     for (long k = 0; k < steps; ++k) {
       const double t = static_cast<double>(k + 1) * scheme.dt;
+      const bool crossing = next < times.size() && times[next] <= t + 1e-9 * scheme.dt;
+      if (crossing) record(t0);
       timed_step(t);
       ++rep.steps_taken;
+      t0 = t;
       if (!finite()) {
         rep.stable = false;
         rep.failure = "non-finite displacement";
         rep.failure_time = t;
         break;
       }
-      if (t + 1e-6 * scheme.dt >= static_cast<double>(next_sample) * output_interval) {
+      if (crossing) {
         record(t);
-        ++next_sample;
+        int count = 0;
+        while (next + static_cast<std::size_t>(count) < times.size() &&
+               times[next + static_cast<std::size_t>(count)] <= t + 1e-9 * scheme.dt)
+          ++count;
+        interpolate(&times[next], count);
+        next += static_cast<std::size_t>(count);
       }
     }
   }

@@ -51,6 +51,11 @@ dt = 2e-3
        {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds", "stable", "max_strain"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["steps"], 500);
+  // Each probe's node and how far it is from the probe's point (here the tip node itself).
+  ASSERT_EQ(j["probes"].size(), 1u);
+  EXPECT_EQ(j["probes"][0]["name"], "tip");
+  EXPECT_TRUE(j["probes"][0]["node"].is_number_integer());
+  EXPECT_NEAR(j["probes"][0]["distance"].get<double>(), 0.0, 1e-15);
   EXPECT_TRUE(j["step_seconds"].contains("median") && j["step_seconds"].contains("p99"));
   // At rest the clamp's reaction balances the load: R + F = 0. Mass damping 20/s makes every
   // mode decay at least like e^(-10 t) (gamma/2), so after 1 s the residual is < 1e-4 x

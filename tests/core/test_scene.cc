@@ -127,6 +127,14 @@ INSTANTIATE_TEST_SUITE_P(
                 "[haptics.plane].y_axis: must be orthogonal to x_axis"},
         BadCase{"[haptics.hand]", "[haptics.plane]\norigin = [0.0, 0.0]\n[haptics.hand]",
                 "[haptics.plane].origin: must have 3 entries, has 2"},
+        // A point far off the body is a typo or the wrong units, not a request to snap to a corner.
+        BadCase{"point = [0.2, 0.025]", "point = [3.0, 5.0]", "probe \"tip\".point is 5.68705 m from the mesh"},
+        BadCase{"point = [0.2, 0.025]", "point = [3.0, 5.0]",
+                "m from the mesh (nearest node 14 at [0.2, 0.05]); a point must lie within the longest edge (0.0559017 "
+                "m) of a node"},
+        BadCase{"total_force = [1.0, 0.0]",
+                "total_force = [1.0, 0.0]\n[[load]]\npoint = [0.1, 0.3]\ntotal_force = [0.0, 1.0]",
+                "load[1].point is 0.25 m from the mesh"},
         // Every further key with a range or a set of values (issue: keys without a bad case).
         BadCase{"thickness = 0.001", "thickness = 0.0", "[material].thickness: = 0: must be > 0"},
         BadCase{"retardation_time = ", "retardation_time = -1.0 #", "[material].retardation_time: = -1: must be >= 0"},

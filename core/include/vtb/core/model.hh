@@ -56,6 +56,7 @@ template <int dim> struct Model {
   std::vector<int> free_index;   ///< node -> index in free_nodes, or -1
   Nodal<dim> initial_velocity;
   std::vector<std::pair<std::string, int>> probes; ///< name, node
+  std::vector<double> probe_distance;              ///< per probe: from its scene point to its node, m
   double duration = 0, output_interval = 0;
 
   int num_nodes() const { return net.num_nodes(); }
@@ -68,7 +69,8 @@ template <int dim> struct Model {
 };
 
 /// Resolves a scene against its mesh. Throws InputError naming the scene key when a vector
-/// has the wrong dimension, a region selects no node, regions conflict (a node both fixed
+/// has the wrong dimension, a probe or point region lies farther from its nearest node than
+/// the mesh's longest edge, a region selects no node, regions conflict (a node both fixed
 /// and driven, or in two drives), or the body is a mechanism that a solver cannot integrate.
 template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
 

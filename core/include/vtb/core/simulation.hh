@@ -46,12 +46,23 @@ struct RunReport {
   std::vector<std::pair<std::string, double>> extra;
 };
 
+/// The times every solver records at: 0, I, 2I, ... up to the duration D, and D itself when
+/// it is not a multiple of I (within 1e-9 of I). Shared by the spring solvers, CVODE and the
+/// FEM, so that their trajectories line up sample for sample whatever their steps.
+std::vector<double> sample_times(double duration, double interval);
+
+/// A fixed-step solver recorded its state at both ends of one step, t0 and t1 (the last two
+/// samples of traj); replaces them by the samples at times[0..count), each in [t0, t1], by
+/// linear interpolation of every recorded quantity (probes, reactions, field). A time within
+/// 1e-9 (t1 - t0) of t1 takes the state at t1 exactly.
+template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const double* times, int count);
+
 /// A run stops as unstable when the state is non-finite or a spring's strain exceeds this.
 inline constexpr double kRunawayStrain = 10.0;
 
-/// Runs `model` with the integrator options; samples every model.output_interval (at the first
-/// step at or after each sample time). Never throws for a numerical blow-up: it stops the run
-/// and reports stable = false.
+/// Runs `model` with the integrator options; samples at sample_times(duration, interval),
+/// interpolated linearly within the step that contains each (the run takes ceil(D / dt) steps). Never throws for a
+/// numerical blow-up: it stops the run and reports stable = false.
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& options, Trajectory<dim>& out,
                    bool record_field = false);
