@@ -20,12 +20,17 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["free_nodes"] = r.free_nodes;
     j["springs"] = r.springs;
   }
-  j["dt"] = r.dt;
+  // dt is a fixed-step solver's step; CVODE chooses its own, so it reports their mean instead.
+  if (r.solver == "cvode")
+    j["mean_step"] = r.dt;
+  else
+    j["dt"] = r.dt;
   j["duration"] = r.duration;
   j["steps"] = r.steps_taken;
   j["steps_planned"] = r.steps;
   j["precompute_seconds"] = r.precompute_seconds;
   j["step_seconds"] = {{"mean", r.step_seconds.mean}, {"median", r.step_seconds.median}, {"p99", r.step_seconds.p99}};
+  j["total_seconds"] = r.total_seconds;
   j["stable"] = r.stable;
   if (!r.stable) {
     j["failure"] = r.failure;

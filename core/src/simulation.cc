@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <sstream>
 
 namespace vtb {
 
@@ -108,6 +109,17 @@ StepStats step_stats(std::vector<double> t) {
   return s;
 }
 
+namespace {
+/// For the explicit scheme, what its failure means: the step against its stability limit.
+std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
+  if (o.kind != "explicit" || !(rep.courant_dt > 0)) return "";
+  std::ostringstream os;
+  os << "; dt = " << o.dt << " s is " << o.dt / rep.courant_dt << " times the explicit scheme's stability limit "
+     << rep.courant_dt << " s (courant_dt_estimate)";
+  return os.str();
+}
+} // namespace
+
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
   using clock = std::chrono::steady_clock;
@@ -150,6 +162,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   step_time.reserve(static_cast<std::size_t>(steps));
 
   std::size_t next = 1;
+  const auto loop_start = clock::now();
   auto record = [&]() { rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field)); };
   record();
   for (long k = 0; k < steps; ++k) {
@@ -163,7 +176,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
     ++rep.steps_taken;
     if (!s.u.allFinite() || !s.v.allFinite()) {
       rep.stable = false;
-      rep.failure = "non-finite displacement or velocity";
+      rep.failure = "non-finite displacement or velocity" + explicit_hint(o, rep);
       rep.failure_time = s.t;
       break;
     }
@@ -178,13 +191,14 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
       if (!(rep.max_strain <= kRunawayStrain)) {
         rep.stable = false;
         rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
-                      "% of its rest length)";
+                      "% of its rest length)" + explicit_hint(o, rep);
         rep.failure_time = s.t;
         break;
       }
     }
   }
   rep.step_seconds = step_stats(std::move(step_time));
+  rep.total_seconds = std::chrono::duration<double>(clock::now() - loop_start).count();
   return rep;
 }
 

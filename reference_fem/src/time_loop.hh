@@ -23,6 +23,7 @@ template <class Step, class Finite, class Record, class Interpolate>
 void march(const TimeScheme& scheme, double duration, double output_interval, RunReport& rep, Step&& step,
            Finite&& finite, Record&& record, Interpolate&& interpolate) {
   std::vector<double> seconds;
+  const auto loop_start = std::chrono::steady_clock::now();
   const auto timed_step = [&](double t) {
     const auto a = std::chrono::steady_clock::now();
     step(t);
@@ -65,6 +66,7 @@ void march(const TimeScheme& scheme, double duration, double output_interval, Ru
     }
   }
   rep.step_seconds = step_stats(std::move(seconds));
+  rep.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - loop_start).count();
 }
 
 } // namespace vtb::fem

@@ -505,6 +505,19 @@ TEST(Haptics, TheHandleStaysInTheWorkspaceAndTooStiffACouplingIsLimited) {
       << r.notes[0];
 }
 
+TEST(Haptics, ASceneAskingForAReferenceSolverIsRefusedNotSilentlyFiltered) {
+  Scene s = press_scene();
+  for (const char* kind : {"cvode", "fem"}) {
+    s.solver.kind = kind;
+    try {
+      run_haptics(s, HapticsOptions{});
+      FAIL() << kind;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("needs a fixed-step spring solver"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Haptics, APlaneInA2DSceneIsRefused) {
   Scene s = press_scene();
   s.haptics->plane = DevicePlaneDesc{};

@@ -163,3 +163,27 @@ total_force = [0.2, 0.0]
 
 } // namespace
 } // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(Harness, NumbersThatCannotMislead) {
+  Scene s = parse_scene(
+      test::plate_scene(8, 2, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.2, 0.0]\n"),
+      "plate.toml", ".");
+  s.duration = 0.1;
+  s.output_interval = 0.01;
+  // A sweep of cvode's dt would integrate the same run at every dt (error 0): refused.
+  EXPECT_THROW(harness::run_sweep(s, {1e-3}, {1.0}, {"cvode"}), InputError);
+  // An unstable row prints no real-time factor and says why it failed.
+  const auto res = harness::run_compare(s, {"explicit", "implicit-euler"}, "cvode", 0.01);
+  ASSERT_FALSE(res.rows[0].report.stable);
+  const std::string table = harness::format_compare(res);
+  EXPECT_NE(table.find("explicit: unstable ("), std::string::npos) << table;
+  const std::string first =
+      table.substr(table.find("\nexplicit"), table.find('\n', table.find("\nexplicit") + 1) - table.find("\nexplicit"));
+  EXPECT_EQ(first.back(), '-') << first;
+}
+
+} // namespace
+} // namespace vtb

@@ -324,8 +324,10 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   }
 
   IntegratorOptions o = integrator_options(scene.solver);
-  // The physics of a session steps at a fixed dt: CVODE and the FEM fall back to the filter.
-  if (o.kind == "cvode" || o.kind == "fem") o.kind = "filtered";
+  // The physics of a session steps at a fixed dt, one step between servo updates.
+  if (o.kind == "cvode" || o.kind == "fem")
+    throw InputError(scene.file.string() + ": [solver].kind = \"" + o.kind +
+                     "\": a haptics session needs a fixed-step spring solver (filtered, implicit-euler or explicit)");
 
   Snapshot<dim> init;
   init.x = model.net.rest;

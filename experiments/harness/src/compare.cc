@@ -93,7 +93,8 @@ void write_compare(const CompareResult& r, const std::filesystem::path& dir) {
       << (p.stable ? "true" : "false") << ',' << num(row.error.displacement_max) << ','
       << num(row.error.displacement_final) << ',' << num(row.error.probe_max) << ',' << num(row.error.reaction_max)
       << ',' << num(row.error.reaction_final) << ',' << num(p.precompute_seconds) << ',' << num(p.step_seconds.median)
-      << ',' << num(p.step_seconds.p99) << ',' << num(row.wall_seconds) << ',' << num(r.duration / row.wall_seconds)
+      << ',' << num(p.step_seconds.p99) << ',' << num(row.wall_seconds) << ','
+      << (p.stable ? num(r.duration / row.wall_seconds) : std::string("")) // no speed for a run that failed
       << '\n';
   }
   d << "run,against,meaning,displacement_error_max,displacement_error_final,reaction_error_max\n";
@@ -120,11 +121,14 @@ std::string format_compare(const CompareResult& r) {
   os << line;
   for (const auto& row : r.rows) {
     const auto& p = row.report;
-    std::snprintf(line, sizeof line, "%-20s %10.3g %7s %12.3e %12.3e %12.3e %12.3f %12.2f %9.1f\n", row.solver.c_str(),
+    // A run that went unstable has no accuracy and no real-time factor worth printing.
+    char rt[32] = "-";
+    if (p.stable) std::snprintf(rt, sizeof rt, "%9.1f", r.duration / row.wall_seconds);
+    std::snprintf(line, sizeof line, "%-20s %10.3g %7s %12.3e %12.3e %12.3e %12.3f %12.2f %9s\n", row.solver.c_str(),
                   p.dt, p.stable ? "yes" : "NO", row.error.displacement_max, row.error.displacement_final,
-                  row.error.reaction_max, p.precompute_seconds * 1e3, p.step_seconds.median * 1e6,
-                  r.duration / row.wall_seconds);
+                  row.error.reaction_max, p.precompute_seconds * 1e3, p.step_seconds.median * 1e6, rt);
     os << line;
+    if (!p.stable) os << "  " << row.solver << ": unstable (" << p.failure << " at t = " << p.failure_time << " s)\n";
   }
   if (!r.decomposition.empty()) {
     os << "error decomposition (max over time of the relative L2 displacement error):\n";

@@ -52,8 +52,14 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
     if (!(dt > 0) || !std::isfinite(dt)) throw InputError("vtb sweep: --dt values must be > 0");
   for (double s : scales)
     if (!(s > 0) || !std::isfinite(s)) throw InputError("vtb sweep: --stiffness-scale values must be > 0");
-  for (const auto& s : solvers)
+  for (const auto& s : solvers) {
     if (!known_solver(s)) throw InputError("vtb sweep: unknown solver \"" + s + "\"");
+    // CVODE chooses its own steps: a dt ladder would run the same integration at every dt
+    // and report error 0 against itself.
+    if (s == "cvode" || s == "fem")
+      throw InputError("vtb sweep: \"" + s +
+                       "\" has no fixed dt to sweep (it is the reference the sweep measures against)");
+  }
   std::vector<SweepCell> cells;
   for (double scale : scales) {
     Scene scene = scene_in;

@@ -32,6 +32,7 @@ struct RunReport {
   long steps = 0, steps_taken = 0;
   double precompute_seconds = 0;
   StepStats step_seconds;
+  double total_seconds = 0; ///< wall time of the whole time loop (steps, samples, checks)
   bool stable = true;
   std::string failure;      ///< why the run was stopped, empty when stable
   double failure_time = -1; ///< simulated time of the failure
