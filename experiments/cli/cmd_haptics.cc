@@ -38,6 +38,12 @@ Action add_haptics(CLI::App& app) {
     if (r.fault_time >= 0)
       std::cout << "; fault at " << r.fault_time << " s, force zero at " << r.force_zero_time << " s";
     std::cout << "; outputs in " << out.string() << "\n";
+    // Timing a user should not miss: late servo cycles mean the force felt was held longer
+    // than one period (docs/haptics.md says what lowers them).
+    if (r.deadline_misses > 0)
+      std::cerr << "vtb haptics: warning: " << r.deadline_misses << " of " << r.samples
+                << " servo cycles started more than half a period late (worst period " << r.period_max_us
+                << " us); see docs/haptics.md, 'Timing on a loaded machine'\n";
     return 0;
   };
 }
