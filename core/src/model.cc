@@ -1,6 +1,9 @@
 #include "vtb/core/model.hh"
 
 #include "vtb/meshes/generate.hh"
+#ifdef VTB_HAVE_CGAL_MESHERS
+#include "vtb/meshes/cgal_generate.hh"
+#endif
 #include "vtb/meshes/msh_io.hh"
 
 #include <Eigen/Geometry>
@@ -88,6 +91,18 @@ AnyMesh load_mesh(const Scene& scene) {
     } catch (const InputError& e) {
       throw InputError(scene.file.string() + ": [mesh].file: " + e.what());
     }
+  }
+  if (m.mesher == "cgal") {
+#ifdef VTB_HAVE_CGAL_MESHERS
+    try {
+      if (m.shape == "rectangle") return mesh_rectangle(m.size, m.nodes);
+      return mesh_box(m.size, m.nodes);
+    } catch (const InputError& e) {
+      throw InputError(scene.file.string() + ": [mesh].generate: " + e.what());
+    }
+#else
+    throw InputError(scene.file.string() + ": [mesh].generate.mesher = \"cgal\": this build has no CGAL meshers");
+#endif
   }
   if (m.shape == "rectangle") return generate_rectangle(m.size, m.divisions);
   return generate_box(m.size, m.divisions);

@@ -89,16 +89,23 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       s.mesh.file = base_dir / r.string("file", std::nullopt);
     } else {
       const toml::table* g = r.table("generate");
-      const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions"});
+      const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions", "mesher", "nodes"});
       s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box"});
       const std::size_t d = s.mesh.shape == "rectangle" ? 2 : 3;
       s.mesh.size = gr.vector("size", d, d);
       if ((s.mesh.size.array() <= 0).any()) gr.fail("size", "entries must be > 0");
-      const Eigen::VectorXd div = gr.vector("divisions", d, d);
-      // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).
-      if ((div.array() != div.array().round()).any() || (div.array() < 1).any() || (div.array() > 2000).any())
-        gr.fail("divisions", "entries must be whole numbers in [1, 2000]");
-      s.mesh.divisions = div.cast<int>();
+      s.mesh.mesher = gr.string("mesher", "structured", {"structured", "cgal"});
+      if (s.mesh.mesher == "cgal") {
+        if (gr.has("divisions")) gr.fail("divisions", "is for mesher = \"structured\"; a CGAL mesh takes nodes");
+        s.mesh.nodes = gr.integer("nodes", std::nullopt, d == 2 ? 4 : 50, 500'000);
+      } else {
+        if (gr.has("nodes")) gr.fail("nodes", "is for mesher = \"cgal\"; a structured mesh takes divisions");
+        const Eigen::VectorXd div = gr.vector("divisions", d, d);
+        // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).
+        if ((div.array() != div.array().round()).any() || (div.array() < 1).any() || (div.array() > 2000).any())
+          gr.fail("divisions", "entries must be whole numbers in [1, 2000]");
+        s.mesh.divisions = div.cast<int>();
+      }
     }
   }
 

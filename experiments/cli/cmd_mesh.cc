@@ -62,7 +62,9 @@ Action add_mesh(CLI::App& app) {
       ->check(CLI::IsMember({"rectangle", "box", "plate", "slab", "sphere"}));
   gen->add_option("--size", o->size, "Extent per axis (m), rectangle and box");
   gen->add_option("--divisions", o->divisions, "Cells per axis, rectangle and box");
-  gen->add_option("--nodes", o->nodes, "Node count: exact for plate, approximate (15 %) for slab and sphere");
+  gen->add_option("--nodes", o->nodes,
+                  "Node count: exact for plate and an unstructured rectangle, approximate (15 %) for slab, sphere "
+                  "and an unstructured box");
   gen->add_option("-o,--out", o->out, "Output .msh file")->required();
   CLI::App* conv = cmd->add_subcommand("convert", "Convert a .msh (2.2 or 4.x) to .msh 4.1 or .vtu");
   conv->add_option("in", o->in, "Input .msh")->required();
@@ -99,6 +101,17 @@ Action add_mesh(CLI::App& app) {
         return 0;
       }
       const std::size_t d = o->shape == "rectangle" ? 2 : 3;
+      if (o->nodes > 0) { // unstructured (CGAL)
+        if (o->size.size() != d || !o->divisions.empty())
+          throw InputError("vtb mesh generate " + o->shape + " --nodes N: needs --size with " + std::to_string(d) +
+                           " values and no --divisions");
+        if (d == 2)
+          write_msh(mesh_rectangle(Eigen::Vector2d(o->size[0], o->size[1]), o->nodes), o->out);
+        else
+          write_msh(mesh_box(Eigen::Vector3d(o->size[0], o->size[1], o->size[2]), o->nodes), o->out);
+        std::cout << "wrote " << o->out << "\n";
+        return 0;
+      }
       if (o->size.size() != d || o->divisions.size() != d)
         throw InputError("vtb mesh generate " + o->shape + ": --size and --divisions need " + std::to_string(d) +
                          " values");

@@ -194,6 +194,16 @@ Polygon paper_plate() {
   return p;
 }
 
+Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes) {
+  if (!(size.array() > 0).all()) throw InputError("rectangle: the size must be > 0");
+  Polygon p;
+  p.vertices = {{0.0, 0.0}, {size.x(), 0.0}, {size.x(), size.y()}, {0.0, size.y()}};
+  p.edge_groups = {{"bottom", {0}}, {"right", {1}}, {"top", {2}}, {"left", {3}}};
+  Mesh2 m = mesh_polygon(p, nodes);
+  m.source = "CGAL rectangle (" + std::to_string(m.num_nodes()) + " nodes)";
+  return m;
+}
+
 Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
   if (poly.vertices.size() < 3) throw InputError("polygon: needs at least 3 vertices");
   if (nodes < static_cast<int>(poly.vertices.size()) || nodes > 2'000'000)

@@ -109,11 +109,11 @@ C3t3 run_mesh_3(const Domain& domain, double size, double feature_size) {
                                  params::exude(params::sliver_bound = 10.0));
 }
 
-Mesh3 mesh_slab(double size) {
+Mesh3 mesh_slab(double size, const Eigen::Vector3d& hi = Eigen::Vector3d(0.2, 0.05, 0.02)) {
   using Domain = CGAL::Polyhedral_mesh_domain_with_features_3<K, Surface>;
   using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
   using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index>;
-  const Eigen::Vector3d lo(0, 0, 0), hi(0.2, 0.05, 0.02);
+  const Eigen::Vector3d lo(0, 0, 0);
   const Surface s = box_surface(lo, hi);
   Domain domain(s);
   domain.detect_features();
@@ -142,17 +142,17 @@ Mesh3 mesh_sphere(double size) {
 
 } // namespace
 
-Mesh3 mesh_solid(const std::string& shape, int nodes) {
-  if (shape != "slab" && shape != "sphere") throw InputError("mesh_solid: shape must be slab or sphere, not " + shape);
+namespace {
+
+/// Mesh_3 to about `nodes` nodes: a first guess of the element size from regular tetrahedra,
+/// then the count's s^-3 law to correct it; the closest of at most 8 tries, within 15 %.
+template <class Make> Mesh3 mesh_to_count(const std::string& what, double volume, int nodes, Make&& make) {
   if (nodes < 50 || nodes > 500'000)
-    throw InputError("mesh_solid: node count " + std::to_string(nodes) + " out of [50, 500000]");
-  const double volume = shape == "slab" ? 0.2 * 0.05 * 0.02 : 4.0 / 3.0 * 3.14159265358979 * 0.05 * 0.05 * 0.05;
-  // A first guess from regular tetrahedra (about 6 per node, volume s^3 / (6 sqrt 2) each),
-  // then the count's s^-3 law to correct; stop within 10 %.
+    throw InputError(what + ": node count " + std::to_string(nodes) + " out of [50, 500000]");
   double size = std::cbrt(volume * std::sqrt(2.0) / nodes) * 1.6;
   Mesh3 best;
   for (int it = 0; it < 8; ++it) {
-    Mesh3 m = shape == "slab" ? mesh_slab(size) : mesh_sphere(size);
+    Mesh3 m = make(size);
     const double ratio = static_cast<double>(m.num_nodes()) / nodes;
     if (best.num_nodes() == 0 || std::abs(m.num_nodes() - nodes) < std::abs(best.num_nodes() - nodes))
       best = std::move(m);
@@ -160,10 +160,24 @@ Mesh3 mesh_solid(const std::string& shape, int nodes) {
     size *= std::cbrt(ratio);
   }
   if (std::abs(static_cast<double>(best.num_nodes()) / nodes - 1.0) > 0.15)
-    throw InputError("mesh_solid: could not reach about " + std::to_string(nodes) + " nodes (got " +
+    throw InputError(what + ": could not reach about " + std::to_string(nodes) + " nodes (got " +
                      std::to_string(best.num_nodes()) + ")");
-  best.source = "CGAL " + shape + " (" + std::to_string(best.num_nodes()) + " nodes)";
+  best.source = "CGAL " + what + " (" + std::to_string(best.num_nodes()) + " nodes)";
   return best;
+}
+
+} // namespace
+
+Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes) {
+  if (!(size.array() > 0).all()) throw InputError("box: the size must be > 0");
+  return mesh_to_count("box", size.prod(), nodes, [&](double h) { return mesh_slab(h, size); });
+}
+
+Mesh3 mesh_solid(const std::string& shape, int nodes) {
+  if (shape != "slab" && shape != "sphere") throw InputError("mesh_solid: shape must be slab or sphere, not " + shape);
+  const double volume = shape == "slab" ? 0.2 * 0.05 * 0.02 : 4.0 / 3.0 * 3.14159265358979 * 0.05 * 0.05 * 0.05;
+  return mesh_to_count(shape, volume, nodes,
+                       [&](double h) { return shape == "slab" ? mesh_slab(h) : mesh_sphere(h); });
 }
 
 } // namespace vtb

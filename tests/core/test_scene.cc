@@ -135,6 +135,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"total_force = [1.0, 0.0]",
                 "total_force = [1.0, 0.0]\n[[load]]\npoint = [0.1, 0.3]\ntotal_force = [0.0, 1.0]",
                 "load[1].point is 0.25 m from the mesh"},
+        BadCase{"divisions = [4, 2]", "divisions = [4, 2], mesher = \"cgal\", nodes = 100",
+                "[mesh].generate.divisions: is for mesher = \"structured\"; a CGAL mesh takes nodes"},
+        BadCase{"divisions = [4, 2]", "divisions = [4, 2], nodes = 100",
+                "[mesh].generate.nodes: is for mesher = \"cgal\"; a structured mesh takes divisions"},
+        BadCase{"divisions = [4, 2]", "mesher = \"cgal\", nodes = 2",
+                "[mesh].generate.nodes: = 2: must be in [4, 500000]"},
+        BadCase{"divisions = [4, 2]", "mesher = \"delaunay\"",
+                "[mesh].generate.mesher: = \"delaunay\": must be one of structured cgal"},
         // Every further key with a range or a set of values (issue: keys without a bad case).
         BadCase{"thickness = 0.001", "thickness = 0.0", "[material].thickness: = 0: must be > 0"},
         BadCase{"retardation_time = ", "retardation_time = -1.0 #", "[material].retardation_time: = -1: must be >= 0"},
@@ -227,6 +235,42 @@ TEST(Scene, RampAndStepProfiles) {
   EXPECT_EQ(ramp_factor(2.0, 1.0, 0.5), 1.0);
   EXPECT_DOUBLE_EQ(ramp_rate(1.25, 1.0, 0.5), 2.0);
   EXPECT_EQ(ramp_rate(2.0, 1.0, 0.5), 0.0);
+}
+
+} // namespace
+} // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(Scene, AnUnstructuredRectangleAndBoxComeFromCgal) {
+  // mesher = "cgal": a rectangle with exactly the asked node count (mesh_polygon's contract),
+  // covering [0, size] (the cells' areas sum to w h to round-off), with the structured
+  // generator's group names; a box within 15 % of its count with its six faces as groups.
+  const Scene r = parse_scene(
+      "[scene]\nduration = 1.0\noutput_interval = 0.1\n[mesh]\n"
+      "generate = { shape = \"rectangle\", size = [0.3, 0.1], mesher = \"cgal\", nodes = 200 }\n"
+      "[material]\nyoung_modulus = 5.0e4\npoisson_ratio = 0.3\ndensity = 1000.0\n[[fix]]\ngroup = \"left\"\n",
+      "cgal.toml", ".");
+  const Mesh2 m = std::get<Mesh2>(load_mesh(r));
+  EXPECT_EQ(m.num_nodes(), 200);
+  double area = 0;
+  for (const auto& c : m.cells) area += signed_measure(m, c);
+  EXPECT_NEAR(area, 0.03, 1e-15);
+  for (const char* g : {"left", "right", "bottom", "top"}) EXPECT_GE(m.groups.at(g).nodes.size(), 3u) << g;
+  EXPECT_NO_THROW(build_model<2>(r, m));
+  const Scene b =
+      parse_scene("[scene]\nduration = 1.0\noutput_interval = 0.1\n[mesh]\n"
+                  "generate = { shape = \"box\", size = [0.1, 0.04, 0.03], mesher = \"cgal\", nodes = 300 }\n"
+                  "[material]\nyoung_modulus = 5.0e4\npoisson_ratio = 0.3\ndensity = 1000.0\n",
+                  "cgal.toml", ".");
+  const Mesh3 box = std::get<Mesh3>(load_mesh(b));
+  EXPECT_NEAR(box.num_nodes(), 300, 45);
+  double volume = 0;
+  for (const auto& c : box.cells) volume += signed_measure(box, c);
+  EXPECT_NEAR(volume, 0.1 * 0.04 * 0.03, 1e-12 * 0.1 * 0.04 * 0.03);
+  for (const char* g : {"left", "right", "bottom", "top", "front", "back"})
+    EXPECT_GE(box.groups.at(g).nodes.size(), 3u) << g;
 }
 
 } // namespace

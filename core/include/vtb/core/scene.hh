@@ -61,7 +61,9 @@ struct MeshDesc {
   std::filesystem::path file; ///< resolved against the scene's folder
   std::string shape;          ///< "rectangle" | "box" when generated
   Eigen::VectorXd size;
-  Eigen::VectorXi divisions;
+  Eigen::VectorXi divisions;         ///< structured
+  std::string mesher = "structured"; ///< "structured" | "cgal" (unstructured, about `nodes` nodes)
+  int nodes = 0;                     ///< cgal
   bool generated() const { return !shape.empty(); }
 };
 

@@ -31,6 +31,14 @@ Polygon paper_plate();
 /// Throws InputError if no mesh with that count and quality is found. Deterministic.
 Mesh2 mesh_polygon(const Polygon& polygon, int nodes, double min_angle_deg = 20.0);
 
+/// An unstructured rectangle [0, size]: mesh_polygon of its four corners, exactly `nodes`
+/// nodes; groups bottom, right, top, left (as the structured generator names them).
+Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes);
+
+/// An unstructured box [0, size] meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %),
+/// sharp edges protected; groups left/right/bottom/top/front/back. Deterministic.
+Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes);
+
 /// 3D solids meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %): shape "slab"
 /// (0.2 x 0.05 x 0.02 box, sharp edges protected; groups left/right/bottom/top/front/back)
 /// or "sphere" (radius 0.05 at the origin; group "surface"). Cells have radius-edge ratio
