@@ -37,7 +37,9 @@ for m in "${mutations[@]}"; do
   if ! cmake --build "$build" -j "$(nproc)" > "$build/mutation.log" 2>&1; then
     echo "[$name] does not compile"; tail -5 "$build/mutation.log"; survived=1
   else
-    failed=$(cd "$build" && ctest -j "$(nproc)" 2>&1 | grep -E "^\s+[0-9]+ - " | sed -E 's/^\s+[0-9]+ - //; s/ \(.*//' )
+    # A mutation can make a solver crawl (CVODE with a wrong Jacobian): 120 s per test, a
+    # time-out counts as caught.
+    failed=$(cd "$build" && ctest -j "$(nproc)" --timeout 120 2>&1 | grep -E "^\s+[0-9]+ - " | sed -E 's/^\s+[0-9]+ - //; s/ \(.*//' )
     n=$(printf '%s' "$failed" | grep -c . || true)
     if [ "$n" -eq 0 ]; then echo "[$name] SURVIVED: no test failed"; survived=1
     else echo "[$name] caught by $n tests:"; printf '%s\n' "$failed" | sed 's/^/    /'; fi

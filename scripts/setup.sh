@@ -13,7 +13,7 @@ VTB_PACKAGES=(
   libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
   libgtest-dev libgmock-dev libbenchmark-dev
   libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev openmpi-bin python3
-  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri
+  libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri zlib1g-dev
 )
 
 vtb_install_packages() {

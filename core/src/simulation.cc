@@ -1,6 +1,7 @@
 #include "vtb/core/simulation.hh"
 
 #include "vtb/core/calibration.hh"
+#include "vtb/core/cell_fields.hh"
 #include "vtb/core/cvode_solver.hh"
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
@@ -40,7 +41,10 @@ double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<di
   std::vector<Vec<dim>> reactions;
   support_reactions(model, s, scratch, ext, reactions);
   traj.reaction.push_back(std::move(reactions));
-  if (record_field) traj.field.push_back(s.u);
+  if (record_field) {
+    traj.field.push_back(s.u);
+    traj.velocity.push_back(s.v);
+  }
   return max_strain(model.net, s.u);
 }
 
@@ -72,13 +76,15 @@ template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const doubl
     out.probe_u.push_back(std::move(pu));
     out.reaction.push_back(std::move(re));
     if (traj.field.size() == n) out.field.push_back(mix(traj.field[a], traj.field[b]));
+    if (traj.velocity.size() == n) out.velocity.push_back(mix(traj.velocity[a], traj.velocity[b]));
   }
-  const bool fields = traj.field.size() == n;
+  const bool fields = traj.field.size() == n, velocities = traj.velocity.size() == n;
   for (int drop = 0; drop < 2; ++drop) {
     traj.t.pop_back();
     traj.probe_u.pop_back();
     traj.reaction.pop_back();
     if (fields) traj.field.pop_back();
+    if (velocities) traj.velocity.pop_back();
   }
   for (int k = 0; k < count; ++k) {
     const auto i = static_cast<std::size_t>(k);
@@ -86,6 +92,7 @@ template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const doubl
     traj.probe_u.push_back(std::move(out.probe_u[i]));
     traj.reaction.push_back(std::move(out.reaction[i]));
     if (fields) traj.field.push_back(std::move(out.field[i]));
+    if (velocities) traj.velocity.push_back(std::move(out.velocity[i]));
   }
 }
 
@@ -239,19 +246,32 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
     Trajectory<dim> traj;
     RunReport rep = simulate(model, o, traj, ov.frames);
     write_run_outputs(out_dir, model, traj, rep, scene.name);
-    if (ov.frames) {
-      std::filesystem::create_directories(out_dir / "frames");
-      for (std::size_t k = 0; k < traj.field.size(); ++k) {
-        char name[32];
-        std::snprintf(name, sizeof name, "frame_%04zu.vtu", k);
-        write_vtu(model.mesh, out_dir / "frames" / name, traj.field[k]);
-      }
-      write_pvd(out_dir, traj.t);
-    }
+    if (ov.frames) write_frames(model, traj, out_dir);
     return rep;
   });
 }
 
+template <int dim>
+void write_frames(const Model<dim>& model, const Trajectory<dim>& traj, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir / "frames");
+  std::vector<float> strain;
+  std::vector<double> force;
+  for (std::size_t k = 0; k < traj.field.size(); ++k) {
+    cell_max_principal_strain(model.mesh, traj.field[k], strain);
+    cell_spring_force(model.mesh, model.net, traj.field[k], force);
+    std::vector<VtuField> fields = {point_vectors<dim>("displacement", traj.field[k])};
+    if (k < traj.velocity.size()) fields.push_back(point_vectors<dim>("velocity", traj.velocity[k]));
+    fields.push_back(VtuField{"max_principal_strain", 1, true, std::vector<double>(strain.begin(), strain.end())});
+    fields.push_back(VtuField{"spring_force", 1, true, force});
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04zu.vtu", k);
+    write_vtu(model.mesh, dir / "frames" / name, fields);
+  }
+  write_pvd(dir, traj.t);
+}
+
+template void write_frames<2>(const Model<2>&, const Trajectory<2>&, const std::filesystem::path&);
+template void write_frames<3>(const Model<3>&, const Trajectory<3>&, const std::filesystem::path&);
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
 template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
 template double record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool);

@@ -2,6 +2,8 @@
 
 #include "colormap.hh"
 
+#include "vtb/core/cell_fields.hh"
+
 #include "vtb/meshes/input_error.hh"
 
 #include <GLFW/glfw3.h>
@@ -165,7 +167,7 @@ template <int dim> void App<dim>::handle_mouse() {
 template <int dim> void App<dim>::draw_body() {
   const auto& model = m_sim->model();
   const auto& u = m_sim->state().u;
-  cell_strains<dim>(model.mesh, u, m_strain);
+  cell_max_principal_strain<dim>(model.mesh, u, m_strain);
   // The colour scale's top is the 98th percentile of the cells' strains, not the maximum: a
   // pull on one node of a membrane makes a near-singular spot that would otherwise leave the
   // rest of the body one colour. It follows a rise at once and a fall slowly (3 % a frame,

@@ -1,7 +1,5 @@
 #include "surface.hh"
 
-#include <Eigen/Dense>
-
 #include <algorithm>
 #include <limits>
 #include <map>
@@ -54,23 +52,6 @@ template <int dim> Surface<dim> make_surface(const Mesh<dim>& mesh) {
   return s;
 }
 
-template <int dim> void cell_strains(const Mesh<dim>& mesh, const Nodal<dim>& u, std::vector<float>& out) {
-  out.resize(mesh.cells.size());
-  for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
-    const auto& cell = mesh.cells[c];
-    Mat<dim> Dm, Ds;
-    for (int k = 0; k < dim; ++k) {
-      Dm.col(k) = mesh.points.col(cell[static_cast<std::size_t>(k) + 1]) - mesh.points.col(cell[0]);
-      Ds.col(k) = Dm.col(k) + u.col(cell[static_cast<std::size_t>(k) + 1]) - u.col(cell[0]);
-    }
-    const Mat<dim> F = Ds * Dm.inverse();
-    const Mat<dim> E = 0.5 * (F.transpose() * F - Mat<dim>::Identity());
-    const Vec<dim> ev = Eigen::SelfAdjointEigenSolver<Mat<dim>>(E, Eigen::EigenvaluesOnly).eigenvalues();
-    const double m = std::max(std::abs(ev.minCoeff()), std::abs(ev.maxCoeff()));
-    out[c] = std::isfinite(m) ? static_cast<float>(m) : std::numeric_limits<float>::infinity();
-  }
-}
-
 template <int dim>
 int nearest_of(const std::vector<int>& candidates, const Mesh<dim>& mesh, const Nodal<dim>& u, const Vec<dim>& p) {
   int best = -1;
@@ -87,8 +68,6 @@ int nearest_of(const std::vector<int>& candidates, const Mesh<dim>& mesh, const 
 
 template Surface<2> make_surface<2>(const Mesh<2>&);
 template Surface<3> make_surface<3>(const Mesh<3>&);
-template void cell_strains<2>(const Mesh<2>&, const Nodal<2>&, std::vector<float>&);
-template void cell_strains<3>(const Mesh<3>&, const Nodal<3>&, std::vector<float>&);
 template int nearest_of<2>(const std::vector<int>&, const Mesh<2>&, const Nodal<2>&, const Vec<2>&);
 template int nearest_of<3>(const std::vector<int>&, const Mesh<3>&, const Nodal<3>&, const Vec<3>&);
 

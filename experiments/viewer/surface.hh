@@ -1,8 +1,8 @@
 #pragma once
 /// \file
 /// What the viewer draws of a mesh: the triangles (a 2D mesh's cells, or a tet mesh's
-/// boundary faces, outward), the cell each belongs to (for its strain colour), the outline
-/// edges, and the boundary nodes a pull may grab; and the strain of each cell.
+/// boundary faces, outward), the cell each belongs to (for its strain colour, from
+/// core's cell_max_principal_strain), the outline edges, and the boundary nodes a pull may grab.
 
 #include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
@@ -20,10 +20,6 @@ template <int dim> struct Surface {
 };
 
 template <int dim> Surface<dim> make_surface(const Mesh<dim>& mesh);
-
-/// Largest principal Green-Lagrange strain magnitude of each cell, E = (F^T F - I) / 2 with
-/// F = Ds Dm^-1 the cell's deformation gradient, at displacement u; `out` is resized once.
-template <int dim> void cell_strains(const Mesh<dim>& mesh, const Nodal<dim>& u, std::vector<float>& out);
 
 /// Among `candidates`, the node nearest to p (positions X + u); -1 if there is none.
 template <int dim>

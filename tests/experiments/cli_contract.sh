@@ -42,6 +42,10 @@ check "unstable run exits 2 with stable=false" '[ $rc -eq 2 ] && grep -q "\"stab
 "$vtb" run "$src/experiments/scenes/plate123_step.toml" --solver fem --duration 0.08 --frames --out "$work/out_frames" > /dev/null; rc=$?
 check "fem run with frames" '[ $rc -eq 0 ] && [ -s "$work/out_frames/frames.pvd" ] && [ $(ls "$work/out_frames/frames" | wc -l) -eq 3 ]'
 
+"$vtb" run "$src/experiments/scenes/plate123_step.toml" --duration 0.08 --frames --out "$work/out_sframes" > /dev/null; rc=$?
+f="$work/out_sframes/frames/frame_0002.vtu"
+check "spring run with frames: compressed VTU with displacement, velocity, strain, spring force" '[ $rc -eq 0 ] && [ $(ls "$work/out_sframes/frames" | wc -l) -eq 3 ] && grep -q vtkZLibDataCompressor "$f" && grep -q "Name=\"displacement\"" "$f" && grep -q "Name=\"velocity\"" "$f" && grep -q "Name=\"max_principal_strain\"" "$f" && grep -q "Name=\"spring_force\"" "$f" && [ ! -e "$f.part" ]'
+
 "$vtb" compare "$src/experiments/scenes/plate123_step.toml" --solvers filtered,implicit-euler --reference cvode --dt 0.01 --out "$work/out_cmp" > "$work/cmp.txt" 2> /dev/null; rc=$?
 check "compare writes compare.csv and a table" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_cmp/compare.csv") -eq 4 ] && grep -q "implicit-euler" "$work/cmp.txt"'
 

@@ -1,5 +1,7 @@
 #include "vtb/harness/reproduce.hh"
 
+#include "vtb/core/cell_fields.hh"
+
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
@@ -63,7 +65,11 @@ void write_fig3(const std::filesystem::path& dir, const std::string& solver, con
       csv << i << ',' << model.mesh.points(0, i) << ',' << model.mesh.points(1, i) << ',' << tr.field[k](0, i) << ','
           << tr.field[k](1, i) << '\n';
     write_text(dir / (name.str() + ".csv"), csv.str());
-    write_vtu(model.mesh, dir / (name.str() + ".vtu"), tr.field[k]);
+    std::vector<float> strain;
+    cell_max_principal_strain(model.mesh, tr.field[k], strain);
+    write_vtu(model.mesh, dir / (name.str() + ".vtu"),
+              {point_vectors<2>("displacement", tr.field[k]),
+               VtuField{"max_principal_strain", 1, true, std::vector<double>(strain.begin(), strain.end())}});
   }
 }
 

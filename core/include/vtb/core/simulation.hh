@@ -14,6 +14,7 @@ template <int dim> struct Trajectory {
   std::vector<std::vector<Vec<dim>>> probe_u;  ///< [sample][probe]
   std::vector<std::vector<Vec<dim>>> reaction; ///< [sample][support]: force the support exerts on the body
   std::vector<Nodal<dim>> field;               ///< [sample] all displacements, when asked for
+  std::vector<Nodal<dim>> velocity;            ///< [sample] all velocities, with the field (spring solvers)
 };
 
 struct StepStats {
@@ -73,10 +74,16 @@ template <int dim>
 void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>& scratch, Nodal<dim>& ext,
                        std::vector<Vec<dim>>& out);
 
-/// Appends the sample of state s to traj (time, probes, support reactions, the whole field if
-/// record_field) and returns the largest spring strain in it. Shared by every spring solver.
+/// Appends the sample of state s to traj (time, probes, support reactions, the whole field and
+/// velocity if record_field) and returns the largest spring strain in it. Shared by every spring solver.
 template <int dim>
 double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field);
+
+/// Writes frames/frame_NNNN.vtu (one per sample of a trajectory recorded with its field) and
+/// frames.pvd into dir: displacement and velocity per node, the largest principal strain and
+/// the mean spring force per cell (compressed binary VTU).
+template <int dim>
+void write_frames(const Model<dim>& model, const Trajectory<dim>& traj, const std::filesystem::path& dir);
 
 /// Options of `vtb run` that override the scene.
 struct RunOverrides {

@@ -1,0 +1,23 @@
+#pragma once
+/// \file
+/// Per-cell fields of a deformed spring model, for the frames vtb writes and the viewer's
+/// colours: the cell's largest principal Green-Lagrange strain, and the mean axial force of
+/// the springs along its edges.
+
+#include "vtb/core/spring_network.hh"
+
+#include <vector>
+
+namespace vtb {
+
+/// max |eigenvalue| of E = (F^T F - I) / 2, F = Ds Dm^-1 the cell's deformation gradient at
+/// displacement u; `out` is resized to the cell count (no allocation once sized). A
+/// non-finite cell gives +inf.
+template <int dim> void cell_max_principal_strain(const Mesh<dim>& mesh, const Nodal<dim>& u, std::vector<float>& out);
+
+/// The mean over a cell's edges of its spring's axial force k (l - L0) (N, tension > 0).
+template <int dim>
+void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
+                       std::vector<double>& out);
+
+} // namespace vtb
