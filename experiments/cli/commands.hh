@@ -18,5 +18,6 @@ Action add_sweep(CLI::App& app);
 Action add_reproduce(CLI::App& app);
 Action add_haptics(CLI::App& app);
 Action add_view(CLI::App& app);
+Action add_study(CLI::App& app);
 
 } // namespace vtb::cli

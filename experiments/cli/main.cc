@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action reproduce = vtb::cli::add_reproduce(app);
   vtb::cli::Action haptics = vtb::cli::add_haptics(app);
   vtb::cli::Action view = vtb::cli::add_view(app);
+  vtb::cli::Action study = vtb::cli::add_study(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -30,6 +31,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("reproduce")) return reproduce();
     if (app.got_subcommand("haptics")) return haptics();
     if (app.got_subcommand("view")) return view();
+    if (app.got_subcommand("study")) return study();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

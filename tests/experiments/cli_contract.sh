@@ -83,5 +83,10 @@ check "view of a bad scene is bad input before any window" '[ $rc -eq 1 ] && gre
 env -u DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --drag 1,2 2> "$work/err"; rc=$?
 check "view refuses a malformed --drag" '[ $rc -eq 1 ] && grep -q "\-\-drag" "$work/err"'
 
+"$vtb" study "$src/experiments/scenes/plate123_step.toml" --quick --solvers filtered-full,implicit-euler --reference cvode --out "$work/out_study" > "$work/study.txt" 2> /dev/null; rc=$?
+check "study writes study.csv (header + 6 runs) and study_plot.tex" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_study/study.csv") -eq 7 ] && [ -s "$work/out_study/study_plot.tex" ] && grep -q "Pareto front" "$work/study.txt"'
+"$vtb" study "$src/experiments/scenes/plate123_step.toml" --solvers fem --out "$work/out_study2" 2> "$work/err"; rc=$?
+check "study refuses a solver it cannot ladder" '[ $rc -eq 1 ] && grep -q "not one to study" "$work/err" && [ ! -e "$work/out_study2" ]'
+
 if [ $fail -eq 0 ]; then echo "cli contract: all checks passed"; fi
 exit $fail

@@ -1,13 +1,17 @@
 // The harness: error metrics on synthetic trajectories, compare end to end, the sweep's
 // explicit stability boundary.
+#include "support/fresh_dir.hh"
 #include "support/small_models.hh"
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/harness/compare.hh"
+#include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <iostream>
 
 namespace vtb {
@@ -183,6 +187,74 @@ TEST(Harness, NumbersThatCannotMislead) {
   const std::string first =
       table.substr(table.find("\nexplicit"), table.find('\n', table.find("\nexplicit") + 1) - table.find("\nexplicit"));
   EXPECT_EQ(first.back(), '-') << first;
+}
+
+} // namespace
+} // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(Study, ParetoFrontKeepsTheRunsNoOtherBeatsInBothErrorAndCost) {
+  std::vector<harness::StudyRow> rows(5);
+  const double err[] = {0.1, 0.05, 0.2, 0.01, 0.3}, cost[] = {1.0, 2.0, 3.0, 10.0, 0.5};
+  for (int k = 0; k < 5; ++k) {
+    rows[static_cast<std::size_t>(k)].error_all = err[k];
+    rows[static_cast<std::size_t>(k)].cost = cost[k];
+  }
+  rows[4].stable = false; // cheapest, but unstable: never on the front
+  harness::mark_pareto(rows);
+  EXPECT_TRUE(rows[0].pareto);
+  EXPECT_TRUE(rows[1].pareto);
+  EXPECT_FALSE(rows[2].pareto) << "beaten by run 0 in both";
+  EXPECT_TRUE(rows[3].pareto);
+  EXPECT_FALSE(rows[4].pareto);
+}
+
+TEST(Study, LaddersAgainstCvodeShowFirstOrderAndWriteTheirFiles) {
+  // A quick study of a small plate against CVODE (the spring model's exact trajectory):
+  // implicit Euler's error falls with dt at first order (the quick ladder divides dt by 4
+  // each time: a ratio of 4 (1 + O(dt/T)), asserted above 3), every row is measured against
+  // the same samples, and study.csv and study_plot.tex are written whole.
+  Scene s = parse_scene(test::plate_scene(8, 2, R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.2, 0.1]
+[[probe]]
+name = "tip"
+point = [0.2, 0.025]
+[solver]
+dt = 2e-3
+)"),
+                        "plate.toml", ".");
+  s.duration = 0.2;
+  s.output_interval = 0.02;
+  harness::StudyOptions o;
+  o.solvers = {"filtered-full", "implicit-euler", "cvode"};
+  o.reference = "cvode";
+  o.quick = true;
+  const auto res = harness::run_study(s, o);
+  ASSERT_EQ(res.rows.size(), 3u + 3u + 2u);
+  std::vector<double> ie;
+  for (const auto& r : res.rows) {
+    EXPECT_TRUE(r.stable) << r.solver << " " << r.dt;
+    if (r.solver == "implicit-euler") ie.push_back(r.error_all);
+  }
+  ASSERT_EQ(ie.size(), 3u);
+  EXPECT_GT(ie[0] / ie[1], 3.0);
+  EXPECT_GT(ie[1] / ie[2], 3.0);
+  EXPECT_TRUE(std::any_of(res.rows.begin(), res.rows.end(), [](const auto& r) { return r.pareto; }));
+  const test::FreshDir dir;
+  std::string note;
+  harness::write_study(res, dir.path(), note);
+  std::ifstream csv(dir / "study.csv");
+  std::string header;
+  std::getline(csv, header);
+  EXPECT_EQ(header.rfind("solver,dt,rtol,stable,error_all,error_probes", 0), 0u) << header;
+  EXPECT_TRUE(std::filesystem::exists(dir / "study_plot.tex"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "study.csv.part"));
 }
 
 } // namespace
