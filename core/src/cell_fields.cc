@@ -26,6 +26,24 @@ template <int dim> void cell_max_principal_strain(const Mesh<dim>& mesh, const N
   }
 }
 
+template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<dim>& u) {
+  double worst = 0;
+  for (const auto& cell : mesh.cells) {
+    Mat<dim> Dm, Du;
+    for (int k = 0; k < dim; ++k) {
+      const int v = cell[static_cast<std::size_t>(k) + 1];
+      Dm.col(k) = mesh.points.col(v) - mesh.points.col(cell[0]);
+      Du.col(k) = u.col(v) - u.col(cell[0]);
+    }
+    const Mat<dim> g = Du * Dm.inverse();
+    const Mat<dim> eps = 0.5 * (g + g.transpose());
+    const double m =
+        Eigen::SelfAdjointEigenSolver<Mat<dim>>(eps, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+    if (!(m <= worst)) worst = m; // propagates NaN
+  }
+  return worst;
+}
+
 template <int dim>
 void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
                        std::vector<double>& out) {
@@ -50,6 +68,8 @@ void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, con
 
 template void cell_max_principal_strain<2>(const Mesh<2>&, const Nodal<2>&, std::vector<float>&);
 template void cell_max_principal_strain<3>(const Mesh<3>&, const Nodal<3>&, std::vector<float>&);
+template double max_small_strain<2>(const Mesh<2>&, const Nodal<2>&);
+template double max_small_strain<3>(const Mesh<3>&, const Nodal<3>&);
 template void cell_spring_force<2>(const Mesh<2>&, const SpringNetwork<2>&, const Nodal<2>&, std::vector<double>&);
 template void cell_spring_force<3>(const Mesh<3>&, const SpringNetwork<3>&, const Nodal<3>&, std::vector<double>&);
 

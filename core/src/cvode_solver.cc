@@ -246,7 +246,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
     s.t = t;
     s.u = ode.u();
     s.v = ode.v();
-    rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field));
+    record_sample(model, s, traj, record_field, rep);
   };
   record(0.0);
   const auto start = clock::now();

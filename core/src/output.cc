@@ -37,6 +37,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["failure_time"] = r.failure_time;
   }
   j["max_strain"] = r.max_strain;
+  if (r.solver != "fem") j["max_spring_strain"] = r.max_spring_strain;
   if (r.solver != "fem") {
     j["courant_dt_estimate"] = r.courant_dt;
     j["calibration"] = r.calibration;

@@ -32,7 +32,8 @@ void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>&
 }
 
 template <int dim>
-double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field) {
+double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
+                     RunReport& rep) {
   traj.t.push_back(s.t);
   std::vector<Vec<dim>> pu;
   for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
@@ -45,7 +46,11 @@ double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<di
     traj.field.push_back(s.u);
     traj.velocity.push_back(s.v);
   }
-  return max_strain(model.net, s.u);
+  const double spring = max_strain(model.net, s.u);
+  rep.max_spring_strain = std::max(rep.max_spring_strain, spring);
+  const double small = max_small_strain(model.mesh, s.u);
+  if (!(small <= rep.max_strain)) rep.max_strain = small; // propagates NaN
+  return spring;
 }
 
 std::vector<double> sample_times(double duration, double interval) {
@@ -170,7 +175,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
 
   std::size_t next = 1;
   const auto loop_start = clock::now();
-  auto record = [&]() { rep.max_strain = std::max(rep.max_strain, record_sample(model, s, traj, record_field)); };
+  auto record = [&]() { record_sample(model, s, traj, record_field, rep); };
   record();
   for (long k = 0; k < steps; ++k) {
     const double t1 = static_cast<double>(k + 1) * o.dt; // no drift from summing dt
@@ -195,7 +200,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
         ++count;
       interpolate_last_step(traj, &times[next], count);
       next += static_cast<std::size_t>(count);
-      if (!(rep.max_strain <= kRunawayStrain)) {
+      if (!(rep.max_spring_strain <= kRunawayStrain)) {
         rep.stable = false;
         rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
                       "% of its rest length)" + explicit_hint(o, rep);
@@ -274,8 +279,8 @@ template void write_frames<2>(const Model<2>&, const Trajectory<2>&, const std::
 template void write_frames<3>(const Model<3>&, const Trajectory<3>&, const std::filesystem::path&);
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
 template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
-template double record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool);
-template double record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool);
+template double record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool, RunReport&);
+template double record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool, RunReport&);
 template void support_reactions<2>(const Model<2>&, const State<2>&, Nodal<2>&, Nodal<2>&, std::vector<Vec<2>>&);
 template void support_reactions<3>(const Model<3>&, const State<3>&, Nodal<3>&, Nodal<3>&, std::vector<Vec<3>>&);
 

@@ -77,7 +77,7 @@ template <int dim> void App<dim>::draw_panel() {
   ImGui::Text("t = %.3f s, %ld steps", sim.state().t, st.steps);
   ImGui::Text("step %.1f us (median), physics %.2f ms/frame", st.step_median_us, m_physics_seconds * 1e3);
   ImGui::Text("real-time factor %.2f, %.0f frames/s", st.realtime_factor, ImGui::GetIO().Framerate);
-  ImGui::Text("energy %.4g J, max strain %.3g", st.energy, st.max_strain);
+  ImGui::Text("energy %.4g J, max spring strain %.3g", st.energy, st.max_strain);
   ImGui::Text("pulls: %d (shift+release pins, C lets go)", sim.num_pulls());
   if (st.behind && !m_paused) ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "behind real time: physics over budget");
   const int n = sim.probe_trace(m_trace);

@@ -1,6 +1,8 @@
 // vtb run's files: names, headers, reactions in balance with the loads at rest.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
+#include "vtb/core/cell_fields.hh"
+#include "vtb/core/output.hh"
 #include "vtb/core/simulation.hh"
 
 #include <gtest/gtest.h>
@@ -82,6 +84,39 @@ TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
   const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
   EXPECT_EQ(j["stable"], false);
   EXPECT_LT(j["steps"].get<long>(), 1000);
+}
+
+} // namespace
+} // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(RunOutputs, MaxStrainIsTheFemsDefinitionForEverySolver) {
+  // max_strain is the largest principal small strain of the P1 field (as the FEM computes it
+  // at its cells' centres): exact for a uniform strain on any mesh, zero for a translation;
+  // the spring measure max |l/L0 - 1| is reported beside it as max_spring_strain.
+  const Mesh2 m = generate_rectangle({0.2, 0.05}, {8, 2});
+  Nodal<2> u(2, m.num_nodes());
+  for (int i = 0; i < m.num_nodes(); ++i) u.col(i) << 0.003 * m.points(0, i) - 0.001 * m.points(1, i), 0.01;
+  // grad u = [[0.003, -0.001], [0, 0]]: eps = [[0.003, -0.0005], [-0.0005, 0]], whose largest
+  // eigenvalue is 0.0015 + sqrt(0.0015^2 + 0.0005^2), on every cell.
+  EXPECT_NEAR(max_small_strain<2>(m, u), 0.0015 + std::sqrt(0.0015 * 0.0015 + 0.0005 * 0.0005), 1e-15);
+  u.row(0).setConstant(0.02);
+  EXPECT_EQ(max_small_strain<2>(m, u), 0.0);
+  const RunReport r = [] {
+    Model<2> model = test::model_from(
+        test::plate_scene(8, 2, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.2, 0.0]\n"));
+    model.duration = 0.1;
+    model.output_interval = 0.01;
+    Trajectory<2> tr;
+    IntegratorOptions o;
+    o.kind = "implicit-euler";
+    return simulate(model, o, tr);
+  }();
+  const auto j = nlohmann::json::parse(summary_json(r, "plate"));
+  EXPECT_GT(j["max_strain"].get<double>(), 0.0);
+  EXPECT_GT(j["max_spring_strain"].get<double>(), 0.0);
 }
 
 } // namespace

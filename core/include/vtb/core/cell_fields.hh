@@ -15,6 +15,11 @@ namespace vtb {
 /// non-finite cell gives +inf.
 template <int dim> void cell_max_principal_strain(const Mesh<dim>& mesh, const Nodal<dim>& u, std::vector<float>& out);
 
+/// The largest principal small strain, max over cells of |eigenvalue| of sym(grad u) of the
+/// P1 interpolant of u on the mesh: the definition the FEM's summary uses (at its cells'
+/// centres), so that `max_strain` means one thing for every solver.
+template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<dim>& u);
+
 /// The mean over a cell's edges of its spring's axial force k (l - L0) (N, tension > 0).
 template <int dim>
 void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,

@@ -37,8 +37,9 @@ struct RunReport {
   bool stable = true;
   std::string failure;      ///< why the run was stopped, empty when stable
   double failure_time = -1; ///< simulated time of the failure
-  double max_strain = 0;    ///< max over samples of max |l/L0 - 1|
-  double courant_dt = 0;    ///< predicted stability limit of the explicit scheme (estimate)
+  double max_strain = 0; ///< max over samples of the largest principal small strain (max_small_strain; the FEM's too)
+  double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
+  double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
   std::string calibration;
   double effective_poisson_ratio = 0;
   std::string filter;
@@ -75,9 +76,11 @@ void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>&
                        std::vector<Vec<dim>>& out);
 
 /// Appends the sample of state s to traj (time, probes, support reactions, the whole field and
-/// velocity if record_field) and returns the largest spring strain in it. Shared by every spring solver.
+/// velocity if record_field), raises rep's max_strain and max_spring_strain to the sample's,
+/// and returns the sample's largest spring strain. Shared by every spring solver.
 template <int dim>
-double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field);
+double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
+                     RunReport& rep);
 
 /// Writes frames/frame_NNNN.vtu (one per sample of a trajectory recorded with its field) and
 /// frames.pvd into dir: displacement and velocity per node, the largest principal strain and
