@@ -45,18 +45,10 @@ template <int dim> Vec<dim> as_vec(const Eigen::VectorXd& v, const std::string& 
 /// The distance from a scene point to the node it is snapped to; InputError naming `what`
 /// and the distance when it exceeds the mesh's longest edge (a typo in a coordinate, or the
 /// wrong units, rather than a point on the body).
-template <int dim> double longest_edge(const Mesh<dim>& mesh) {
-  double longest = 0;
-  for (const auto& e : unique_edges(mesh))
-    longest = std::max(longest, (mesh.points.col(e[1]) - mesh.points.col(e[0])).norm());
-  return longest;
-}
-
 template <int dim>
-double snap_distance(const Mesh<dim>& mesh, const Vec<dim>& x, int node, const std::string& what,
+double snap_distance(const Mesh<dim>& mesh, double longest, const Vec<dim>& x, int node, const std::string& what,
                      const std::string& file) {
   const double d = (mesh.points.col(node) - x).norm();
-  const double longest = longest_edge(mesh);
   if (d > longest) {
     std::ostringstream os;
     os << file << ": " << what << ".point is " << d << " m from the mesh (nearest node " << node << " at [";
@@ -67,7 +59,9 @@ double snap_distance(const Mesh<dim>& mesh, const Vec<dim>& x, int node, const s
   return d;
 }
 
-template <int dim> Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDesc& r, const std::string& file) {
+/// `longest` is the mesh's longest edge (the longest spring's rest length).
+template <int dim>
+Selection<dim> resolve(const Mesh<dim>& mesh, double longest, const RegionDesc& r, const std::string& file) {
   RegionSpec<dim> spec;
   const std::string what = file + ": " + r.label;
   if (r.box)
@@ -77,7 +71,7 @@ template <int dim> Selection<dim> resolve(const Mesh<dim>& mesh, const RegionDes
   if (r.point) spec.point = as_vec<dim>(*r.point, r.label + ".point", file);
   Selection<dim> s = select(mesh, spec, what);
   if (s.nodes.empty()) throw InputError(what + ": the region selects no node of mesh " + mesh.source);
-  if (spec.point) snap_distance(mesh, *spec.point, s.nodes.front(), r.label, file);
+  if (spec.point) snap_distance(mesh, longest, *spec.point, s.nodes.front(), r.label, file);
   return s;
 }
 
@@ -114,6 +108,8 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   model.duration = scene.duration;
   model.output_interval = scene.output_interval;
   model.net = build_network(mesh, scene.material, scene.solver.springs);
+  // Every mesh edge is a spring: the longest rest length is the longest edge.
+  const double longest = model.net.rest_length.size() ? model.net.rest_length.maxCoeff() : 0.0;
   const int n = model.net.num_nodes();
   model.constrained.assign(static_cast<std::size_t>(n), 0);
   // A node may sit in two fixes (both hold it at zero) but in no drive shared with anything.
@@ -135,7 +131,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   for (const auto& f : scene.fixes) {
     Support<dim> s;
     s.name = f.region.label;
-    Selection<dim> sel = resolve(mesh, f.region, file);
+    Selection<dim> sel = resolve(mesh, longest, f.region, file);
     s.nodes = std::move(sel.nodes);
     s.facets = std::move(sel.facets);
     if (f.region.box)
@@ -146,7 +142,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   for (const auto& d : scene.drives) {
     Support<dim> s;
     s.name = d.region.label;
-    Selection<dim> sel = resolve(mesh, d.region, file);
+    Selection<dim> sel = resolve(mesh, longest, d.region, file);
     s.nodes = std::move(sel.nodes);
     s.facets = std::move(sel.facets);
     if (d.region.box)
@@ -159,7 +155,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
     claim(static_cast<int>(model.supports.size()) - 1);
   }
   for (const auto& l : scene.loads) {
-    const Selection<dim> sel = resolve(mesh, l.region, file);
+    const Selection<dim> sel = resolve(mesh, longest, l.region, file);
     const Vec<dim> total = as_vec<dim>(l.total_force, l.region.label + ".total_force", file);
     Load<dim> load;
     load.name = l.region.label;
@@ -231,7 +227,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
     const Vec<dim> x = as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file);
     const int node = nearest_node(mesh, x);
     model.probes.push_back({p.name, node});
-    model.probe_distance.push_back(snap_distance(mesh, x, node, "probe \"" + p.name + "\"", file));
+    model.probe_distance.push_back(snap_distance(mesh, longest, x, node, "probe \"" + p.name + "\"", file));
   }
   model.mesh = std::move(mesh);
   return model;

@@ -60,16 +60,20 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   return j.dump(2) + "\n";
 }
 
-namespace {
-
-void write_file(const std::filesystem::path& path, const std::string& text) {
-  std::ofstream f(path, std::ios::binary | std::ios::trunc);
-  if (!f) throw InputError(path.string() + ": cannot write");
-  f << text;
-  if (!f) throw InputError(path.string() + ": write failed");
+void write_files_atomically(const std::filesystem::path& dir,
+                            const std::vector<std::pair<std::string, std::string>>& files) {
+  auto part = [&](const std::string& name) { return dir / (name + ".part"); };
+  for (const auto& [name, text] : files) {
+    std::ofstream f(part(name), std::ios::binary | std::ios::trunc);
+    if (f) f << text;
+    if (!f) {
+      std::error_code ec;
+      for (const auto& [other, unused] : files) std::filesystem::remove(part(other), ec);
+      throw InputError((dir / name).string() + ": cannot write");
+    }
+  }
+  for (const auto& [name, text] : files) std::filesystem::rename(part(name), dir / name);
 }
-
-} // namespace
 
 void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times) {
   std::ostringstream os;
@@ -81,8 +85,7 @@ void write_pvd(const std::filesystem::path& dir, const std::vector<double>& time
     os << "<DataSet timestep=\"" << times[k] << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
   }
   os << "</Collection>\n</VTKFile>\n";
-  write_file(dir / "frames.pvd.part", os.str());
-  std::filesystem::rename(dir / "frames.pvd.part", dir / "frames.pvd");
+  write_files_atomically(dir, {{"frames.pvd", os.str()}});
 }
 
 /// The summary with each probe's node and its distance from the probe's scene point.
@@ -117,12 +120,9 @@ void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model
                 << (dim == 3 ? f[dim - 1] : 0.0) << '\n';
     }
   }
-  const std::pair<const char*, std::string> files[] = {
-      {"probes.csv", probes.str()},
-      {"reactions.csv", reactions.str()},
-      {"summary.json", with_probes(summary_json(report, scene_name), model)}};
-  for (const auto& [name, text] : files) write_file(dir / (std::string(name) + ".part"), text);
-  for (const auto& [name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+  write_files_atomically(dir, {{"probes.csv", probes.str()},
+                               {"reactions.csv", reactions.str()},
+                               {"summary.json", with_probes(summary_json(report, scene_name), model)}});
 }
 
 template void write_run_outputs<2>(const std::filesystem::path&, const Model<2>&, const Trajectory<2>&,

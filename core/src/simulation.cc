@@ -32,8 +32,8 @@ void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>&
 }
 
 template <int dim>
-double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
-                     RunReport& rep) {
+void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
+                   RunReport& rep) {
   traj.t.push_back(s.t);
   std::vector<Vec<dim>> pu;
   for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
@@ -46,11 +46,9 @@ double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<di
     traj.field.push_back(s.u);
     traj.velocity.push_back(s.v);
   }
-  const double spring = max_strain(model.net, s.u);
-  rep.max_spring_strain = std::max(rep.max_spring_strain, spring);
+  rep.max_spring_strain = std::max(rep.max_spring_strain, max_strain(model.net, s.u));
   const double small = max_small_strain(model.mesh, s.u);
   if (!(small <= rep.max_strain)) rep.max_strain = small; // propagates NaN
-  return spring;
 }
 
 std::vector<double> sample_times(double duration, double interval) {
@@ -61,18 +59,16 @@ std::vector<double> sample_times(double duration, double interval) {
   return t;
 }
 
-template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const double* times, int count) {
+template <int dim> void interpolate_last_step(Trajectory<dim>& traj, std::span<const double> times) {
   const std::size_t n = traj.t.size();
   const std::size_t a = n - 2, b = n - 1;
   const double t0 = traj.t[a], t1 = traj.t[b];
   Trajectory<dim> out;
-  for (int k = 0; k < count; ++k) {
-    const double ts = times[k];
-    const bool at_end = t1 - ts <= 1e-9 * (t1 - t0);
-    const double w = at_end ? 1.0 : (ts - t0) / (t1 - t0);
+  for (const double ts : times) {
+    const double w = step_weight(t0, t1, ts);
     auto mix = [&](const auto& x, const auto& y) {
       using T = std::decay_t<decltype(x)>;
-      return at_end ? T(y) : T((1 - w) * x + w * y);
+      return w == 1.0 ? T(y) : T((1 - w) * x + w * y);
     };
     out.t.push_back(ts);
     std::vector<Vec<dim>> pu(traj.probe_u[a].size()), re(traj.reaction[a].size());
@@ -91,8 +87,7 @@ template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const doubl
     if (fields) traj.field.pop_back();
     if (velocities) traj.velocity.pop_back();
   }
-  for (int k = 0; k < count; ++k) {
-    const auto i = static_cast<std::size_t>(k);
+  for (std::size_t i = 0; i < times.size(); ++i) {
     traj.t.push_back(out.t[i]);
     traj.probe_u.push_back(std::move(out.probe_u[i]));
     traj.reaction.push_back(std::move(out.reaction[i]));
@@ -101,8 +96,8 @@ template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const doubl
   }
 }
 
-template void interpolate_last_step<2>(Trajectory<2>&, const double*, int);
-template void interpolate_last_step<3>(Trajectory<3>&, const double*, int);
+template void interpolate_last_step<2>(Trajectory<2>&, std::span<const double>);
+template void interpolate_last_step<3>(Trajectory<3>&, std::span<const double>);
 
 StepStats step_stats(std::vector<double> t) {
   StepStats s;
@@ -165,21 +160,20 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   // Enough steps to reach the duration; each sample time is interpolated within its step.
   const long steps = std::max(1L, static_cast<long>(std::ceil(model.duration / o.dt - 1e-9)));
   rep.steps = steps;
-  const std::vector<double> times = sample_times(model.duration, model.output_interval);
-  traj.t.reserve(times.size() + 1);
-  traj.probe_u.reserve(times.size() + 1);
-  traj.reaction.reserve(times.size() + 1);
-  if (record_field) traj.field.reserve(times.size() + 1);
+  SampleSchedule samples(model.duration, model.output_interval);
+  traj.t.reserve(samples.size() + 1);
+  traj.probe_u.reserve(samples.size() + 1);
+  traj.reaction.reserve(samples.size() + 1);
+  if (record_field) traj.field.reserve(samples.size() + 1);
   std::vector<double> step_time;
   step_time.reserve(static_cast<std::size_t>(steps));
 
-  std::size_t next = 1;
   const auto loop_start = clock::now();
   auto record = [&]() { record_sample(model, s, traj, record_field, rep); };
   record();
   for (long k = 0; k < steps; ++k) {
     const double t1 = static_cast<double>(k + 1) * o.dt; // no drift from summing dt
-    const bool crossing = next < times.size() && times[next] <= t1 + 1e-9 * o.dt;
+    const bool crossing = samples.due(t1, o.dt);
     if (crossing) record(); // the state at the step's start, to interpolate from
     const auto a = clock::now();
     integrator->step(s);
@@ -194,12 +188,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
     }
     if (crossing) {
       record();
-      int count = 0;
-      while (next + static_cast<std::size_t>(count) < times.size() &&
-             times[next + static_cast<std::size_t>(count)] <= t1 + 1e-9 * o.dt)
-        ++count;
-      interpolate_last_step(traj, &times[next], count);
-      next += static_cast<std::size_t>(count);
+      interpolate_last_step(traj, samples.take(t1, o.dt));
       if (!(rep.max_spring_strain <= kRunawayStrain)) {
         rep.stable = false;
         rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
@@ -279,8 +268,8 @@ template void write_frames<2>(const Model<2>&, const Trajectory<2>&, const std::
 template void write_frames<3>(const Model<3>&, const Trajectory<3>&, const std::filesystem::path&);
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
 template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
-template double record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool, RunReport&);
-template double record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool, RunReport&);
+template void record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool, RunReport&);
+template void record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool, RunReport&);
 template void support_reactions<2>(const Model<2>&, const State<2>&, Nodal<2>&, Nodal<2>&, std::vector<Vec<2>>&);
 template void support_reactions<3>(const Model<3>&, const State<3>&, Nodal<3>&, Nodal<3>&, std::vector<Vec<3>>&);
 

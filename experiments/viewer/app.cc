@@ -39,14 +39,13 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
 }
 
 template <int dim>
-App<dim>::App(GLFWwindow* window, const Scene& scene, Mesh<dim> mesh, const ViewOptions& options)
-    : m_window(window), m_surface(make_surface(mesh)) {
+App<dim>::App(GLFWwindow* window, const Scene& scene, std::unique_ptr<LiveSim<dim>> sim, std::string note,
+              const ViewOptions& options)
+    : m_window(window), m_sim(std::move(sim)), m_surface(make_surface(m_sim->model().mesh)), m_edit(m_sim->controls()),
+      m_message(std::move(note)) {
   m_scene = &scene;
   m_scripted = options.frames > 0; // a scripted run ignores the (absent) mouse
   m_wall_start = glfwGetTime();
-  const SimControls c = initial_controls(scene, options, &m_message);
-  m_sim = std::make_unique<LiveSim<dim>>(scene, std::move(mesh), c);
-  m_edit = c;
   const auto& model = m_sim->model();
   for (const auto& sup : model.supports)
     for (int n : sup.nodes) m_fixed.push_back(n);

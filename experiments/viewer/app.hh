@@ -23,7 +23,10 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
 
 template <int dim> class App {
 public:
-  App(GLFWwindow* window, const Scene& scene, Mesh<dim> mesh, const ViewOptions& options);
+  /// Takes the session's simulation (built before the window, so that bad input is found
+  /// first) and the note of initial_controls.
+  App(GLFWwindow* window, const Scene& scene, std::unique_ptr<LiveSim<dim>> sim, std::string note,
+      const ViewOptions& options);
 
   /// One frame: advance the physics by sim_seconds within wall_budget, then draw.
   void frame(double sim_seconds, double wall_budget);

@@ -85,8 +85,10 @@ void write_png(GLFWwindow* w, const std::string& path) {
   }
 }
 
-template <int dim> int session(Window& win, const Scene& scene, Mesh<dim> mesh, const ViewOptions& o) {
-  App<dim> app(win.get(), scene, std::move(mesh), o);
+template <int dim>
+int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live, std::string note,
+            const ViewOptions& o) {
+  App<dim> app(win.get(), scene, std::move(live), std::move(note), o);
   if (o.device) app.set_device_mode(true);
   if (o.drag && !o.device) app.start_drag(o.drag->first, o.drag->second);
   const bool headless = o.frames > 0;
@@ -163,22 +165,17 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
   if (o.frames < 0) throw InputError("--frames must be >= 0");
   if (!o.screenshot.empty() && o.frames == 0) throw InputError("--screenshot needs --frames N (the frame to write)");
   if (o.dt && !(*o.dt > 0)) throw InputError("--dt must be > 0");
-  if (o.device && dimension(load_mesh(scene)) != 2)
-    throw InputError("--device needs a 2D scene (the ProCAT is a planar device)");
-  AnyMesh mesh = load_mesh(scene); // bad input is found before a window opens
-  // The model is built once before the window opens, so that a scene the solvers refuse is
-  // reported as bad input (exit 1) whether or not there is a display.
-  std::visit(
-      [&](const auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        const LiveSim<dim> check(scene, m, initial_controls(scene, o));
-      },
-      mesh);
-  Window win(o, "vtb view: " + scene.name);
+  AnyMesh mesh = load_mesh(scene);
   return std::visit(
       [&](auto& m) {
         constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        return session<dim>(win, scene, std::move(m), o);
+        if (o.device && dim != 2) throw InputError("--device needs a 2D scene (the ProCAT is a planar device)");
+        // The simulation is built before the window opens, so that a scene the solvers refuse
+        // is reported as bad input (exit 1) whether or not there is a display.
+        std::string note;
+        auto sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), initial_controls(scene, o, &note));
+        Window win(o, "vtb view: " + scene.name);
+        return session<dim>(win, scene, std::move(sim), std::move(note), o);
       },
       mesh);
 }

@@ -176,8 +176,7 @@ Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes) {
 Mesh3 mesh_solid(const std::string& shape, int nodes) {
   if (shape != "slab" && shape != "sphere") throw InputError("mesh_solid: shape must be slab or sphere, not " + shape);
   const double volume = shape == "slab" ? 0.2 * 0.05 * 0.02 : 4.0 / 3.0 * 3.14159265358979 * 0.05 * 0.05 * 0.05;
-  return mesh_to_count(shape, volume, nodes,
-                       [&](double h) { return shape == "slab" ? mesh_slab(h) : mesh_sphere(h); });
+  return mesh_to_count(shape, volume, nodes, [&](double h) { return shape == "slab" ? mesh_slab(h) : mesh_sphere(h); });
 }
 
 } // namespace vtb

@@ -466,16 +466,16 @@ template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, 
         record(t, out, record_field, rep);
         if (!m_opt.frames_dir.empty() && out.t.size() == 1) write_frame(m_u, 0);
       },
-      [&](const double* times, int count) {
+      [&](std::span<const double> times) {
         TimerOutput::Scope s(m_timer, "output");
         const double ta = out.t[out.t.size() - 2], tb = out.t.back();
-        interpolate_last_step(out, times, count);
+        interpolate_last_step(out, times);
         if (m_opt.frames_dir.empty()) return;
-        for (int k = 0; k < count; ++k) {
-          const double w = tb - times[k] <= 1e-9 * (tb - ta) ? 1.0 : (times[k] - ta) / (tb - ta);
+        for (std::size_t k = 0; k < times.size(); ++k) {
+          const double w = step_weight(ta, tb, times[k]);
           m_frame_mix = m_frame_last;
           m_frame_mix.sadd(w, 1 - w, m_frame_prev);
-          write_frame(m_frame_mix, out.t.size() - static_cast<std::size_t>(count - k));
+          write_frame(m_frame_mix, out.t.size() - (times.size() - k));
         }
       });
   for (const auto& [phase, seconds] : m_timer.get_summary_data(TimerOutput::total_wall_time)) {

@@ -67,7 +67,7 @@ public:
     march(
         m_scheme, m_model.duration, m_model.output_interval, rep, [&](double t) { step(t); },
         [&] { return std::isfinite(m_u.l2_norm()); }, [&](double t) { record(t, out, record_field); },
-        [&](const double* times, int count) { interpolate_last_step(out, times, count); });
+        [&](std::span<const double> times) { interpolate_last_step(out, times); });
     rep.max_strain = m_max_strain;
     return rep;
   }

@@ -15,7 +15,7 @@ namespace vtb::fem {
 /// The static solve once at `duration`, or steps of the scheme's dt up to it (ceil(D / dt)
 /// steps), with samples at sample_times(duration, output_interval): each is interpolated
 /// within its step from the states at the step's ends (record(t) appends a sample of the
-/// current state, interpolate(times, count) replaces the last two by the samples at times),
+/// current state, interpolate(times) replaces the last two by the samples at those times),
 /// stopping at the first step whose displacement is not finite (rep.stable = false, with the
 /// time). step(t) advances to t, finite() says whether the displacement is finite. Fills rep's
 /// step counts and step times.
@@ -37,13 +37,12 @@ void march(const TimeScheme& scheme, double duration, double output_interval, Ru
     const long steps = std::max(1L, static_cast<long>(std::ceil(duration / scheme.dt - 1e-9)));
     rep.steps = steps;
     seconds.reserve(static_cast<std::size_t>(steps));
-    const std::vector<double> times = sample_times(duration, output_interval);
-    std::size_t next = 1;
+    SampleSchedule samples(duration, output_interval);
     record(0.0);
     double t0 = 0.0;
     for (long k = 0; k < steps; ++k) {
       const double t = static_cast<double>(k + 1) * scheme.dt;
-      const bool crossing = next < times.size() && times[next] <= t + 1e-9 * scheme.dt;
+      const bool crossing = samples.due(t, scheme.dt);
       if (crossing) record(t0);
       timed_step(t);
       ++rep.steps_taken;
@@ -56,12 +55,7 @@ void march(const TimeScheme& scheme, double duration, double output_interval, Ru
       }
       if (crossing) {
         record(t);
-        int count = 0;
-        while (next + static_cast<std::size_t>(count) < times.size() &&
-               times[next + static_cast<std::size_t>(count)] <= t + 1e-9 * scheme.dt)
-          ++count;
-        interpolate(&times[next], count);
-        next += static_cast<std::size_t>(count);
+        interpolate(samples.take(t, scheme.dt));
       }
     }
   }

@@ -7,6 +7,7 @@
 #include "vtb/core/haptics/force_shaping.hh"
 #include "vtb/core/haptics/triple_buffer.hh"
 #include "vtb/core/integrator.hh"
+#include "vtb/core/output.hh"
 #include "vtb/core/simulation.hh"
 
 #include <nlohmann/json.hpp>
@@ -469,13 +470,7 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
                            {"saturated_samples", p.saturated_samples},
                            {"nonfinite_samples", p.nonfinite_samples},
                            {"energy_to_user", p.energy_to_user}});
-  const std::pair<const char*, std::string> files[] = {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}};
-  for (const auto& [name, text] : files) {
-    std::ofstream f(dir / (std::string(name) + ".part"));
-    f << text;
-    if (!f) throw InputError((dir / name).string() + ": cannot write");
-  }
-  for (const auto& [name, text] : files) std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+  write_files_atomically(dir, {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}});
 }
 
 } // namespace vtb

@@ -2,6 +2,8 @@
 
 #include "vtb/harness/solvers.hh"
 
+#include "vtb/core/output.hh"
+
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -101,14 +103,7 @@ void write_compare(const CompareResult& r, const std::filesystem::path& dir) {
   for (const auto& x : r.decomposition)
     d << x.a << ',' << x.b << ",\"" << x.meaning << "\"," << num(x.error.displacement_max) << ','
       << num(x.error.displacement_final) << ',' << num(x.error.reaction_max) << '\n';
-  for (const auto& [name, text] :
-       {std::pair<const char*, std::string>{"compare.csv", c.str()}, {"decomposition.csv", d.str()}}) {
-    std::ofstream f(dir / (std::string(name) + ".part"));
-    f << text;
-    if (!f) throw InputError((dir / name).string() + ": cannot write");
-  }
-  for (const char* name : {"compare.csv", "decomposition.csv"})
-    std::filesystem::rename(dir / (std::string(name) + ".part"), dir / name);
+  write_files_atomically(dir, {{"compare.csv", c.str()}, {"decomposition.csv", d.str()}});
 }
 
 std::string format_compare(const CompareResult& r) {

@@ -3,6 +3,7 @@
 #include "vtb/core/cell_fields.hh"
 
 #include "vtb/core/explicit_euler.hh"
+#include "vtb/core/output.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/sweep.hh"
@@ -42,11 +43,7 @@ std::string fmt(double x, int prec = 3) {
 }
 
 void write_text(const std::filesystem::path& p, const std::string& text) {
-  std::ofstream f(p.string() + ".part");
-  f << text;
-  if (!f) throw InputError(p.string() + ": cannot write");
-  f.close();
-  std::filesystem::rename(p.string() + ".part", p);
+  write_files_atomically(p.parent_path(), {{p.filename().string(), text}});
 }
 
 /// Field snapshots of one run for the Fig. 3 analogue: CSV and VTU at the requested times.

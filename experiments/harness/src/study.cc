@@ -2,6 +2,7 @@
 
 #include "vtb/core/cvode_solver.hh"
 #include "vtb/core/explicit_euler.hh"
+#include "vtb/core/output.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
@@ -145,19 +146,6 @@ std::string num(double x) {
   return os.str();
 }
 
-void write_atomically(const std::filesystem::path& file, const std::string& text) {
-  const auto tmp = file.string() + ".part";
-  {
-    std::ofstream f(tmp);
-    f << text;
-    if (!f) {
-      std::filesystem::remove(tmp);
-      throw InputError(file.string() + ": cannot write");
-    }
-  }
-  std::filesystem::rename(tmp, file);
-}
-
 /// The figure: pgfplots, log-log, every stable run a mark per solver, the front a line.
 std::string plot_tex(const StudyResult& r) {
   std::ostringstream t;
@@ -218,8 +206,7 @@ std::filesystem::path write_study(const StudyResult& r, const std::filesystem::p
       << ',' << (row.skipped ? "" : num(row.total_seconds)) << ',' << (row.skipped ? "" : num(row.cost)) << ','
       << (row.stable ? num(1.0 / row.cost) : "") << ',' << (row.pareto ? "true" : "false") << ",\"" << row.failure
       << "\"\n";
-  write_atomically(dir / "study.csv", c.str());
-  write_atomically(dir / "study_plot.tex", plot_tex(r));
+  write_files_atomically(dir, {{"study.csv", c.str()}, {"study_plot.tex", plot_tex(r)}});
   // The PNG needs LaTeX (pgfplots) and poppler: both optional here, so their absence is a note.
   if (std::system("command -v pdflatex >/dev/null 2>&1 && command -v pdftoppm >/dev/null 2>&1") != 0) {
     note = "no plot: pdflatex or pdftoppm is not installed (study_plot.tex is written; the paper's setup installs "

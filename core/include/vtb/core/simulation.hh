@@ -5,6 +5,7 @@
 #include "vtb/core/integrator.hh"
 
 #include <filesystem>
+#include <span>
 
 namespace vtb {
 
@@ -54,11 +55,37 @@ struct RunReport {
 /// FEM, so that their trajectories line up sample for sample whatever their steps.
 std::vector<double> sample_times(double duration, double interval);
 
+/// A fixed-step loop's progress through sample_times(duration, interval) (sample 0, at t = 0,
+/// is taken before the first step): whether the step ending at t1 contains the next sample
+/// time, and the sample times it contains.
+class SampleSchedule {
+public:
+  SampleSchedule(double duration, double interval) : m_times(sample_times(duration, interval)) {}
+  std::size_t size() const { return m_times.size(); }
+  bool due(double t1, double dt) const { return m_next < m_times.size() && m_times[m_next] <= t1 + 1e-9 * dt; }
+  /// The sample times in the step ending at t1, and the loop moves past them.
+  std::span<const double> take(double t1, double dt) {
+    const std::size_t first = m_next;
+    while (due(t1, dt)) ++m_next;
+    return {m_times.data() + first, m_next - first};
+  }
+
+private:
+  std::vector<double> m_times;
+  std::size_t m_next = 1;
+};
+
+/// The weight of the state at t1 in the sample at ts of the step [t0, t1]: (ts - t0)/(t1 - t0),
+/// and exactly 1 within 1e-9 of the step of t1 (the state at t1 itself, bit for bit).
+inline double step_weight(double t0, double t1, double ts) {
+  return t1 - ts <= 1e-9 * (t1 - t0) ? 1.0 : (ts - t0) / (t1 - t0);
+}
+
 /// A fixed-step solver recorded its state at both ends of one step, t0 and t1 (the last two
-/// samples of traj); replaces them by the samples at times[0..count), each in [t0, t1], by
+/// samples of traj); replaces them by the samples at `times`, each in [t0, t1], by
 /// linear interpolation of every recorded quantity (probes, reactions, field). A time within
 /// 1e-9 (t1 - t0) of t1 takes the state at t1 exactly.
-template <int dim> void interpolate_last_step(Trajectory<dim>& traj, const double* times, int count);
+template <int dim> void interpolate_last_step(Trajectory<dim>& traj, std::span<const double> times);
 
 /// A run stops as unstable when the state is non-finite or a spring's strain exceeds this.
 inline constexpr double kRunawayStrain = 10.0;
@@ -76,11 +103,11 @@ void support_reactions(const Model<dim>& model, const State<dim>& s, Nodal<dim>&
                        std::vector<Vec<dim>>& out);
 
 /// Appends the sample of state s to traj (time, probes, support reactions, the whole field and
-/// velocity if record_field), raises rep's max_strain and max_spring_strain to the sample's,
-/// and returns the sample's largest spring strain. Shared by every spring solver.
+/// velocity if record_field), and raises rep's max_strain and max_spring_strain to the sample's. Shared by every spring
+/// solver.
 template <int dim>
-double record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
-                     RunReport& rep);
+void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>& traj, bool record_field,
+                   RunReport& rep);
 
 /// Writes frames/frame_NNNN.vtu (one per sample of a trajectory recorded with its field) and
 /// frames.pvd into dir: displacement and velocity per node, the largest principal strain and
