@@ -12,6 +12,7 @@ Action add_compare(CLI::App& app) {
     std::string scene, reference = "fem", out;
     std::vector<std::string> solvers;
     double dt = 0;
+    bool frames = false;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("compare", "Run several solvers on a scene; errors against a reference, timing, "
@@ -24,12 +25,14 @@ Action add_compare(CLI::App& app) {
   cmd->add_option("--reference", o->reference, "fem (default) or cvode");
   cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");
+  cmd->add_flag("--frames", o->frames, "Also write each solver's frames.pvd and frames/*.vtu in OUT/<solver>/");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     if (o->dt < 0) throw InputError("--dt must be > 0");
-    const auto res = harness::run_compare(scene, o->solvers, o->reference, o->dt, &std::cerr);
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-compare") : std::filesystem::path(o->out);
+    // Each solver's own run outputs (probes.csv, reactions.csv, summary.json) in OUT/<solver>/.
+    const auto res = harness::run_compare(scene, o->solvers, o->reference, o->dt, &std::cerr, {out, o->frames});
     harness::write_compare(res, out);
     std::cout << harness::format_compare(res) << "outputs in " << out.string() << "\n";
     return 0;

@@ -96,6 +96,44 @@ dt = 0.01
   EXPECT_EQ(res.decomposition[1].b, "fem");
 }
 
+TEST(Compare, KeepsEachSolversRunOutputsAndFrames) {
+  Scene s = parse_scene(test::plate_scene(4, 2, R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.2, 0.0]
+[[probe]]
+name = "tip"
+point = [0.2, 0.0]
+[solver]
+dt = 0.01
+)"),
+                        "plate.toml", ".");
+  s.duration = 0.1;
+  s.output_interval = 0.03; // samples at 0, 0.03, 0.06, 0.09 and the last at 0.1
+  const test::FreshDir dir;
+  const auto res = harness::run_compare(s, {"filtered-full", "cvode"}, "fem", 0, nullptr, {dir.path(), true});
+  ASSERT_EQ(res.rows.size(), 3u);
+  for (const char* solver : {"filtered-full", "cvode", "fem"}) {
+    const auto run = dir / solver;
+    for (const char* f : {"probes.csv", "reactions.csv", "summary.json", "frames.pvd", "frames/frame_0004.vtu"})
+      EXPECT_TRUE(std::filesystem::exists(run / f)) << solver << "/" << f;
+    EXPECT_FALSE(std::filesystem::exists(run / "frames/frame_0005.vtu")) << solver << ": five samples, five frames";
+    std::ifstream probes(run / "probes.csv");
+    std::string line, last;
+    int rows = 0;
+    std::getline(probes, line);
+    EXPECT_EQ(line, "t,probe,ux,uy,uz");
+    while (std::getline(probes, line)) {
+      ++rows;
+      last = line;
+    }
+    EXPECT_EQ(rows, 5) << solver << ": one probe at five sample times";
+    EXPECT_EQ(last.substr(0, last.find(',')), "0.1") << solver << ": the last sample is at the duration";
+  }
+}
+
 TEST(Sweep, FindsTheExplicitBoundaryWhereThePredictionPutsIt) {
   // Undamped tiny plate: symplectic Euler on the linearised model is stable iff
   // dt < 2 / omega_max, and max_omega_squared is the exact largest eigenvalue, so the limit is

@@ -16,7 +16,7 @@ namespace {
 
 template <int dim>
 CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const std::vector<std::string>& solvers,
-                           const std::string& reference, double dt, std::ostream* progress) {
+                           const std::string& reference, double dt, std::ostream* progress, const KeepRuns& keep) {
   CompareResult res;
   res.scene = scene.name;
   res.reference = reference;
@@ -34,6 +34,10 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
     row.report = run_solver(scene, model, name, dt, runs[name]);
     row.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
     if (progress) *progress << " " << std::fixed << std::setprecision(2) << row.wall_seconds << " s\n";
+    if (!keep.runs_dir.empty()) {
+      write_run_outputs(keep.runs_dir / name, model, runs[name], row.report, scene.name);
+      if (keep.frames) write_frames(model, runs[name], keep.runs_dir / name);
+    }
     res.rows.push_back(std::move(row));
   }
   for (auto& row : res.rows) {
@@ -70,7 +74,7 @@ std::string num(double x) {
 } // namespace
 
 CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
-                          double dt, std::ostream* progress) {
+                          double dt, std::ostream* progress, const KeepRuns& keep) {
   if (reference != "fem" && reference != "cvode")
     throw InputError("--reference must be fem or cvode, not " + reference);
   for (const auto& s : solvers)
@@ -79,7 +83,7 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
                        "\" (explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem)");
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
-    return compare_impl<dim>(scene, model, solvers, reference, dt, progress);
+    return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);
   });
 }
 

@@ -31,10 +31,18 @@ struct CompareResult {
   std::vector<DecompositionRow> decomposition; ///< filtered vs cvode, cvode vs fem, filtered vs fem (those run)
 };
 
+/// What `compare` keeps of each run besides the table: with `runs_dir` set, each solver's
+/// probes.csv, reactions.csv and summary.json in runs_dir/<solver>/, and with `frames` its
+/// frames.pvd and frames/*.vtu (the same files `vtb run` writes).
+struct KeepRuns {
+  std::filesystem::path runs_dir;
+  bool frames = false;
+};
+
 /// Runs `solvers` and the reference (fem or cvode) on the scene. `dt` > 0 overrides the
 /// scene's step for every fixed-step solver. Progress goes to `progress` if non-null.
 CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
-                          double dt = 0, std::ostream* progress = nullptr);
+                          double dt = 0, std::ostream* progress = nullptr, const KeepRuns& keep = {});
 
 /// compare.csv (one row per solver) and decomposition.csv; nothing is left half-written.
 void write_compare(const CompareResult& result, const std::filesystem::path& dir);
