@@ -4,13 +4,15 @@
 
 #include <iostream>
 #include <memory>
+#include <thread>
 
 namespace vtb::cli {
 
 Action add_haptics(CLI::App& app) {
   struct Opts {
     std::string scene, fault, out, replay;
-    bool lockstep = false;
+    bool lockstep = false, lock_memory = false, no_priority = false;
+    int pin_cpu = -1;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -19,12 +21,22 @@ Action add_haptics(CLI::App& app) {
   cmd->add_option("--fault", o->fault, "Inject a fault: stall@T (physics stops) or nan@T (physics returns NaN)");
   cmd->add_option("--replay", o->replay, "Recorded handle trajectory (t,hx,hy CSV) for device = \"replay\"");
   cmd->add_flag("--lockstep", o->lockstep, "Interleave servo and physics in simulated time (deterministic)");
+  cmd->add_flag("--lock-memory", o->lock_memory, "mlockall for the session (no page faults in the servo loop)");
+  cmd->add_option("--pin-cpu", o->pin_cpu, "Pin the servo thread to this core; the physics runs on the others");
+  cmd->add_flag("--no-realtime-priority", o->no_priority, "Do not ask for SCHED_FIFO (to measure what it buys)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-haptics)");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     HapticsOptions ho;
     if (!o->fault.empty()) ho.fault = parse_fault(o->fault, ho.fault_time);
     ho.lockstep = o->lockstep;
+    ho.lock_memory = o->lock_memory;
+    const int cores = static_cast<int>(std::thread::hardware_concurrency());
+    if (o->pin_cpu >= cores && cores > 0)
+      throw InputError("--pin-cpu " + std::to_string(o->pin_cpu) + ": this machine has cores 0-" +
+                       std::to_string(cores - 1));
+    ho.pin_cpu = o->pin_cpu;
+    ho.realtime_priority = !o->no_priority;
     ho.replay = o->replay;
     const HapticsReport r = run_haptics(scene, ho);
     for (const auto& note : r.notes) std::cerr << "note: " << note << '\n';

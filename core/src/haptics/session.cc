@@ -24,6 +24,7 @@
 
 #include <pthread.h>
 #include <sched.h>
+#include <sys/mman.h>
 #include <sys/prctl.h>
 
 namespace vtb {
@@ -308,6 +309,35 @@ template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<
   return plane;
 }
 
+/// The servo thread's real-time set-up (called on that thread): SCHED_FIFO priority, 1 ns
+/// timer slack, and the pin to one core. Returns what was granted, for the summary.
+std::vector<std::string> set_up_servo_thread(const HapticsOptions& opt) {
+  std::vector<std::string> got;
+  if (opt.realtime_priority) {
+    // Granted to root (or CAP_SYS_NICE); else an ordinary thread, and the misses tell.
+    sched_param prio{};
+    prio.sched_priority = 80;
+    got.push_back(pthread_setschedparam(pthread_self(), SCHED_FIFO, &prio) == 0 ? "fifo" : "fifo-denied");
+  }
+  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL); // wake-ups to the microsecond, not 50 us late
+  if (opt.pin_cpu >= 0) {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    CPU_SET(opt.pin_cpu, &set);
+    got.push_back(pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0 ? "pinned" : "pinned-denied");
+  }
+  return got;
+}
+
+/// Moves the calling thread to every core it may use but `cpu` (nothing if that is the only one).
+void keep_off_cpu(int cpu) {
+  cpu_set_t set;
+  CPU_ZERO(&set);
+  if (pthread_getaffinity_np(pthread_self(), sizeof set, &set) != 0) return;
+  CPU_CLR(cpu, &set);
+  if (CPU_COUNT(&set) > 0) pthread_setaffinity_np(pthread_self(), sizeof set, &set);
+}
+
 template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, const Model<dim>& model) {
   const DevicePlane<dim> plane = device_plane(scene, model.mesh);
   std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
@@ -347,6 +377,7 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   periods.reserve(static_cast<std::size_t>(ticks));
   tick_us.reserve(static_cast<std::size_t>(ticks));
   long misses = 0;
+  std::vector<std::string> realtime_setup;
   if (opt.lockstep) {
     // Simulated time only: deterministic, for tests and replays.
     for (long k = 0; k < ticks; ++k) {
@@ -360,14 +391,12 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   } else {
     // Real time: the servo on its own thread, absolute deadlines, the last 200 us spun.
     std::atomic<bool> done{false};
+    std::vector<std::string> setup;
+    if (opt.lock_memory) setup.push_back(mlockall(MCL_CURRENT | MCL_FUTURE) == 0 ? "mlock" : "mlock-denied");
+    if (opt.pin_cpu >= 0) keep_off_cpu(opt.pin_cpu); // the physics (this thread) leaves the servo's core
     const auto start = steady::now() + std::chrono::milliseconds(5);
     std::thread servo_thread([&] {
-      // A servo loop wants a real-time priority; granted to root (or CAP_SYS_NICE), else it
-      // runs as an ordinary thread and the summary's misses tell.
-      sched_param prio{};
-      prio.sched_priority = 80;
-      pthread_setschedparam(pthread_self(), SCHED_FIFO, &prio);
-      prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL); // wake-ups to the microsecond, not 50 us late
+      for (auto& g : set_up_servo_thread(opt)) setup.push_back(std::move(g));
       auto next = start;
       auto last = start;
       const auto p = std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(period));
@@ -398,8 +427,11 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
       }
     }
     servo_thread.join();
+    if (opt.lock_memory) munlockall();
+    realtime_setup = std::move(setup);
   }
   HapticsReport rep = std::move(servo.report());
+  rep.realtime_setup = std::move(realtime_setup);
   rep.dim = dim;
   rep.coupling_stiffness = h.coupling_stiffness;
   rep.notes = std::move(notes);
@@ -411,6 +443,7 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     rep.energy_to_user += p.energy_to_user;
   }
   rep.period_max_us = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
+  if (!opt.lockstep) rep.period_us = periods;
   const StepStats cycle = step_stats(std::move(periods)), tick = step_stats(std::move(tick_us));
   rep.rate_hz_mean = cycle.mean > 0 ? 1e6 / cycle.mean : 0.0;
   rep.period_p99_us = cycle.p99;
@@ -451,6 +484,7 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["period_p99_us"] = r.period_p99_us;
   j["period_max_us"] = r.period_max_us;
   j["deadline_misses"] = r.deadline_misses;
+  j["realtime_setup"] = r.realtime_setup;
   j["max_force"] = r.max_force;
   j["saturated_samples"] = r.saturated_samples;
   j["nonfinite_samples"] = r.nonfinite_samples;

@@ -16,6 +16,10 @@ struct HapticsOptions {
   double fault_time = 0;        ///< s of simulated time
   bool lockstep = false;        ///< one thread, servo and physics interleaved in simulated time (deterministic)
   std::filesystem::path replay; ///< for device = "replay": the recorded handle trajectories (haptics.csv)
+  // Real-time servo thread set-up (docs/haptics.md measures what each buys on a loaded box).
+  bool realtime_priority = true; ///< ask for SCHED_FIFO 80 (granted to root or CAP_SYS_NICE)
+  bool lock_memory = false;      ///< mlockall(MCL_CURRENT | MCL_FUTURE) for the session's length
+  int pin_cpu = -1;              ///< >= 0: the servo thread pinned to that core, the physics kept off it
 };
 
 /// Parses "stall@T" or "nan@T". Throws InputError otherwise.
@@ -35,6 +39,8 @@ struct HapticsReport {
   long samples = 0;
   double rate_hz_mean = 0, period_p99_us = 0, period_max_us = 0;
   long deadline_misses = 0; ///< cycles that started more than half a period late
+  std::vector<std::string>
+      realtime_setup; ///< what the servo thread was granted: "fifo", "mlock", "pinned" (or "x-denied")
   /// Over all probes: the largest force, the sums of the counts and of the energy.
   double max_force = 0;
   long saturated_samples = 0, nonfinite_samples = 0;
@@ -45,6 +51,7 @@ struct HapticsReport {
   double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
   double coupling_stiffness = 0;              ///< N/m rendered: the scene's, limited to the device's max stiffness
   std::vector<std::string> notes;             ///< what the run changed from the scene, one line each
+  std::vector<double> period_us;              ///< each servo cycle's measured period (real time only)
   std::vector<double> t;                      ///< servo sample times
   std::vector<ProbeTrace> probes;             ///< probe 0 is [haptics.hand], then [[haptics.probe]] in order
 };
