@@ -14,6 +14,7 @@ VTB_PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev
   libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev openmpi-bin python3
   libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri zlib1g-dev
+  texlive-latex-extra texlive-pictures texlive-latex-recommended texlive-fonts-recommended latexmk poppler-utils
 )
 
 vtb_install_packages() {

@@ -19,5 +19,6 @@ Action add_reproduce(CLI::App& app);
 Action add_haptics(CLI::App& app);
 Action add_view(CLI::App& app);
 Action add_study(CLI::App& app);
+Action add_paper_data(CLI::App& app);
 
 } // namespace vtb::cli

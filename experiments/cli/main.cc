@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action haptics = vtb::cli::add_haptics(app);
   vtb::cli::Action view = vtb::cli::add_view(app);
   vtb::cli::Action study = vtb::cli::add_study(app);
+  vtb::cli::Action paper_data = vtb::cli::add_paper_data(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -32,6 +33,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("haptics")) return haptics();
     if (app.got_subcommand("view")) return view();
     if (app.got_subcommand("study")) return study();
+    if (app.got_subcommand("paper-data")) return paper_data();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

@@ -1,5 +1,7 @@
 #include "vtb/harness/reproduce.hh"
 
+#include "reproduce_parts.hh"
+
 #include "vtb/core/cell_fields.hh"
 
 #include "vtb/core/explicit_euler.hh"
@@ -61,40 +63,81 @@ void write_fig3(const std::filesystem::path& dir, const std::string& solver, con
     for (int i = 0; i < model.num_nodes(); ++i)
       csv << i << ',' << model.mesh.points(0, i) << ',' << model.mesh.points(1, i) << ',' << tr.field[k](0, i) << ','
           << tr.field[k](1, i) << '\n';
-    write_text(dir / (name.str() + ".csv"), csv.str());
     std::vector<float> strain;
     cell_max_principal_strain(model.mesh, tr.field[k], strain);
+    std::ostringstream cells;
+    cells << std::setprecision(6) << "cell,n0,n1,n2,max_principal_strain\n";
+    for (int c = 0; c < model.mesh.num_cells(); ++c) {
+      const auto& cell = model.mesh.cells[static_cast<std::size_t>(c)];
+      cells << c << ',' << cell[0] << ',' << cell[1] << ',' << cell[2] << ',' << strain[static_cast<std::size_t>(c)]
+            << '\n';
+    }
+    write_files_atomically(dir, {{name.str() + ".csv", csv.str()}, {name.str() + "_cells.csv", cells.str()}});
     write_vtu(model.mesh, dir / (name.str() + ".vtu"),
               {point_vectors<2>("displacement", tr.field[k]),
                VtuField{"max_principal_strain", 1, true, std::vector<double>(strain.begin(), strain.end())}});
   }
 }
 
-} // namespace
-
-std::string run_reproduce(const ReproduceOptions& o) {
-  std::ostream* log = o.progress;
-  const double duration = o.quick ? 2.0 : 10.0;
-  std::filesystem::create_directories(o.out);
-  auto scene_of = [&](const std::string& file) {
-    Scene s = read_scene(o.scenes_dir / file);
-    s.duration = duration;
-    return s;
-  };
-  const std::vector<Case> cases = {{"517 nodes, one force", "plate517_step.toml", 1, 25.0},
-                                   {"517 nodes, four forces", "plate517_four_forces.toml", 4, 25.0},
-                                   {"123 nodes, one force", "plate123_step.toml", 1, 100.0}};
-  const std::vector<std::string> solvers = {"filtered-neighbors", "filtered-full", "implicit-euler", "cvode", "fem"};
-
-  // (a) The timing table, with the error of each solver against the FEM.
+/// What the timing part hands to the rest: the table, the decomposition on the first case,
+/// and that case's filtered-full and FEM runs for the Fig. 3 analogue.
+struct TimingPart {
   std::vector<TimingRow> table;
   std::vector<DecompositionRow> decomposition;
   Model<2> fig_model;
   std::map<std::string, Trajectory<2>> fig_runs;
+};
+
+Scene scene_for(const ReproduceOptions& o, const std::string& file, double duration) {
+  Scene s = read_scene(o.scenes_dir / file);
+  s.duration = duration;
+  return s;
+}
+
+/// The explicit scheme timed over a bounded number of steps at half its limit: over the whole
+/// run it would take hours at the plates' damping-limited step.
+TimingRow explicit_timing_row(const Scene& scene, const Model<2>& model, const Case& cs, double duration) {
+  const double tau = scene.material.retardation_time;
+  const double dtc = explicit_critical_dt(max_omega_squared(model, true), tau, scene.material.mass_damping);
+  Model<2> m = model;
+  m.duration = std::min(duration, 20000 * 0.5 * dtc);
+  m.output_interval = m.duration;
+  Trajectory<2> tr;
+  IntegratorOptions io;
+  io.kind = "explicit";
+  io.dt = 0.5 * dtc;
+  const auto a = clock_type::now();
+  const RunReport rep = simulate(m, io, tr);
+  const double w = std::chrono::duration<double>(clock_type::now() - a).count();
+  TimingRow r;
+  r.label = cs.label;
+  r.solver = "explicit";
+  r.nodes = model.num_nodes();
+  r.forces = cs.forces;
+  r.paper_fps = cs.paper_fps;
+  r.dt = io.dt;
+  r.stable = rep.stable;
+  r.steps_per_second = 1.0 / rep.step_seconds.mean;
+  r.step_us = rep.step_seconds.median * 1e6;
+  r.precompute_ms = rep.precompute_seconds * 1e3;
+  r.realtime = m.duration / w;
+  r.error = std::nan("");
+  r.timing_only = true;
+  return r;
+}
+
+/// (a) The timing table, with the error of each solver against the FEM.
+TimingPart run_timing(const ReproduceOptions& o, double duration) {
+  std::ostream* log = o.progress;
+  const std::vector<Case> cases = {{"517 nodes, one force", "plate517_step.toml", 1, 25.0},
+                                   {"517 nodes, four forces", "plate517_four_forces.toml", 4, 25.0},
+                                   {"123 nodes, one force", "plate123_step.toml", 1, 100.0}};
+  const std::vector<std::string> solvers = {"filtered-neighbors", "filtered-full", "implicit-euler", "cvode", "fem"};
+  TimingPart part;
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const Case& cs = cases[c];
     if (log) *log << "[timing " << c + 1 << "/" << cases.size() << "] " << cs.label << "\n";
-    const Scene scene = scene_of(cs.scene_file);
+    const Scene scene = scene_for(o, cs.scene_file, duration);
     const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
     std::map<std::string, Trajectory<2>> runs;
     std::map<std::string, RunReport> reports;
@@ -121,161 +164,157 @@ std::string run_reproduce(const ReproduceOptions& o) {
       r.precompute_ms = rep.precompute_seconds * 1e3;
       r.realtime = (rep.stable ? duration : rep.failure_time) / wall[s];
       r.error = rep.stable ? compare(runs[s], runs["fem"]).displacement_max : std::nan("");
-      table.push_back(r);
+      part.table.push_back(r);
     }
-    // The explicit scheme is timed over a bounded number of steps at half its limit: over the
-    // whole run it would take hours at the plates' damping-limited step.
-    {
-      Scene short_scene = scene;
-      const double tau = scene.material.retardation_time;
-      const double dtc = explicit_critical_dt(max_omega_squared(model, true), tau, scene.material.mass_damping);
-      Model<2> m = model;
-      m.duration = std::min(duration, 20000 * 0.5 * dtc);
-      m.output_interval = m.duration;
-      Trajectory<2> tr;
-      IntegratorOptions io;
-      io.kind = "explicit";
-      io.dt = 0.5 * dtc;
-      const auto a = clock_type::now();
-      const RunReport rep = simulate(m, io, tr);
-      const double w = std::chrono::duration<double>(clock_type::now() - a).count();
-      TimingRow r;
-      r.label = cs.label;
-      r.solver = "explicit";
-      r.nodes = model.num_nodes();
-      r.forces = cs.forces;
-      r.paper_fps = cs.paper_fps;
-      r.dt = io.dt;
-      r.stable = rep.stable;
-      r.steps_per_second = 1.0 / rep.step_seconds.mean;
-      r.step_us = rep.step_seconds.median * 1e6;
-      r.precompute_ms = rep.precompute_seconds * 1e3;
-      r.realtime = m.duration / w;
-      r.error = std::nan("");
-      r.timing_only = true;
-      table.push_back(r);
+    part.table.push_back(explicit_timing_row(scene, model, cs, duration));
+    if (c != 0) continue;
+    for (const char* a : {"filtered-full", "filtered-neighbors"}) {
+      if (!reports[a].stable) continue;
+      part.decomposition.push_back(
+          {a, "cvode", "time-integration error of the approximation", compare(runs[a], runs["cvode"])});
+      part.decomposition.push_back({a, "fem", "what a user sees", compare(runs[a], runs["fem"])});
     }
-    if (c == 0) {
-      for (const char* a : {"filtered-full", "filtered-neighbors"}) {
-        if (!reports[a].stable) continue;
-        decomposition.push_back(
-            {a, "cvode", "time-integration error of the approximation", compare(runs[a], runs["cvode"])});
-        decomposition.push_back({a, "fem", "what a user sees", compare(runs[a], runs["fem"])});
-      }
-      decomposition.push_back({"implicit-euler", "cvode", "time-integration error of implicit Euler",
-                               compare(runs["implicit-euler"], runs["cvode"])});
-      decomposition.push_back(
-          {"cvode", "fem", "modelling error of springs vs continuum", compare(runs["cvode"], runs["fem"])});
-      fig_model = model;
-      fig_runs["filtered-full"] = std::move(runs["filtered-full"]);
-      fig_runs["fem"] = std::move(runs["fem"]);
-    }
+    part.decomposition.push_back({"implicit-euler", "cvode", "time-integration error of implicit Euler",
+                                  compare(runs["implicit-euler"], runs["cvode"])});
+    part.decomposition.push_back(
+        {"cvode", "fem", "modelling error of springs vs continuum", compare(runs["cvode"], runs["fem"])});
+    part.fig_model = model;
+    part.fig_runs["filtered-full"] = std::move(runs["filtered-full"]);
+    part.fig_runs["fem"] = std::move(runs["fem"]);
   }
+  return part;
+}
 
-  // (b) The Fig. 3 analogue: the plate at 0, T/2 and T (the paper: 0, 5 and 10 s).
-  if (log) *log << "[fig3] deformed shapes\n";
-  for (const auto& [solver, tr] : fig_runs)
-    write_fig3(o.out / "fig3", solver, fig_model, tr, {0.0, duration / 2, duration});
-
-  // (c) Accuracy against speed on the 123-node plate: a dt ladder per solver.
+/// (c) Accuracy against speed on the 123-node plate: a dt ladder per solver.
+void write_accuracy(const ReproduceOptions& o, double duration) {
+  std::ostream* log = o.progress;
   if (log) *log << "[accuracy vs speed] 123-node plate\n";
   std::ostringstream acc;
   acc << "solver,dt,rtol,stable,error_vs_cvode,error_vs_fem,wall_seconds,step_median_us\n";
-  {
-    const Scene scene = scene_of("plate123_step.toml");
-    const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
-    Scene tight = scene;
-    tight.solver.rtol = 1e-10;
-    tight.solver.atol = 1e-14;
-    Trajectory<2> ref_cvode, ref_fem;
-    run_solver(tight, model, "cvode", 0, ref_cvode);
-    run_solver(scene, model, "fem", scene.solver.dt / 4, ref_fem);
-    const std::vector<double> ladder = o.quick ? std::vector<double>{0.04, 0.01, 0.0025}
-                                               : std::vector<double>{0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125};
-    auto row = [&](const std::string& solver, const Scene& sc, double dt, double rtol) {
-      Trajectory<2> tr;
-      const auto a = clock_type::now();
-      const RunReport rep = run_solver(sc, model, solver, dt, tr);
-      const double w = std::chrono::duration<double>(clock_type::now() - a).count();
-      const bool ok = rep.stable;
-      acc << solver << ',' << fmt(rep.dt, 6) << ',' << (rtol > 0 ? fmt(rtol) : "") << ',' << (ok ? "true" : "false")
-          << ',' << (ok ? fmt(compare(tr, ref_cvode).displacement_max, 6) : "nan") << ','
-          << (ok ? fmt(compare(tr, ref_fem).displacement_max, 6) : "nan") << ',' << fmt(w, 6) << ','
-          << fmt(rep.step_seconds.median * 1e6, 6) << '\n';
-      if (log) *log << "  " << solver << " dt " << fmt(rep.dt) << (ok ? "" : " (unstable)") << "\n";
-    };
-    for (const char* s : {"filtered-full", "filtered-neighbors", "implicit-euler", "fem"})
-      for (double dt : ladder) row(s, scene, dt, 0);
-    for (double rtol : o.quick ? std::vector<double>{1e-3, 1e-6} : std::vector<double>{1e-2, 1e-4, 1e-6, 1e-8}) {
-      Scene sc = scene;
-      sc.solver.rtol = rtol;
-      sc.solver.atol = rtol * 1e-4;
-      row("cvode", sc, 0, rtol);
-    }
-    row("explicit", scene, 0, 0); // half its stability limit
+  const Scene scene = scene_for(o, "plate123_step.toml", duration);
+  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
+  Scene tight = scene;
+  tight.solver.rtol = 1e-10;
+  tight.solver.atol = 1e-14;
+  Trajectory<2> ref_cvode, ref_fem;
+  run_solver(tight, model, "cvode", 0, ref_cvode);
+  run_solver(scene, model, "fem", scene.solver.dt / 4, ref_fem);
+  const std::vector<double> ladder =
+      o.quick ? std::vector<double>{0.04, 0.01, 0.0025} : std::vector<double>{0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125};
+  auto row = [&](const std::string& solver, const Scene& sc, double dt, double rtol) {
+    Trajectory<2> tr;
+    const auto a = clock_type::now();
+    const RunReport rep = run_solver(sc, model, solver, dt, tr);
+    const double w = std::chrono::duration<double>(clock_type::now() - a).count();
+    const bool ok = rep.stable;
+    acc << solver << ',' << fmt(rep.dt, 6) << ',' << (rtol > 0 ? fmt(rtol) : "") << ',' << (ok ? "true" : "false")
+        << ',' << (ok ? fmt(compare(tr, ref_cvode).displacement_max, 6) : "nan") << ','
+        << (ok ? fmt(compare(tr, ref_fem).displacement_max, 6) : "nan") << ',' << fmt(w, 6) << ','
+        << fmt(rep.step_seconds.median * 1e6, 6) << '\n';
+    if (log) *log << "  " << solver << " dt " << fmt(rep.dt) << (ok ? "" : " (unstable)") << "\n";
+  };
+  for (const char* s : {"filtered-full", "filtered-neighbors", "implicit-euler", "fem"})
+    for (double dt : ladder) row(s, scene, dt, 0);
+  for (double rtol : o.quick ? std::vector<double>{1e-3, 1e-6} : std::vector<double>{1e-2, 1e-4, 1e-6, 1e-8}) {
+    Scene sc = scene;
+    sc.solver.rtol = rtol;
+    sc.solver.atol = rtol * 1e-4;
+    row("cvode", sc, 0, rtol);
   }
+  row("explicit", scene, 0, 0); // half its stability limit
   write_text(o.out / "accuracy_speed.csv", acc.str());
+}
 
-  // (d) The stability map on the 123-node plate.
-  if (log) *log << "[stability map]\n";
-  {
-    Scene scene = scene_of("plate123_step.toml");
-    scene.duration = o.quick ? 0.5 : 1.0;
-    const std::vector<double> dts =
-        o.quick ? std::vector<double>{1e-5, 1e-3, 2e-2} : std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2, 4e-2};
-    const std::vector<double> scales =
-        o.quick ? std::vector<double>{0.1, 10.0} : std::vector<double>{0.01, 0.1, 1.0, 10.0, 100.0};
-    write_sweep(
-        run_sweep(scene, dts, scales, {"explicit", "filtered-neighbors", "filtered-full", "implicit-euler"}, log),
-        o.out / "stability.csv");
-  }
+/// (d) The stability map on the 123-node plate.
+void write_stability(const ReproduceOptions& o) {
+  if (o.progress) *o.progress << "[stability map]\n";
+  Scene scene = scene_for(o, "plate123_step.toml", o.quick ? 0.5 : 1.0);
+  const std::vector<double> dts =
+      o.quick ? std::vector<double>{1e-5, 1e-3, 2e-2} : std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2, 4e-2};
+  const std::vector<double> scales =
+      o.quick ? std::vector<double>{0.1, 10.0} : std::vector<double>{0.01, 0.1, 1.0, 10.0, 100.0};
+  write_sweep(
+      run_sweep(scene, dts, scales, {"explicit", "filtered-neighbors", "filtered-full", "implicit-euler"}, o.progress),
+      o.out / "stability.csv");
+}
 
-  // The timing table and the report.
-  std::ostringstream csv, md;
+void write_timing_csv(const ReproduceOptions& o, const TimingPart& part) {
+  std::ostringstream csv, dcsv;
   csv << "case,nodes,forces,paper_fps_piii450,solver,dt,stable,steps_per_second,step_median_us,precompute_ms,"
          "realtime_factor,displacement_error_vs_fem,timing_only\n";
+  for (const auto& r : part.table)
+    csv << '"' << r.label << "\"," << r.nodes << ',' << r.forces << ',' << r.paper_fps << ',' << r.solver << ','
+        << fmt(r.dt, 6) << ',' << (r.stable ? "true" : "false") << ',' << fmt(r.steps_per_second, 6) << ','
+        << fmt(r.step_us, 6) << ',' << fmt(r.precompute_ms, 6) << ',' << fmt(r.realtime, 6) << ',' << fmt(r.error, 6)
+        << ',' << (r.timing_only ? "true" : "false") << '\n';
+  dcsv << "run,against,meaning,displacement_error_max,displacement_error_final,reaction_error_max\n";
+  for (const auto& d : part.decomposition)
+    dcsv << d.a << ',' << d.b << ",\"" << d.meaning << "\"," << fmt(d.error.displacement_max, 6) << ','
+         << fmt(d.error.displacement_final, 6) << ',' << fmt(d.error.reaction_max, 6) << '\n';
+  write_files_atomically(o.out, {{"timing_table.csv", csv.str()}, {"decomposition.csv", dcsv.str()}});
+}
+
+/// report.md: the timing table and the decomposition as markdown, the files, and the figures
+/// (PNG written beside it by scripts/build_paper.sh).
+std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, double duration) {
+  std::ostringstream md;
   md << "# vtb reproduce" << (o.quick ? " --quick" : "") << "\n\n"
      << "Cai, Dill and Payandeh's experiment: a thin polygonal plate, clamped on its left edge and pulled by a step "
         "force (or four forces), "
      << duration << " s of simulated time. Machine: this one (2 cores); the paper: Pentium III-450, NT.\n\n"
      << "## Timing table\n\n"
      << "| case | paper (PIII-450) | solver | dt [s] | stable | us/step | steps/s | precompute [ms] | real-time factor "
-        "| "
-        "error vs FEM |\n|---|---|---|---|---|---|---|---|---|---|\n";
-  for (const auto& r : table) {
-    csv << '"' << r.label << "\"," << r.nodes << ',' << r.forces << ',' << r.paper_fps << ',' << r.solver << ','
-        << fmt(r.dt, 6) << ',' << (r.stable ? "true" : "false") << ',' << fmt(r.steps_per_second, 6) << ','
-        << fmt(r.step_us, 6) << ',' << fmt(r.precompute_ms, 6) << ',' << fmt(r.realtime, 6) << ',' << fmt(r.error, 6)
-        << ',' << (r.timing_only ? "true" : "false") << '\n';
+        "| error vs FEM |\n|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& r : part.table)
     md << "| " << r.label << " | " << r.paper_fps << " frames/s | " << r.solver << " | " << fmt(r.dt) << " | "
        << (r.stable ? "yes" : "**no**") << " | " << fmt(r.step_us) << " | " << fmt(r.steps_per_second) << " | "
        << fmt(r.precompute_ms) << " | " << fmt(r.realtime) << (r.timing_only ? " (timed over 20000 steps)" : "")
        << " | " << fmt(r.error) << " |\n";
-  }
-  write_text(o.out / "timing_table.csv", csv.str());
-  std::ostringstream dcsv;
-  dcsv << "run,against,meaning,displacement_error_max,displacement_error_final,reaction_error_max\n";
   md << "\n## Error decomposition (517 nodes, one force)\n\n| run | against | meaning | max rel. L2 displacement error "
-        "| "
-        "final |\n|---|---|---|---|---|\n";
-  for (const auto& d : decomposition) {
-    dcsv << d.a << ',' << d.b << ",\"" << d.meaning << "\"," << fmt(d.error.displacement_max, 6) << ','
-         << fmt(d.error.displacement_final, 6) << ',' << fmt(d.error.reaction_max, 6) << '\n';
+        "| final |\n|---|---|---|---|---|\n";
+  for (const auto& d : part.decomposition)
     md << "| " << d.a << " | " << d.b << " | " << d.meaning << " | " << fmt(d.error.displacement_max) << " | "
        << fmt(d.error.displacement_final) << " |\n";
-  }
-  write_text(o.out / "decomposition.csv", dcsv.str());
-  md << "\n## Files\n\n- `timing_table.csv`: the table above.\n- `fig3/`: the plate at 0, " << duration / 2 << " and "
+  md << "\n## Figures\n\nDrawn by `scripts/build_paper.sh` (pgfplots) from the CSV files here, as PNG in `figures/` "
+        "and in the paper `vtb.pdf`; without LaTeX the links below stay empty.\n\n";
+  for (const auto& [file, title] : kReportFigures) md << "![" << title << "](figures/" << file << ".png)\n\n";
+  md << "## Files\n\n- `timing_table.csv`: the table above.\n- `fig3/`: the plate at 0, " << duration / 2 << " and "
      << duration
-     << " s (CSV and VTU), filtered-full and FEM (the paper's Fig. 3).\n- `accuracy_speed.csv`: error against CVODE "
-        "(rtol 1e-10) and against the FEM, and cost, over a dt ladder per solver (123-node plate).\n- `stability.csv`: "
-        "stable or not over dt x stiffness scale, with the explicit scheme's predicted limit (criterion: "
-     << kStabilityCriterion << ").\n- `decomposition.csv`: the error decomposition.\n\n"
+     << " s (CSV with the cells and their strain, and VTU), filtered-full and FEM (the paper's Fig. 3).\n"
+        "- `accuracy_speed.csv`: error against CVODE (rtol 1e-10) and against the FEM, and cost, over a dt ladder per "
+        "solver (123-node plate).\n- `stability.csv`: stable or not over dt x stiffness scale, with the explicit "
+        "scheme's predicted limit (criterion: "
+     << kStabilityCriterion
+     << ").\n- `decomposition.csv`: the error decomposition.\n- `creep.csv`: the creep strip's tip against the "
+        "Kelvin-Voigt law.\n- `scaling.csv`: step time, precompute and heap over a 2D and a 3D mesh ladder.\n"
+        "- `haptics_*.csv`: a real-time servo session with a physics stall (periods, force trace, summary).\n"
+        "- `meta.csv`: quick or not, the machine.\n\n"
      << "Reading: the paper's frame rates were one step per frame on a 450 MHz Pentium III. The truncated "
         "(`neighbors`) filter is the paper's; at steps beyond a few explicit limits it diverges (docs/method.md), "
         "which the table records as unstable rather than hiding.\n";
-  write_text(o.out / "report.md", md.str());
   return md.str();
+}
+
+} // namespace
+
+std::string run_reproduce(const ReproduceOptions& o) {
+  const double duration = o.quick ? 2.0 : 10.0;
+  std::filesystem::create_directories(o.out);
+  parts::write_meta(o.out, o.quick, duration);
+  const TimingPart timing = run_timing(o, duration);
+  write_timing_csv(o, timing);
+  // (b) The Fig. 3 analogue: the plate at 0, T/2 and T (the paper: 0, 5 and 10 s).
+  if (o.progress) *o.progress << "[fig3] deformed shapes\n";
+  for (const auto& [solver, tr] : timing.fig_runs)
+    write_fig3(o.out / "fig3", solver, timing.fig_model, tr, {0.0, duration / 2, duration});
+  write_accuracy(o, duration);
+  write_stability(o);
+  parts::write_creep(o.out, o.scenes_dir, o.progress);
+  parts::write_scaling(o.out, o.quick, o.progress);
+  parts::write_haptics(o.out, o.scenes_dir, 1.5, o.progress);
+  const std::string md = report_markdown(o, timing, duration);
+  write_text(o.out / "report.md", md);
+  return md;
 }
 
 } // namespace vtb::harness

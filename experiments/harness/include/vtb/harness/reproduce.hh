@@ -5,8 +5,26 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <string>
 
 namespace vtb::harness {
+
+/// The figures report.md shows, as scripts/build_paper.sh draws them from paper/figures/FILE.tex
+/// into figures/FILE.png beside it (a test checks that each has its .tex).
+struct ReportFigure {
+  const char* file;
+  const char* title;
+};
+inline constexpr ReportFigure kReportFigures[] = {
+    {"fig3", "The plate at three times, coloured by strain (the paper's Fig. 3)"},
+    {"accuracy_speed", "Accuracy against speed, Pareto front marked"},
+    {"stability", "Stability over time step and stiffness"},
+    {"decomposition", "Error decomposition: time integration, model, total"},
+    {"convergence", "Convergence of implicit Euler and CVODE"},
+    {"creep", "Creep against the Kelvin-Voigt law"},
+    {"scaling", "Step time and memory against nodes"},
+    {"haptics", "The haptic loop: servo periods and a physics stall"},
+};
 
 struct ReproduceOptions {
   bool quick = false;               ///< 2 s of simulated time instead of 10, smaller ladders
@@ -16,7 +34,8 @@ struct ReproduceOptions {
 };
 
 /// Writes timing_table.csv, fig3/*.csv|vtu, accuracy_speed.csv, stability.csv,
-/// decomposition.csv and report.md into options.out; returns the report's text.
+/// decomposition.csv, creep.csv, scaling.csv, haptics_*.csv, meta.csv and report.md into
+/// options.out; returns the report's text.
 std::string run_reproduce(const ReproduceOptions& options);
 
 } // namespace vtb::harness

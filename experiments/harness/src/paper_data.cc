@@ -1,0 +1,191 @@
+#include "vtb/harness/paper_data.hh"
+
+#include "paper_data_parts.hh"
+
+#include "vtb/core/output.hh"
+#include "vtb/harness/tex.hh"
+#include "vtb/meshes/input_error.hh"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <sstream>
+
+namespace vtb::harness {
+namespace paper {
+
+void Out::macro(const std::string& name, const std::string& value) {
+  macros += tex_macro(name, value);
+}
+void Out::number(const std::string& name, double value, int digits) {
+  macro(name, tex_number(value, digits));
+}
+void Out::number_and_raw(const std::string& name, double value, int digits) {
+  number(name, value, digits);
+  macro(name + "Raw", plain_number(value));
+}
+
+double loglog_slope(const std::vector<double>& x, const std::vector<double>& y) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < x.size() && i < y.size(); ++i) {
+    if (!(x[i] > 0 && y[i] > 0)) continue;
+    const double a = std::log(x[i]), b = std::log(y[i]);
+    n += 1;
+    sx += a;
+    sy += b;
+    sxx += a * a;
+    sxy += a * b;
+  }
+  const double den = n * sxx - sx * sx;
+  return n >= 2 && den > 0 ? (n * sxy - sx * sy) / den : std::nan("");
+}
+
+namespace {
+
+std::string yes_no(const std::string& s) {
+  return s == "true" ? "yes" : "\\textbf{no}";
+}
+
+/// The row of the timing table for (nodes, forces, solver); InputError if absent.
+std::size_t timing_row(const CsvTable& t, int nodes, int forces, const std::string& solver) {
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (t.number(r, "nodes") == nodes && t.number(r, "forces") == forces && t.text(r, "solver") == solver) return r;
+  throw InputError("timing_table.csv: no row for " + std::to_string(nodes) + " nodes, " + std::to_string(forces) +
+                   " forces, solver " + solver);
+}
+
+} // namespace
+
+void timing(const std::filesystem::path& dir, Out& out) {
+  const CsvTable t = CsvTable::read(dir / "timing_table.csv");
+  std::ostringstream rows, calibration;
+  std::string last_case;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const std::string& label = t.text(r, "case");
+    const bool first = label != last_case;
+    if (first && r > 0) rows << "\\midrule\n";
+    last_case = label;
+    rows << (first ? tex_escape(label) + " (" + tex_number(t.number(r, "paper_fps_piii450")) + " frames/s)" : "")
+         << " & \\texttt{" << tex_escape(t.text(r, "solver")) << "} & " << tex_number(t.number(r, "dt")) << " & "
+         << yes_no(t.text(r, "stable")) << " & " << tex_number(t.number(r, "step_median_us")) << " & "
+         << tex_number(t.number(r, "steps_per_second")) << " & " << tex_number(t.number(r, "precompute_ms")) << " & "
+         << tex_number(t.number(r, "realtime_factor")) << (t.text(r, "timing_only") == "true" ? "$^*$" : "") << " & "
+         << tex_number(t.number(r, "displacement_error_vs_fem")) << " \\\\\n";
+    if (t.text(r, "solver") == "cvode")
+      calibration << tex_escape(label) << " & " << tex_number(t.number(r, "nodes")) << " & "
+                  << tex_number(t.number(r, "displacement_error_vs_fem")) << " \\\\\n";
+  }
+  out.files.emplace_back("timing_rows.tex", rows.str());
+  out.files.emplace_back("calibration_rows.tex", calibration.str());
+
+  // The numbers the text states: the 517-node plate under one force, and the 123-node one.
+  const auto at = [&](int nodes, int forces, const std::string& solver, const std::string& col) {
+    return t.number(timing_row(t, nodes, forces, solver), col);
+  };
+  const double full = at(517, 1, "filtered-full", "step_median_us"),
+               ie = at(517, 1, "implicit-euler", "step_median_us");
+  out.number("vtbFullStepUs", full);
+  out.number("vtbIEStepUs", ie);
+  out.number("vtbCvodeStepUs", at(517, 1, "cvode", "step_median_us"));
+  out.number("vtbFemStepUs", at(517, 1, "fem", "step_median_us"));
+  out.number("vtbSpeedupIE", ie / full, 2);
+  out.number("vtbFullRT", at(517, 1, "filtered-full", "realtime_factor"));
+  out.number("vtbFullErr", at(517, 1, "filtered-full", "displacement_error_vs_fem"), 2);
+  out.number("vtbIEErr", at(517, 1, "implicit-euler", "displacement_error_vs_fem"), 2);
+  out.number("vtbCvodeErr", at(517, 1, "cvode", "displacement_error_vs_fem"), 2);
+  out.number("vtbFourFullErr", at(517, 4, "filtered-full", "displacement_error_vs_fem"), 2);
+  out.number("vtbFourCvodeErr", at(517, 4, "cvode", "displacement_error_vs_fem"), 2);
+  out.number("vtbPaperFpsLarge", at(517, 1, "filtered-full", "paper_fps_piii450"));
+  out.number("vtbPaperFpsSmall", at(123, 1, "filtered-full", "paper_fps_piii450"));
+  out.number("vtbFullFps", at(517, 1, "filtered-full", "steps_per_second"));
+  out.number("vtbFpsRatio",
+             at(517, 1, "filtered-full", "steps_per_second") / at(517, 1, "filtered-full", "paper_fps_piii450"), 2);
+  out.number("vtbSmallFullStepUs", at(123, 1, "filtered-full", "step_median_us"));
+  out.macro("vtbNbStable",
+            t.text(timing_row(t, 517, 1, "filtered-neighbors"), "stable") == "true" ? "stable" : "unstable");
+}
+
+void fig3(const std::filesystem::path& dir, Out& out) {
+  // Three times per model, from the file names the reproduction writes (SOLVER_tT.csv).
+  std::map<std::string, std::vector<std::pair<double, std::string>>> snaps;
+  for (const auto& e : std::filesystem::directory_iterator(dir / "fig3")) {
+    const std::string f = e.path().filename().string();
+    const auto u = f.rfind("_t");
+    if (e.path().extension() != ".csv" || f.find("_cells") != std::string::npos || u == std::string::npos) continue;
+    snaps[f.substr(0, u)].emplace_back(std::stod(f.substr(u + 2)), e.path().stem().string());
+  }
+  for (const char* model : {"filtered-full", "fem"})
+    if (snaps[model].size() != 3) throw InputError((dir / "fig3").string() + ": needs three snapshots of " + model);
+  // One magnification for all panels: the largest displacement drawn as 15 % of the plate's
+  // length, rounded down to 1, 2 or 5 times a power of ten.
+  double umax = 0, extent = 0;
+  std::map<std::string, CsvTable> nodes;
+  for (auto& [model, list] : snaps) {
+    std::sort(list.begin(), list.end());
+    for (const auto& [t, stem] : list) {
+      nodes.emplace(stem, CsvTable::read(dir / "fig3" / (stem + ".csv")));
+      const CsvTable& n = nodes.at(stem);
+      for (std::size_t r = 0; r < n.rows(); ++r) {
+        umax = std::max(umax, std::hypot(n.number(r, "ux"), n.number(r, "uy")));
+        extent = std::max(extent, n.number(r, "x"));
+      }
+    }
+  }
+  const double raw = umax > 0 ? 0.15 * extent / umax : 1.0, p = std::pow(10.0, std::floor(std::log10(raw)));
+  const double scale = raw >= 5 * p ? 5 * p : raw >= 2 * p ? 2 * p : p;
+  out.number("vtbFigThreeScale", scale);
+  double smax = 0;
+  for (const auto& [model, list] : snaps)
+    for (std::size_t k = 0; k < list.size(); ++k) {
+      const std::string& stem = list[k].second;
+      const CsvTable& n = nodes.at(stem);
+      const CsvTable c = CsvTable::read(dir / "fig3" / (stem + "_cells.csv"));
+      std::ostringstream os;
+      os << "x y c\n";
+      for (std::size_t r = 0; r < c.rows(); ++r) {
+        const double s = c.number(r, "max_principal_strain");
+        smax = std::max(smax, s);
+        for (const char* v : {"n0", "n1", "n2"}) {
+          const auto i = static_cast<std::size_t>(c.number(r, v));
+          os << n.number(i, "x") + scale * n.number(i, "ux") << ' ' << n.number(i, "y") + scale * n.number(i, "uy")
+             << ' ' << s << '\n';
+        }
+      }
+      out.files.emplace_back("fig3_" + model + "_" + std::to_string(k) + ".dat", os.str());
+    }
+  const auto& times = snaps["filtered-full"];
+  out.number("vtbFigThreeTa", times[0].first);
+  out.number("vtbFigThreeTb", times[1].first);
+  out.number("vtbFigThreeTc", times[2].first);
+  out.number_and_raw("vtbFigThreeStrainMax", smax, 2);
+}
+
+} // namespace paper
+
+std::vector<std::pair<std::string, std::string>> paper_data(const std::filesystem::path& dir) {
+  paper::Out out;
+  const CsvTable meta = CsvTable::read(dir / "meta.csv");
+  std::map<std::string, std::string> m;
+  for (std::size_t r = 0; r < meta.rows(); ++r) m[meta.text(r, "key")] = meta.text(r, "value");
+  out.macro("vtbQuickNote", m["quick"] == "true"
+                                ? "Quick reproduction (\\texttt{-{}-quick}): " + tex_escape(m["duration_s"]) +
+                                      "~s of simulated time and short ladders."
+                                : "Full reproduction: " + tex_escape(m["duration_s"]) + "~s of simulated time.");
+  out.macro("vtbMachine", tex_escape(m["cpu"]) + ", " + tex_escape(m["cores"]) + " cores");
+  paper::timing(dir, out);
+  paper::fig3(dir, out);
+  paper::accuracy(dir, out);
+  paper::stability(dir, out);
+  paper::creep_scaling(dir, out);
+  paper::haptics(dir, out);
+  out.files.emplace_back("numbers.tex", out.macros);
+  return out.files;
+}
+
+void write_paper_data(const std::filesystem::path& reproduce_dir, const std::filesystem::path& out_dir) {
+  auto files = paper_data(reproduce_dir);
+  std::filesystem::create_directories(out_dir);
+  write_files_atomically(out_dir, files);
+}
+
+} // namespace vtb::harness

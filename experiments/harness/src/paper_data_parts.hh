@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// The pieces of `paper_data` (internal): each reads one part of a reproduction and adds its
+/// files and macros to the Out.
+
+#include "vtb/harness/csv_table.hh"
+#include "vtb/harness/paper_data.hh"
+
+#include <filesystem>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace vtb::harness::paper {
+
+struct Out {
+  std::vector<std::pair<std::string, std::string>> files; ///< name, text
+  std::string macros;                                     ///< numbers.tex
+  void macro(const std::string& name, const std::string& value);
+  void number(const std::string& name, double value, int digits = 3);
+  /// NAME for text and NAMERaw for plot coordinates.
+  void number_and_raw(const std::string& name, double value, int digits = 3);
+};
+
+void timing(const std::filesystem::path& dir, Out& out);        // timing_rows.tex, calibration_rows.tex
+void accuracy(const std::filesystem::path& dir, Out& out);      // acc_*.dat, pareto.dat, conv_*.dat, decomp_*.dat
+void stability(const std::filesystem::path& dir, Out& out);     // stab_*.dat, courant.dat
+void fig3(const std::filesystem::path& dir, Out& out);          // fig3_*.dat
+void creep_scaling(const std::filesystem::path& dir, Out& out); // creep.dat, scaling_*.dat
+void haptics(const std::filesystem::path& dir, Out& out);       // haptics_hist.dat, haptics_trace.dat
+
+} // namespace vtb::harness::paper

@@ -1,0 +1,234 @@
+// The plotted series of `paper_data`: accuracy against speed, convergence, decomposition,
+// stability, creep, scaling, the haptic loop.
+#include "paper_data_parts.hh"
+
+#include "vtb/harness/tex.hh"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+namespace vtb::harness::paper {
+namespace {
+
+/// Column values of the rows where `keep` holds, in file order.
+template <class Keep> std::vector<double> column(const CsvTable& t, const std::string& name, Keep keep) {
+  std::vector<double> v;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (keep(r)) v.push_back(t.number(r, name));
+  return v;
+}
+
+/// The distinct values of a text column, in order of first appearance.
+std::vector<std::string> distinct(const CsvTable& t, const std::string& name) {
+  std::vector<std::string> v;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (std::find(v.begin(), v.end(), t.text(r, name)) == v.end()) v.push_back(t.text(r, name));
+  return v;
+}
+
+std::string series(const std::string& header, const std::vector<std::vector<double>>& columns) {
+  std::ostringstream os;
+  os.precision(8);
+  os << header << '\n';
+  for (std::size_t i = 0; !columns.empty() && i < columns[0].size(); ++i) {
+    for (std::size_t c = 0; c < columns.size(); ++c) os << (c ? " " : "") << columns[c][i];
+    os << '\n';
+  }
+  return os.str();
+}
+
+double max_relative_deviation(const std::vector<double>& run, const std::vector<double>& ref) {
+  double dev = 0, scale = 0;
+  for (std::size_t i = 0; i < run.size() && i < ref.size(); ++i) {
+    dev = std::max(dev, std::abs(run[i] - ref[i]));
+    scale = std::max(scale, std::abs(ref[i]));
+  }
+  return scale > 0 ? dev / scale : std::nan("");
+}
+
+} // namespace
+
+void accuracy(const std::filesystem::path& dir, Out& out) {
+  const CsvTable a = CsvTable::read(dir / "accuracy_speed.csv");
+  const CsvTable meta = CsvTable::read(dir / "meta.csv");
+  double duration = 1;
+  for (std::size_t r = 0; r < meta.rows(); ++r)
+    if (meta.text(r, "key") == "duration_s") duration = meta.number(r, "value");
+  // Cost = wall time per simulated second: a cheap step at a tiny dt is not cheap.
+  struct Point {
+    double cost, error;
+    std::string solver;
+  };
+  std::vector<Point> points;
+  // A run identical to the reference (the FEM at the reference's own step) has error 0: no
+  // measurement, and no place on a log axis.
+  const auto ok = [&](std::size_t r) {
+    return a.text(r, "stable") == "true" && std::isfinite(a.number(r, "error_vs_fem")) &&
+           a.number(r, "error_vs_fem") > 0;
+  };
+  for (const std::string& s : distinct(a, "solver")) {
+    const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
+    std::vector<double> cost = column(a, "wall_seconds", mine), err = column(a, "error_vs_fem", mine);
+    for (double& c : cost) c /= duration;
+    for (std::size_t i = 0; i < cost.size(); ++i) points.push_back({cost[i], err[i], s});
+    out.files.emplace_back("acc_" + s + ".dat", series("cost error", {cost, err}));
+  }
+  std::vector<Point> front;
+  for (const Point& p : points) {
+    const bool dominated = std::any_of(points.begin(), points.end(), [&](const Point& q) {
+      return q.cost <= p.cost && q.error <= p.error && (q.cost < p.cost || q.error < p.error);
+    });
+    if (!dominated) front.push_back(p);
+  }
+  std::sort(front.begin(), front.end(), [](const Point& x, const Point& y) { return x.cost < y.cost; });
+  std::vector<double> fc, fe;
+  std::string names;
+  for (const Point& p : front) {
+    fc.push_back(p.cost);
+    fe.push_back(p.error);
+    if (names.find(p.solver) == std::string::npos) names += (names.empty() ? "" : ", ") + p.solver;
+  }
+  out.files.emplace_back("pareto.dat", series("cost error", {fc, fe}));
+  out.number("vtbParetoCount", static_cast<double>(front.size()));
+  out.macro("vtbParetoSolvers", "\\texttt{" + tex_escape(names) + "}");
+  const auto best = std::min_element(points.begin(), points.end(), [](auto& x, auto& y) { return x.error < y.error; });
+  if (best != points.end()) {
+    out.number("vtbBestErr", best->error, 2);
+    out.macro("vtbBestSolver", "\\texttt{" + tex_escape(best->solver) + "}");
+  }
+
+  // Convergence and decomposition over dt, against CVODE at rtol 1e-10.
+  for (const auto& [s, file] :
+       std::vector<std::pair<std::string, std::string>>{{"implicit-euler", "ie"}, {"filtered-full", "full"}}) {
+    const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
+    const auto dt = column(a, "dt", mine), integ = column(a, "error_vs_cvode", mine),
+               total = column(a, "error_vs_fem", mine);
+    out.files.emplace_back("conv_" + file + ".dat", series("dt error total", {dt, integ, total}));
+    out.number(file == "ie" ? "vtbIEOrder" : "vtbFullOrder", loglog_slope(dt, integ), 2);
+  }
+  const auto cv = [&](std::size_t r) { return a.text(r, "solver") == "cvode" && ok(r); };
+  out.files.emplace_back("conv_cvode.dat",
+                         series("rtol error", {column(a, "rtol", cv), column(a, "error_vs_cvode", cv)}));
+  const CsvTable d = CsvTable::read(dir / "decomposition.csv");
+  for (std::size_t r = 0; r < d.rows(); ++r)
+    if (d.text(r, "run") == "cvode" && d.text(r, "against") == "fem") {
+      const double model = d.number(r, "displacement_error_max");
+      out.number("vtbModelErr", model, 2);
+      const auto fixed = [&](std::size_t q) {
+        return a.text(q, "solver") == "filtered-full" || a.text(q, "solver") == "implicit-euler";
+      };
+      const auto dts = column(a, "dt", fixed);
+      const double lo = *std::min_element(dts.begin(), dts.end()), hi = *std::max_element(dts.begin(), dts.end());
+      out.files.emplace_back("model_err.dat", series("dt error", {{lo, hi}, {model, model}}));
+    }
+}
+
+void stability(const std::filesystem::path& dir, Out& out) {
+  const CsvTable t = CsvTable::read(dir / "stability.csv");
+  for (const std::string& s : distinct(t, "solver"))
+    for (const bool stable : {true, false}) {
+      const auto mine = [&](std::size_t r) {
+        return t.text(r, "solver") == s && (t.text(r, "stable") == "true") == stable;
+      };
+      out.files.emplace_back("stab_" + s + (stable ? "_ok" : "_bad") + ".dat",
+                             series("dt scale", {column(t, "dt", mine), column(t, "stiffness_scale", mine)}));
+    }
+  std::map<double, double> courant; // scale -> predicted explicit limit
+  for (std::size_t r = 0; r < t.rows(); ++r) courant[t.number(r, "stiffness_scale")] = t.number(r, "courant_dt");
+  std::vector<double> cd, cs;
+  for (const auto& [scale, dt] : courant) {
+    cd.push_back(dt);
+    cs.push_back(scale);
+  }
+  out.files.emplace_back("courant.dat", series("dt scale", {cd, cs}));
+  const auto ratio = [&](const std::string& s, bool stable, bool largest) {
+    double v = largest ? 0.0 : std::numeric_limits<double>::infinity();
+    for (std::size_t r = 0; r < t.rows(); ++r)
+      if (t.text(r, "solver") == s && (t.text(r, "stable") == "true") == stable)
+        v = largest ? std::max(v, t.number(r, "dt_over_courant")) : std::min(v, t.number(r, "dt_over_courant"));
+    return std::isfinite(v) && v > 0 ? v : std::nan("");
+  };
+  out.number("vtbNbMaxStableRatio", ratio("filtered-neighbors", true, true), 2);
+  out.number("vtbNbMinUnstableRatio", ratio("filtered-neighbors", false, false), 2);
+  out.number("vtbExplicitMinUnstableRatio", ratio("explicit", false, false), 2);
+  for (const auto& [s, name] : std::vector<std::pair<std::string, std::string>>{{"filtered-full", "vtbFullStable"},
+                                                                                {"implicit-euler", "vtbIEStable"}}) {
+    int n = 0, ok = 0;
+    for (std::size_t r = 0; r < t.rows(); ++r)
+      if (t.text(r, "solver") == s) {
+        ++n;
+        ok += t.text(r, "stable") == "true";
+      }
+    out.macro(name, std::to_string(ok) + " of " + std::to_string(n));
+  }
+  out.number("vtbFullMaxRatio", ratio("filtered-full", true, true), 3);
+}
+
+void creep_scaling(const std::filesystem::path& dir, Out& out) {
+  const CsvTable c = CsvTable::read(dir / "creep.csv");
+  const auto all = [](std::size_t) { return true; };
+  const auto t = column(c, "t", all), law = column(c, "analytic", all), full = column(c, "filtered_full", all),
+             ie = column(c, "implicit_euler", all), cv = column(c, "cvode", all);
+  const auto mm_of = [](std::vector<double> v) {
+    for (double& x : v) x *= 1e3;
+    return v;
+  };
+  out.files.emplace_back("creep.dat",
+                         series("t analytic full ie cvode", {t, mm_of(law), mm_of(full), mm_of(ie), mm_of(cv)}));
+  out.number("vtbCreepFullErr", 100 * max_relative_deviation(full, law), 2);
+  out.number("vtbCreepIEErr", 100 * max_relative_deviation(ie, law), 2);
+  out.number("vtbCreepCvodeErr", 100 * max_relative_deviation(cv, law), 2);
+
+  const CsvTable s = CsvTable::read(dir / "scaling.csv");
+  for (const int dim : {2, 3})
+    for (const auto& [solver, tag] :
+         std::vector<std::pair<std::string, std::string>>{{"filtered-full", "Full"}, {"implicit-euler", "IE"}}) {
+      const auto mine = [&](std::size_t r) { return s.number(r, "dim") == dim && s.text(r, "solver") == solver; };
+      const auto nodes = column(s, "nodes", mine), step = column(s, "step_median_us", mine),
+                 pre = column(s, "precompute_ms", mine), heap = column(s, "heap_mb", mine);
+      const std::string d = dim == 2 ? "Two" : "Three";
+      out.files.emplace_back("scaling_" + std::to_string(dim) + "_" + solver + ".dat",
+                             series("nodes step precompute heap", {nodes, step, pre, heap}));
+      out.number("vtbExpStep" + tag + d, loglog_slope(nodes, step), 2);
+      out.number("vtbExpHeap" + tag + d, loglog_slope(nodes, heap), 2);
+      if (!nodes.empty()) {
+        if (tag == "Full") out.number("vtbMaxNodes" + d, nodes.back(), 4);
+        out.number("vtbMaxStep" + tag + d, step.back());
+      }
+    }
+}
+
+void haptics(const std::filesystem::path& dir, Out& out) {
+  const CsvTable p = CsvTable::read(dir / "haptics_periods.csv");
+  const auto all = [](std::size_t) { return true; };
+  std::vector<double> periods = column(p, "period_us", all);
+  if (!periods.empty()) {
+    const double lo = std::floor(*std::min_element(periods.begin(), periods.end()));
+    const double hi = std::ceil(*std::max_element(periods.begin(), periods.end())) + 1;
+    const int bins = 60;
+    std::vector<double> edge(bins + 1), count(bins + 1, 0.0);
+    for (int b = 0; b <= bins; ++b) edge[b] = lo + (hi - lo) * b / bins;
+    for (double v : periods) count[std::min(bins - 1, static_cast<int>((v - lo) / (hi - lo) * bins))] += 1;
+    count[bins] = count[bins - 1]; // ybar interval: the last edge closes the last bin
+    out.files.emplace_back("haptics_hist.dat", series("edge count", {edge, count}));
+  }
+  const CsvTable tr = CsvTable::read(dir / "haptics_trace.csv");
+  out.files.emplace_back("haptics_trace.dat",
+                         series("t force hy", {column(tr, "t", all), column(tr, "force", all), column(tr, "hy", all)}));
+  const CsvTable s = CsvTable::read(dir / "haptics_summary.csv");
+  out.number("vtbServoRate", s.number(0, "rate_hz"), 4);
+  out.number("vtbServoPNineNine", s.number(0, "period_p99_us"), 4);
+  out.number("vtbServoMax", s.number(0, "period_max_us"), 4);
+  out.number("vtbMisses", s.number(0, "deadline_misses"));
+  out.number("vtbServoSamples", s.number(0, "samples"), 6);
+  out.number_and_raw("vtbStallTime", s.number(0, "stall_time"));
+  out.number("vtbFaultTime", s.number(0, "fault_time"), 4);
+  out.number("vtbForceZeroMs", 1e3 * (s.number(0, "force_zero_time") - s.number(0, "fault_time")), 3);
+  out.number("vtbMaxForce", s.number(0, "max_force"), 3);
+  out.number_and_raw("vtbDeviceLimit", s.number(0, "device_limit"), 3);
+}
+
+} // namespace vtb::harness::paper

@@ -1,0 +1,29 @@
+#pragma once
+/// \file
+/// The reproduction's parts beyond the paper's own table (internal to the harness): each
+/// writes one CSV into the output folder, which the paper (scripts/build_paper.sh) plots.
+
+#include <filesystem>
+#include <iosfwd>
+
+namespace vtb::harness::parts {
+
+/// meta.csv: key,value rows: quick, duration_s, cores, cpu (what the title page states).
+void write_meta(const std::filesystem::path& out, bool quick, double duration);
+
+/// creep.csv: the creep strip's tip displacement over time for filtered-full, implicit Euler
+/// and CVODE beside the Kelvin-Voigt law u_static (1 - exp(-t / tau)), u_static from the
+/// spring network's linear static solve.
+void write_creep(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
+
+/// haptics_periods.csv (each servo cycle's period) and haptics_trace.csv (t, handle and
+/// force of the first probe) of a real-time session of haptic_press.toml with the physics
+/// stalled at `stall_time`; haptics_summary.csv: misses, p99, fault and force-zero times.
+void write_haptics(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, double stall_time,
+                   std::ostream* log);
+
+/// scaling.csv: per mesh of a 2D rectangle and a 3D box ladder and per solver (filtered-full,
+/// implicit-euler): nodes, springs, precompute, median step and the integrator's heap bytes.
+void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* log);
+
+} // namespace vtb::harness::parts

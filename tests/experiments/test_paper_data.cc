@@ -1,0 +1,124 @@
+// The paper's data step: LaTeX escaping, the CSV reader, numbers computed from the fixture
+// reproduction, and the figure list that report.md and build_paper.sh share.
+#include "vtb/harness/csv_table.hh"
+#include "vtb/harness/paper_data.hh"
+#include "vtb/harness/reproduce.hh"
+#include "vtb/harness/tex.hh"
+#include "vtb/meshes/input_error.hh"
+
+#include <gtest/gtest.h>
+
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <map>
+
+namespace vtb {
+namespace {
+
+const std::filesystem::path kFixture = std::filesystem::path(VTB_SOURCE_DIR) / "tests/paper/fixture";
+
+TEST(TexEscape, EverySpecialPrintsLiterally) {
+  EXPECT_EQ(harness::tex_escape("a_b%c&d#e$f"), "a\\_b\\%c\\&d\\#e\\$f");
+  EXPECT_EQ(harness::tex_escape("\\input{x}"), "\\textbackslash{}input\\{x\\}");
+  EXPECT_EQ(harness::tex_escape("~^"), "\\textasciitilde{}\\textasciicircum{}");
+  EXPECT_EQ(harness::tex_escape(std::string("a\nb\x01")), "ab"); // no line breaks or controls from data
+  // Nothing a CSV can hold leaves a bare special: read the output as TeX would, skipping our
+  // own commands (\\textbackslash{} ...) and escaped characters (\\_ ...); no special is left.
+  const std::string all = harness::tex_escape("x_%&#$\\{}~^y");
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (all[i] == '\\') {
+      std::size_t j = i + 1;
+      while (j < all.size() && std::isalpha(static_cast<unsigned char>(all[j]))) ++j;
+      i = j == i + 1 ? i + 1 : (all.compare(j, 2, "{}") == 0 ? j + 1 : j - 1);
+      continue;
+    }
+    EXPECT_EQ(std::string("_%&#$\\{}~^").find(all[i]), std::string::npos) << "bare '" << all[i] << "' in " << all;
+  }
+}
+
+TEST(TexNumber, ReadableForms) {
+  EXPECT_EQ(harness::tex_number(29.4321), "29.4");
+  EXPECT_EQ(harness::tex_number(30019.8), "30020"); // not 3e+04
+  EXPECT_EQ(harness::tex_number(1.94e-8), "\\ensuremath{1.94\\times10^{-8}}");
+  EXPECT_EQ(harness::tex_number(std::nan("")), "n/a");
+  EXPECT_THROW(harness::tex_macro("vtb1", "x"), std::logic_error); // TeX names are letters only
+}
+
+TEST(CsvTable, QuotedFieldsAndClearErrors) {
+  const auto t = harness::CsvTable::parse("case,n\n\"a, \"\"b\"\"\",3\nc,nan\n", "t.csv");
+  ASSERT_EQ(t.rows(), 2u);
+  EXPECT_EQ(t.text(0, "case"), "a, \"b\"");
+  EXPECT_EQ(t.number(0, "n"), 3.0);
+  EXPECT_TRUE(std::isnan(t.number(1, "n")));
+  EXPECT_THROW(t.text(0, "missing"), InputError);
+  try {
+    harness::CsvTable::parse("a,b\n1,2,3\n", "bad.csv");
+    FAIL() << "a row longer than the header was accepted";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "bad.csv:2: 3 fields where the header has 2");
+  }
+  try {
+    harness::CsvTable::parse("a\nx\n", "t.csv").number(0, "a");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "t.csv: row 2, column \"a\": \"x\" is not a number");
+  }
+}
+
+std::map<std::string, std::string> data_files() {
+  std::map<std::string, std::string> m;
+  for (auto& [name, text] : harness::paper_data(kFixture)) m[name] = text;
+  return m;
+}
+
+TEST(PaperData, NumbersComeFromTheFixture) {
+  const auto files = data_files();
+  const std::string& numbers = files.at("numbers.tex");
+  // The fixture's 517-node, one-force row: filtered-full 29.4 us, implicit Euler 276 us.
+  const auto t = harness::CsvTable::read(kFixture / "timing_table.csv");
+  double full = 0, ie = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (t.number(r, "nodes") == 517 && t.number(r, "forces") == 1) {
+      if (t.text(r, "solver") == "filtered-full") full = t.number(r, "step_median_us");
+      if (t.text(r, "solver") == "implicit-euler") ie = t.number(r, "step_median_us");
+    }
+  EXPECT_NE(numbers.find("\\newcommand\\vtbFullStepUs{" + harness::tex_number(full) + "}"), std::string::npos);
+  EXPECT_NE(numbers.find("\\newcommand\\vtbSpeedupIE{" + harness::tex_number(ie / full, 2) + "}"), std::string::npos);
+  // Every figure's series exists; the Pareto front is non-empty and sorted by cost.
+  for (const char* f : {"timing_rows.tex", "calibration_rows.tex", "pareto.dat", "courant.dat", "creep.dat",
+                        "haptics_hist.dat", "haptics_trace.dat", "fig3_fem_2.dat", "scaling_3_filtered-full.dat"})
+    EXPECT_TRUE(files.count(f)) << f;
+  EXPECT_GT(std::count(files.at("pareto.dat").begin(), files.at("pareto.dat").end(), '\n'), 1);
+}
+
+TEST(PaperData, LogLogSlopeRecoversAPowerLaw) {
+  // The fitted order (convergence) and exponent (scaling): y = 3 x^1.5 exactly, plus points
+  // that a log axis cannot hold (x or y <= 0), which the fit skips.
+  const std::vector<double> x = {1, 2, 4, 8, 0, 5}, y = {3, 3 * std::pow(2, 1.5), 3 * 8.0, 3 * std::pow(8, 1.5), 1, -1};
+  EXPECT_NEAR(harness::paper::loglog_slope(x, y), 1.5, 1e-12);
+  EXPECT_TRUE(std::isnan(harness::paper::loglog_slope({1}, {1})));
+}
+
+TEST(PaperData, MissingFileIsOneClearError) {
+  try {
+    harness::paper_data(kFixture / "fig3");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("meta.csv: cannot read"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ReportFigures, EachHasItsPgfplotsSource) {
+  for (const auto& f : harness::kReportFigures)
+    EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(VTB_SOURCE_DIR) / "paper/figures" /
+                                        (std::string(f.file) + ".tex")))
+        << f.file;
+  std::size_t sources = 0;
+  for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(VTB_SOURCE_DIR) / "paper/figures"))
+    sources += e.path().extension() == ".tex";
+  EXPECT_EQ(sources, std::size(harness::kReportFigures)) << "a figure the report does not show, or the reverse";
+}
+
+} // namespace
+} // namespace vtb

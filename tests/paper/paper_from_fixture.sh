@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# The paper is built from a small fixture reproduction (tests/paper/fixture, the CSV files of a
+# real `vtb reproduce --quick`) and read back with pdftotext:
+#  1. a timing changed in the fixture's CSV is the number the PDF prints (numbers come from data);
+#  2. a case name full of TeX specials (_ % & # $ \ { } ~ ^ and an \input) prints literally;
+#  3. pdflatex ran with shell escape off (not even the restricted default);
+#  4. every figure exists as a non-empty PDF and PNG, the PNG is not blank, and it changes
+#     when its data changes (creep.csv scaled -> creep.png differs, fig3.png does not).
+# Usage: paper_from_fixture.sh BUILD_DIR
+set -euo pipefail
+build=$(realpath "$1")
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cp -r "$root/tests/paper/fixture" "$tmp/repro"
+fail() { echo "FAIL: $*" >&2; exit 1; }
+
+weird='123 nodes_%&#$\input{x}~^ one force'
+python3 - "$tmp/repro/timing_table.csv" "$weird" <<'PY'
+import csv, sys
+path, weird = sys.argv[1], sys.argv[2]
+rows = list(csv.reader(open(path)))
+h = rows[0]
+for r in rows[1:]:
+    if r[h.index('nodes')] == '517' and r[h.index('forces')] == '1' and r[h.index('solver')] == 'filtered-full':
+        r[h.index('step_median_us')] = '86.4'
+    if r[h.index('nodes')] == '123':
+        r[h.index('case')] = weird
+csv.writer(open(path, 'w', newline=''), lineterminator='\n').writerows(rows)
+PY
+grep -q '86\.4' "$root/tests/paper/fixture/timing_table.csv" && fail "the fixture's timing table already holds 86.4"
+
+VTB_BUILD=$build bash "$root/scripts/build_paper.sh" "$tmp/repro" "$tmp/paper" >/dev/null
+pdftotext -layout "$tmp/paper/vtb.pdf" "$tmp/vtb.txt"
+grep -q 'takes 86\.4 .s per step' "$tmp/vtb.txt" || fail "the changed timing (86.4 us) is not in the PDF's text"
+grep -qF "$weird" "$tmp/vtb.txt" || fail "the case name with TeX specials did not print literally"
+# pdflatex logs "\write18 enabled" (or "restricted \write18 enabled") whenever shell escape is on.
+grep -q 'write18 enabled' "$tmp/paper/vtb.log" && fail "pdflatex ran with shell escape"
+grep -q 'Quick reproduction' "$tmp/vtb.txt" || fail "a --quick reproduction's paper does not say so"
+
+non_blank() { # PNG -> fraction of pixels that differ from the most common grey level > 1 %
+  pdftoppm -gray -r 40 -singlefile "$1" "$tmp/probe"
+  python3 - "$tmp/probe.pgm" <<'PY'
+import sys, collections
+data = open(sys.argv[1], 'rb').read()
+parts = data.split(maxsplit=4)  # P5 w h maxval pixels
+pixels = parts[4]
+common = collections.Counter(pixels).most_common(1)[0][1]
+sys.exit(0 if 1 - common / len(pixels) > 0.01 else 1)
+PY
+}
+for src in "$root"/paper/figures/*.tex; do
+  name=$(basename "$src" .tex)
+  [ -s "$tmp/paper/figures/$name.pdf" ] || fail "figures/$name.pdf missing or empty"
+  [ -s "$tmp/repro/figures/$name.png" ] || fail "figures/$name.png (beside report.md) missing or empty"
+  non_blank "$tmp/paper/figures/$name.pdf" || fail "figure $name is blank"
+done
+
+cp "$tmp/repro/figures/creep.png" "$tmp/creep_before.png"
+cp "$tmp/repro/figures/fig3.png" "$tmp/fig3_before.png"
+python3 - "$tmp/repro/creep.csv" <<'PY'
+import csv, sys
+rows = list(csv.reader(open(sys.argv[1])))
+for r in rows[1:]:
+    r[4] = str(2 * float(r[4]))  # cvode's tip twice as far
+csv.writer(open(sys.argv[1], 'w', newline=''), lineterminator='\n').writerows(rows)
+PY
+VTB_BUILD=$build bash "$root/scripts/build_paper.sh" "$tmp/repro" "$tmp/paper" >/dev/null
+cmp -s "$tmp/creep_before.png" "$tmp/repro/figures/creep.png" && fail "creep.png did not change with creep.csv"
+cmp -s "$tmp/fig3_before.png" "$tmp/repro/figures/fig3.png" || fail "fig3.png changed though its data did not"
+echo "paper from fixture: ok ($(pdfinfo "$tmp/paper/vtb.pdf" | awk '/Pages/ {print $2}') pages)"
