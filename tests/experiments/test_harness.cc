@@ -293,6 +293,16 @@ dt = 2e-3
   EXPECT_EQ(header.rfind("solver,dt,rtol,stable,error_all,error_probes", 0), 0u) << header;
   EXPECT_TRUE(std::filesystem::exists(dir / "study_plot.tex"));
   EXPECT_FALSE(std::filesystem::exists(dir / "study.csv.part"));
+  // The plot is the paper's Pareto figure drawn from the study's own series.
+  std::ifstream plot(dir / "study_plot.tex");
+  const std::string tex((std::istreambuf_iterator<char>(plot)), std::istreambuf_iterator<char>());
+  EXPECT_NE(tex.find("paper/figures/accuracy_speed.tex"), std::string::npos) << tex;
+  std::ifstream ie_series(dir / "data/acc_implicit-euler.dat");
+  std::string line;
+  int points = 0;
+  while (std::getline(ie_series, line)) ++points;
+  EXPECT_EQ(points, 1 + 3) << "header and the three stable implicit-Euler runs";
+  EXPECT_TRUE(std::filesystem::exists(dir / "data/pareto.dat"));
 }
 
 } // namespace

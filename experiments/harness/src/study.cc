@@ -1,4 +1,5 @@
 #include "vtb/harness/study.hh"
+#include "vtb/harness/tex.hh"
 
 #include "vtb/core/cvode_solver.hh"
 #include "vtb/core/explicit_euler.hh"
@@ -49,6 +50,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
   StudyResult res;
   res.scene = scene.name;
   res.reference = o.reference;
+  res.filter = scene.solver.filter;
   res.nodes = model.num_nodes();
   res.duration = model.duration;
   // The reference, converged at its own step: the continuum (P2, one refinement, dt / 4), or
@@ -147,30 +149,37 @@ std::string num(double x) {
 }
 
 /// The figure: pgfplots, log-log, every stable run a mark per solver, the front a line.
-std::string plot_tex(const StudyResult& r) {
-  std::ostringstream t;
-  t << "\\documentclass[border=4pt]{standalone}\n\\usepackage{pgfplots}\n\\pgfplotsset{compat=1.18}\n"
-    << "\\begin{document}\n\\begin{tikzpicture}\n\\begin{loglogaxis}[width=11cm, height=7.5cm, "
-    << "xlabel={wall seconds per simulated second}, ylabel={displacement error vs " << r.reference << "}, "
-    << "legend pos=outer north east, legend style={font=\\small}, grid=major]\n";
-  std::vector<std::string> solvers;
-  for (const auto& row : r.rows)
-    if (std::find(solvers.begin(), solvers.end(), row.solver) == solvers.end()) solvers.push_back(row.solver);
-  for (const auto& s : solvers) {
-    t << "\\addplot+[only marks] table[x=cost, y=error, col sep=comma] {\n cost,error\n";
+/// The study's series in the format of the reproduction's (paper_series.cc), so that the
+/// paper's own Pareto figure, paper/figures/accuracy_speed.tex, draws both: data/acc_NAME.dat
+/// per solver (cost error), data/pareto.dat, and data/numbers.tex naming the reference.
+std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r, const std::string& filter) {
+  const auto plotted = [&](const std::string& solver) { return solver == "filtered" ? "filtered-" + filter : solver; };
+  std::vector<std::pair<std::string, std::string>> files;
+  for (const char* name : {"filtered-full", "filtered-neighbors", "implicit-euler", "cvode", "fem", "explicit"}) {
+    std::ostringstream t;
+    t << "cost error\n";
     for (const auto& row : r.rows)
-      if (row.solver == s && row.stable && std::isfinite(row.error_all) && row.error_all > 0)
-        t << " " << num(row.cost) << "," << num(row.error_all) << "\n";
-    t << "};\n\\addlegendentry{" << s << "}\n";
+      if (plotted(row.solver) == name && row.stable && std::isfinite(row.error_all) && row.error_all > 0)
+        t << num(row.cost) << ' ' << num(row.error_all) << '\n';
+    files.emplace_back(std::string("acc_") + name + ".dat", t.str());
   }
-  t << "\\addplot[black, thick, dashed] table[x=cost, y=error, col sep=comma] {\n cost,error\n";
   std::vector<const StudyRow*> front;
   for (const auto& row : r.rows)
     if (row.pareto && row.error_all > 0) front.push_back(&row);
   std::sort(front.begin(), front.end(), [](const StudyRow* a, const StudyRow* b) { return a->cost < b->cost; });
-  for (const auto* row : front) t << " " << num(row->cost) << "," << num(row->error_all) << "\n";
-  t << "};\n\\addlegendentry{Pareto front}\n\\end{loglogaxis}\n\\end{tikzpicture}\n\\end{document}\n";
-  return t.str();
+  std::ostringstream p;
+  p << "cost error\n";
+  for (const auto* row : front) p << num(row->cost) << ' ' << num(row->error_all) << '\n';
+  files.emplace_back("pareto.dat", p.str());
+  files.emplace_back("numbers.tex", tex_macro("vtbAccuracyReference", r.reference == "cvode" ? "CVODE" : "FEM"));
+  return files;
+}
+
+/// study_plot.tex: the paper's figure drawn alone from data/ (standalone class).
+std::string plot_tex(const std::filesystem::path& paper_dir) {
+  return "\\documentclass[border=4pt]{standalone}\n\\input{" + (paper_dir / "preamble.tex").string() +
+         "}\n\\begin{document}\n\\input{" + (paper_dir / "figures/accuracy_speed.tex").string() +
+         "}\n\\end{document}\n";
 }
 
 } // namespace
@@ -206,7 +215,9 @@ std::filesystem::path write_study(const StudyResult& r, const std::filesystem::p
       << ',' << (row.skipped ? "" : num(row.total_seconds)) << ',' << (row.skipped ? "" : num(row.cost)) << ','
       << (row.stable ? num(1.0 / row.cost) : "") << ',' << (row.pareto ? "true" : "false") << ",\"" << row.failure
       << "\"\n";
-  write_files_atomically(dir, {{"study.csv", c.str()}, {"study_plot.tex", plot_tex(r)}});
+  std::filesystem::create_directories(dir / "data");
+  write_files_atomically(dir / "data", plot_data(r, r.filter));
+  write_files_atomically(dir, {{"study.csv", c.str()}, {"study_plot.tex", plot_tex(VTB_PAPER_DIR)}});
   // The PNG needs LaTeX (pgfplots) and poppler: both optional here, so their absence is a note.
   if (std::system("command -v pdflatex >/dev/null 2>&1 && command -v pdftoppm >/dev/null 2>&1") != 0) {
     note = "no plot: pdflatex or pdftoppm is not installed (study_plot.tex is written; the paper's setup installs "

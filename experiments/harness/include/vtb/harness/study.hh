@@ -34,6 +34,7 @@ struct StudyRow {
 
 struct StudyResult {
   std::string scene, reference;
+  std::string filter = "full"; ///< the scene's filter: what the solver "filtered" means
   int nodes = 0;
   double duration = 0;
   std::string reference_note; ///< what the reference run was
