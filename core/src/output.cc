@@ -60,21 +60,6 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   return j.dump(2) + "\n";
 }
 
-void write_files_atomically(const std::filesystem::path& dir,
-                            const std::vector<std::pair<std::string, std::string>>& files) {
-  auto part = [&](const std::string& name) { return dir / (name + ".part"); };
-  for (const auto& [name, text] : files) {
-    std::ofstream f(part(name), std::ios::binary | std::ios::trunc);
-    if (f) f << text;
-    if (!f) {
-      std::error_code ec;
-      for (const auto& [other, unused] : files) std::filesystem::remove(part(other), ec);
-      throw InputError((dir / name).string() + ": cannot write");
-    }
-  }
-  for (const auto& [name, text] : files) std::filesystem::rename(part(name), dir / name);
-}
-
 void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times) {
   std::ostringstream os;
   os << std::setprecision(12)
@@ -102,9 +87,6 @@ template <int dim> std::string with_probes(const std::string& summary, const Mod
 template <int dim>
 void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
                        const RunReport& report, const std::string& scene_name) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
   std::ostringstream probes, reactions;
   probes << std::setprecision(10) << "t,probe,ux,uy,uz\n";
   reactions << std::setprecision(10) << "t,region,fx,fy,fz\n";

@@ -247,7 +247,7 @@ RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::fi
 
 template <int dim>
 void write_frames(const Model<dim>& model, const Trajectory<dim>& traj, const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir / "frames");
+  ensure_directory(dir / "frames");
   std::vector<float> strain;
   std::vector<double> force;
   for (std::size_t k = 0; k < traj.field.size(); ++k) {

@@ -2,6 +2,7 @@
 #include "commands.hh"
 
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <iostream>
@@ -37,6 +38,9 @@ int main(int argc, char** argv) {
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;
+  } catch (const vtb::IoError& e) { // the input was fine; the folder or the disk was not
+    std::cerr << "vtb: I/O error: " << e.what() << "\n";
+    return 74; // EX_IOERR (sysexits.h)
   } catch (const std::exception& e) {
     std::cerr << "vtb: internal error: " << e.what() << "\n";
     return 70;

@@ -3,6 +3,7 @@
 #include "app.hh"
 
 #include "vtb/core/model.hh"
+#include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <GLFW/glfw3.h>
@@ -74,15 +75,9 @@ void write_png(GLFWwindow* w, const std::string& path) {
   for (int y = 0; y < fh; ++y)
     std::copy_n(px.begin() + static_cast<std::ptrdiff_t>(row * static_cast<std::size_t>(fh - 1 - y)), row,
                 flipped.begin() + static_cast<std::ptrdiff_t>(row * static_cast<std::size_t>(y)));
-  const std::string tmp = path + ".part";
-  if (!stbi_write_png(tmp.c_str(), fw, fh, 3, flipped.data(), static_cast<int>(row))) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("vtb view: cannot write " + path);
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error("vtb view: cannot write " + path);
-  }
+  commit_file_atomically(path, [&](const std::filesystem::path& tmp) {
+    return stbi_write_png(tmp.c_str(), fw, fh, 3, flipped.data(), static_cast<int>(row)) != 0;
+  });
 }
 
 template <int dim>

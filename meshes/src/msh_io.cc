@@ -1,5 +1,7 @@
 #include "vtb/meshes/msh_io.hh"
 
+#include "vtb/meshes/atomic_file.hh"
+
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/mesh_serialize.hh"
 #include "vtb/meshes/msh_prescan.hh"
@@ -293,6 +295,7 @@ AnyMesh read_msh(const std::filesystem::path& file) {
 template <int dim> void write_msh(const Mesh<dim>& mesh, const std::filesystem::path& file) {
   // gmsh picks the format from the extension, so the temporary name ends in .msh too.
   const std::filesystem::path tmp = file.parent_path() / ("." + file.filename().string() + ".part.msh");
+  ensure_directory(file.parent_path());
   try {
     GmshSession session;
     gmsh::model::add("vtb");
@@ -328,10 +331,16 @@ template <int dim> void write_msh(const Mesh<dim>& mesh, const std::filesystem::
     }
     gmsh::write(tmp.string());
   } catch (const std::string& e) {
-    std::filesystem::remove(tmp);
-    throw InputError(file.string() + ": cannot write: " + e);
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw IoError(file.string() + ": cannot write: " + e);
   }
-  std::filesystem::rename(tmp, file);
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw IoError(file.string() + ": cannot write: " + ec.message());
+  }
 }
 
 template void write_msh<2>(const Mesh<2>&, const std::filesystem::path&);

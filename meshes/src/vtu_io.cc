@@ -1,5 +1,6 @@
 #include "vtb/meshes/vtu_io.hh"
 
+#include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <zlib.h>
@@ -52,7 +53,7 @@ std::string compressed(const void* data, std::size_t bytes) {
 }
 
 template <class T>
-void array(std::ofstream& f, const char* type, const std::string& name, int components, const std::vector<T>& v) {
+void array(std::ostream& f, const char* type, const std::string& name, int components, const std::vector<T>& v) {
   f << "<DataArray type=\"" << type << "\"";
   if (!name.empty()) f << " Name=\"" << name << "\"";
   f << " NumberOfComponents=\"" << components << "\" format=\"binary\">\n"
@@ -83,10 +84,7 @@ void write_vtu(const Mesh<dim>& mesh, const std::filesystem::path& file, const s
     if (fl.values.size() != n * static_cast<std::size_t>(fl.components))
       throw std::invalid_argument("write_vtu: field " + fl.name + " has the wrong size");
   }
-  const std::filesystem::path tmp = file.string() + ".part";
-  {
-    std::ofstream f(tmp, std::ios::binary);
-    if (!f) throw InputError(file.string() + ": cannot write");
+  write_file_atomically(file, [&](std::ostream& f) {
     f << "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"0.1\" byte_order=\"LittleEndian\" "
          "header_type=\"UInt32\" compressor=\"vtkZLibDataCompressor\">\n<UnstructuredGrid>\n<Piece NumberOfPoints=\""
       << mesh.num_nodes() << "\" NumberOfCells=\"" << mesh.num_cells() << "\">\n<Points>\n";
@@ -120,9 +118,7 @@ void write_vtu(const Mesh<dim>& mesh, const std::filesystem::path& file, const s
       f << (cell ? "</CellData>\n" : "</PointData>\n");
     }
     f << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
-    if (!f) throw InputError(file.string() + ": write failed");
-  }
-  std::filesystem::rename(tmp, file);
+  });
 }
 
 template void write_vtu<2>(const Mesh<2>&, const std::filesystem::path&, const std::vector<VtuField>&);

@@ -26,6 +26,7 @@
 #include "grid.hh"
 #include "time_loop.hh"
 #include "time_scheme.hh"
+#include "vtb/meshes/atomic_file.hh"
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/timer.h>
@@ -119,9 +120,7 @@ template <int dim> void KelvinVoigtProblem<dim>::write_frame(const Vector<double
   data_out.build_patches(m_mapping, static_cast<unsigned int>(m_opt.degree));
   char name[32];
   std::snprintf(name, sizeof name, "frame_%04zu.vtu", index);
-  std::filesystem::create_directories(m_opt.frames_dir);
-  std::ofstream f(m_opt.frames_dir / name);
-  data_out.write_vtu(f);
+  write_file_atomically(m_opt.frames_dir / name, [&](std::ostream& f) { data_out.write_vtu(f); });
 }
 
 template <int dim> void KelvinVoigtProblem<dim>::make_grid() {

@@ -36,6 +36,20 @@ check "broken mesh exits 1 naming the file" '[ $rc -eq 1 ] && grep -q "broken.ms
 "$vtb" run "$src/experiments/scenes/plate_step.toml" --duration 0.05 --out "$work/out_good" > /dev/null; rc=$?
 check "good scene runs" '[ $rc -eq 0 ] && [ -s "$work/out_good/probes.csv" ] && [ -s "$work/out_good/reactions.csv" ] && [ -s "$work/out_good/summary.json" ]'
 
+# A write that fails is an I/O error (exit 74), not bad input, named in one line; nothing is
+# left behind. Root ignores permissions, so the unwritable folders are a path through a
+# regular file and /proc (a file system that refuses new folders).
+printf 'x' > "$work/afile"
+"$vtb" run "$src/experiments/scenes/plate_step.toml" --duration 0.05 --out "$work/afile/out" > /dev/null 2> "$work/err"; rc=$?
+check "output under a file exits 74 naming the folder" '[ $rc -eq 74 ] && grep -q "^vtb: I/O error: $work/afile/out: cannot create the folder" "$work/err" && [ $(wc -l < "$work/err") -eq 1 ] && [ "$(cat "$work/afile")" = x ]'
+"$vtb" run "$src/experiments/scenes/plate_step.toml" --duration 0.05 --out /proc/vtb_contract_out > /dev/null 2> "$work/err"; rc=$?
+check "output on a read-only file system exits 74" '[ $rc -eq 74 ] && grep -q "I/O error: /proc/vtb_contract_out" "$work/err" && [ ! -e /proc/vtb_contract_out ]'
+"$vtb" mesh generate rectangle --size 1 1 --divisions 2 2 -o "$work/afile/m.msh" > /dev/null 2> "$work/err"; rc=$?
+check "mesh written under a file exits 74" '[ $rc -eq 74 ] && grep -q "I/O error: $work/afile" "$work/err"'
+"$vtb" compare "$src/experiments/scenes/plate_step.toml" --solvers filtered-full --reference cvode --out "$work/afile/cmp" > /dev/null 2> "$work/err"; rc=$?
+check "compare into an unwritable folder exits 74" '[ $rc -eq 74 ] && [ "$(cat "$work/afile")" = x ]'
+ls "$work" | grep -q "\.part" ; check "no .part file left anywhere" '[ $? -ne 0 ]'
+
 "$vtb" run "$src/experiments/scenes/plate_step.toml" --solver explicit --dt 1e-3 --duration 0.2 --out "$work/out_unstable" > /dev/null 2> "$work/err"; rc=$?
 check "unstable run exits 2 with stable=false" '[ $rc -eq 2 ] && grep -q "\"stable\": false" "$work/out_unstable/summary.json" && grep -q "unstable" "$work/err"'
 

@@ -464,9 +464,6 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
 }
 
 void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, const std::string& scene_name) {
-  std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec) throw InputError(dir.string() + ": cannot create output folder: " + ec.message());
   std::ostringstream csv;
   csv << std::setprecision(10) << "t,hx,hy,fx,fy";
   for (std::size_t i = 1; i < r.probes.size(); ++i)

@@ -88,7 +88,6 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
 }
 
 void write_compare(const CompareResult& r, const std::filesystem::path& dir) {
-  std::filesystem::create_directories(dir);
   std::ostringstream c, d;
   c << "solver,reference,nodes,dt,steps,stable,displacement_error_max,displacement_error_final,probe_error_max,"
        "reaction_error_max,reaction_error_final,precompute_seconds,step_median_seconds,step_p99_seconds,total_seconds,"

@@ -184,7 +184,6 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
 
 void write_paper_data(const std::filesystem::path& reproduce_dir, const std::filesystem::path& out_dir) {
   auto files = paper_data(reproduce_dir);
-  std::filesystem::create_directories(out_dir);
   write_files_atomically(out_dir, files);
 }
 

@@ -51,7 +51,6 @@ void write_text(const std::filesystem::path& p, const std::string& text) {
 /// Field snapshots of one run for the Fig. 3 analogue: CSV and VTU at the requested times.
 void write_fig3(const std::filesystem::path& dir, const std::string& solver, const Model<2>& model,
                 const Trajectory<2>& tr, const std::vector<double>& times) {
-  std::filesystem::create_directories(dir);
   for (double t : times) {
     std::size_t k = 0;
     for (std::size_t j = 0; j < tr.t.size(); ++j)
@@ -299,7 +298,7 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
 
 std::string run_reproduce(const ReproduceOptions& o) {
   const double duration = o.quick ? 2.0 : 10.0;
-  std::filesystem::create_directories(o.out);
+  ensure_directory(o.out);
   parts::write_meta(o.out, o.quick, duration);
   const TimingPart timing = run_timing(o, duration);
   write_timing_csv(o, timing);

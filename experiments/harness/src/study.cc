@@ -202,7 +202,7 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
 }
 
 std::filesystem::path write_study(const StudyResult& r, const std::filesystem::path& dir, std::string& note) {
-  std::filesystem::create_directories(dir);
+  ensure_directory(dir);
   std::ostringstream c;
   c << "solver,dt,rtol,stable,error_all,error_probes,step_median_seconds,total_seconds,seconds_per_simulated_second,"
        "realtime_factor,pareto,note\n";
@@ -215,7 +215,6 @@ std::filesystem::path write_study(const StudyResult& r, const std::filesystem::p
       << ',' << (row.skipped ? "" : num(row.total_seconds)) << ',' << (row.skipped ? "" : num(row.cost)) << ','
       << (row.stable ? num(1.0 / row.cost) : "") << ',' << (row.pareto ? "true" : "false") << ",\"" << row.failure
       << "\"\n";
-  std::filesystem::create_directories(dir / "data");
   write_files_atomically(dir / "data", plot_data(r, r.filter));
   write_files_atomically(dir, {{"study.csv", c.str()}, {"study_plot.tex", plot_tex(VTB_PAPER_DIR)}});
   // The PNG needs LaTeX (pgfplots) and poppler: both optional here, so their absence is a note.

@@ -1,5 +1,7 @@
 #include "vtb/harness/sweep.hh"
 
+#include "vtb/meshes/atomic_file.hh"
+
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/harness/solvers.hh"
 
@@ -73,10 +75,7 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
 }
 
 void write_sweep(const std::vector<SweepCell>& cells, const std::filesystem::path& file) {
-  if (file.has_parent_path()) std::filesystem::create_directories(file.parent_path());
-  const auto tmp = file.string() + ".part";
-  {
-    std::ofstream f(tmp);
+  write_file_atomically(file, [&](std::ostream& f) {
     f << std::setprecision(6);
     f << "solver,dt,stiffness_scale,young_modulus,stable,criterion,failure,max_strain,displacement_error_max,"
          "step_median_seconds,courant_dt,dt_over_courant\n";
@@ -85,9 +84,7 @@ void write_sweep(const std::vector<SweepCell>& cells, const std::filesystem::pat
         << (c.stable ? "true" : "false") << ",\"" << kStabilityCriterion << "\",\"" << c.failure << "\","
         << c.max_strain << ',' << c.error << ',' << c.step_median << ',' << c.courant_dt << ',' << c.dt / c.courant_dt
         << '\n';
-    if (!f) throw InputError(file.string() + ": cannot write");
-  }
-  std::filesystem::rename(tmp, file);
+  });
 }
 
 } // namespace vtb::harness

@@ -4,6 +4,7 @@
 /// Files are written under a temporary name and renamed only when all are complete.
 
 #include "vtb/core/simulation.hh"
+#include "vtb/meshes/atomic_file.hh" // write_files_atomically, IoError
 
 #include <filesystem>
 #include <string>
@@ -19,12 +20,6 @@ void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model
 /// frames.pvd listing frames/frame_NNNN.vtu with their times (the .vtu files written by the
 /// caller: the spring runs with write_vtu, the FEM with deal.II's DataOut).
 void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times);
-
-/// Writes each (name, text) into dir, all or nothing: every file to NAME.part first, then all
-/// renamed; InputError naming the path when a write fails (the .part files are removed). The
-/// one writer of vtb's text outputs.
-void write_files_atomically(const std::filesystem::path& dir,
-                            const std::vector<std::pair<std::string, std::string>>& files);
 
 /// The summary as JSON text (for tests).
 std::string summary_json(const RunReport& report, const std::string& scene_name);
