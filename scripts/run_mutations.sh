@@ -16,7 +16,7 @@ mutations=(
   "spring Jacobian sign (CVODE)|core/src/cvode_solver.cc|s/if (a >= 0) add(part, a, a, B, -1.0);/if (a >= 0) add(part, a, a, B, 1.0);/"
   "dashpot dropped from implicit Euler's matrix|core/src/implicit_euler.cc|s/const Mat<dim> B = dt \* dt \* K + dt \* dashpot_jacobian<dim>(xi, xj, net.damping\[sp\]);/const Mat<dim> B = dt * dt * K;/"
   "dashpot dropped from CVODE's Jacobian|core/src/cvode_solver.cc|s/const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping\[s\]);/const Mat<dim> C = Mat<dim>::Zero();/"
-  "saturation removed|core/src/haptics/force_shaping.cc|s/if (norm <= max_force) return f;/if (true) return f;/"
+  "saturation removed|core/haptics/src/force_shaping.cc|s/if (norm <= max_force) return f;/if (true) return f;/"
   "torque correction skipped|core/src/filtered.cc|s/if (m_correct) correct_momentum(s);/(void)m_correct;/"
   "FEM thickness scaling halved|reference_fem/src/grid.hh|s/const double t = dim == 2 ? mat.thickness : 1.0;/const double t = dim == 2 ? 0.5 * mat.thickness : 1.0;/"
   "strain limit skipped|core/src/filtered.cc|s/if (m_strain_limit > 0) limit_strain(s);/(void)m_strain_limit;/"

@@ -203,23 +203,6 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   return rep;
 }
 
-Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
-  Scene scene = scene_in;
-  if (ov.solver) scene.solver.kind = *ov.solver;
-  if (ov.dt) {
-    if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
-    scene.solver.dt = *ov.dt;
-  }
-  if (ov.duration) {
-    if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");
-    scene.duration = *ov.duration;
-    scene.output_interval = std::min(scene.output_interval, scene.duration);
-  }
-  if (scene.solver.dt > scene.duration)
-    throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
-  return scene;
-}
-
 IntegratorOptions integrator_options(const SolverDesc& s) {
   IntegratorOptions o;
   o.kind = s.kind;
@@ -232,15 +215,14 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
   return o;
 }
 
-RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
-  const Scene scene = with_overrides(scene_in, ov);
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
   const IntegratorOptions o = integrator_options(scene.solver);
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     Trajectory<dim> traj;
-    RunReport rep = simulate(model, o, traj, ov.frames);
+    RunReport rep = simulate(model, o, traj, frames);
     write_run_outputs(out_dir, model, traj, rep, scene.name);
-    if (ov.frames) write_frames(model, traj, out_dir);
+    if (frames) write_frames(model, traj, out_dir);
     return rep;
   });
 }

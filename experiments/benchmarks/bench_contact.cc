@@ -1,7 +1,7 @@
 // 3D haptic contact on the canonical slabs: refitting the CGAL AABB tree to a new shape, the
 // inside/outside ray-parity query, and one proxy update of a handle pressed into the top face.
 //   build/bin/vtb_bench_contact --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
-#include "vtb/core/haptics/contact3d.hh"
+#include "vtb/haptics/contact3d.hh"
 #include "vtb/meshes/msh_io.hh"
 
 #include <benchmark/benchmark.h>

@@ -3,7 +3,7 @@
 // misses (cycles started more than half a period late), the servo cycle's own work (median, p99)
 // per 2 s session; on the 2D press, the 3D slab press and the two-probe press.
 //   build/bin/vtb_bench_servo --benchmark_repetitions=3
-#include "vtb/core/haptics/session.hh"
+#include "vtb/haptics/session.hh"
 
 #include <benchmark/benchmark.h>
 

@@ -1,6 +1,7 @@
 #include "commands.hh"
+#include "overrides.hh"
 
-#include "vtb/core/haptics/session.hh"
+#include "vtb/haptics/session.hh"
 
 #include <iostream>
 #include <memory>

@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "overrides.hh"
 
 #include "vtb/core/simulation.hh"
 #include "vtb/fem/kelvin_voigt.hh"
@@ -29,11 +30,10 @@ Action add_run(CLI::App& app) {
     if (!o->solver.empty()) ov.solver = o->solver;
     if (o->dt != 0) ov.dt = o->dt;
     if (o->duration != 0) ov.duration = o->duration;
-    ov.frames = o->frames;
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
-    const std::string kind = ov.solver ? *ov.solver : scene.solver.kind;
-    const RunReport r = kind == "fem" ? fem::run_scene(scene, ov, out) : run_scene(scene, ov, out);
+    const Scene run = with_overrides(scene, ov);
+    const RunReport r = run.solver.kind == "fem" ? fem::run_scene(run, out, o->frames) : run_scene(run, out, o->frames);
     std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
               << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "

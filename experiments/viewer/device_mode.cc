@@ -1,6 +1,6 @@
 #include "device_mode.hh"
 
-#include "vtb/core/haptics/coupling.hh"
+#include "vtb/haptics/coupling.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -8,9 +8,9 @@
 
 #include "live_sim.hh"
 
-#include "vtb/core/haptics/contact2d.hh"
-#include "vtb/core/haptics/device.hh"
-#include "vtb/core/haptics/force_shaping.hh"
+#include "vtb/haptics/contact2d.hh"
+#include "vtb/haptics/device.hh"
+#include "vtb/haptics/force_shaping.hh"
 
 #include <array>
 #include <optional>

@@ -3,22 +3,21 @@
 
 namespace vtb::fem {
 
-RunReport run_scene(const Scene& scene_in, const RunOverrides& ov, const std::filesystem::path& out_dir) {
-  const Scene scene = with_overrides(scene_in, ov);
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
   FemOptions o = options_from(scene.solver);
-  if (ov.frames) o.frames_dir = out_dir / "frames";
+  if (frames) o.frames_dir = out_dir / "frames";
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     Trajectory<dim> traj;
     if (mpi_size() > 1) {
-      if (ov.frames) throw InputError("--frames is not available under MPI yet");
+      if (frames) throw InputError("--frames is not available under MPI yet");
       const RunReport rep = simulate_distributed<dim>(model, scene.material, o, traj);
       if (mpi_rank() == 0) write_run_outputs(out_dir, model, traj, rep, scene.name);
       return rep;
     }
     const RunReport rep = simulate<dim>(model, scene.material, o, traj);
     write_run_outputs(out_dir, model, traj, rep, scene.name);
-    if (ov.frames) write_pvd(out_dir, traj.t);
+    if (frames) write_pvd(out_dir, traj.t);
     return rep;
   });
 }

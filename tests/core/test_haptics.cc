@@ -3,11 +3,11 @@
 // boundaries in 2D and 3D, the AABB tree following a deformed body, and several probes at once.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
-#include "vtb/core/haptics/contact2d.hh"
-#include "vtb/core/haptics/contact3d.hh"
-#include "vtb/core/haptics/device.hh"
-#include "vtb/core/haptics/force_shaping.hh"
-#include "vtb/core/haptics/session.hh"
+#include "vtb/haptics/contact2d.hh"
+#include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/device.hh"
+#include "vtb/haptics/force_shaping.hh"
+#include "vtb/haptics/session.hh"
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/generate.hh"
 
@@ -90,7 +90,8 @@ TEST_P(Watchdog, DropsTheForceToZeroWithin50msOfAFault) {
   const auto& [scene, fault] = GetParam();
   HapticsOptions o;
   o.lockstep = true;
-  o.fault = parse_fault(fault + "@1.4", o.fault_time);
+  o.fault = fault == "stall" ? HapticsOptions::Fault::stall : HapticsOptions::Fault::nan;
+  o.fault_time = 1.4;
   const HapticsReport r = run_haptics(scene_named(scene), o);
   double before = 0;
   const ProbeTrace& p = r.probes.at(0);
@@ -544,7 +545,8 @@ TEST(Haptics, ThreadedServoLoopRunsThePressAndTheWatchdog) {
   // Nothing here asserts a rate: timing is measured by vtb_bench_servo, not by tests.
   HapticsOptions o;
   o.lockstep = false;
-  o.fault = parse_fault("nan@1.2", o.fault_time);
+  o.fault = HapticsOptions::Fault::nan;
+  o.fault_time = 1.2;
   Scene s = scene_named("haptic_press");
   s.duration = 1.5;
   const HapticsReport r = run_haptics(s, o);

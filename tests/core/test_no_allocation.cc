@@ -2,9 +2,9 @@
 // test thread while integrators step. This program replaces malloc (glibc's __libc_*
 // entry points do the work), so it is kept apart from the other suites.
 #include "support/small_models.hh"
-#include "vtb/core/haptics/contact2d.hh"
-#include "vtb/core/haptics/contact3d.hh"
-#include "vtb/core/haptics/force_shaping.hh"
+#include "vtb/haptics/contact2d.hh"
+#include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/force_shaping.hh"
 #include "vtb/meshes/generate.hh"
 
 #include <gtest/gtest.h>

@@ -42,7 +42,7 @@ dt = 2e-3
   const Scene scene = parse_scene(text, "plate.toml", ".");
   const test::FreshDir fresh;
   const auto dir = fresh / "out";
-  const RunReport r = run_scene(scene, {}, dir);
+  const RunReport r = run_scene(scene, dir);
   ASSERT_TRUE(r.stable);
   const std::string probes = slurp(dir / "probes.csv"), reactions = slurp(dir / "reactions.csv");
   EXPECT_EQ(probes.substr(0, probes.find('\n')), "t,probe,ux,uy,uz");
@@ -77,7 +77,7 @@ TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
   const Scene scene = parse_scene(text, "plate.toml", ".");
   const test::FreshDir fresh;
   const auto dir = fresh / "out";
-  const RunReport r = run_scene(scene, {}, dir);
+  const RunReport r = run_scene(scene, dir);
   EXPECT_FALSE(r.stable);
   // The explicit scheme's failure names its stability limit (the user's next step).
   EXPECT_NE(r.failure.find("times the explicit scheme's stability limit"), std::string::npos) << r.failure;

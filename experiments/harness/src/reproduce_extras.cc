@@ -1,7 +1,7 @@
 #include "reproduce_parts.hh"
 
 #include "vtb/core/force_jacobian.hh"
-#include "vtb/core/haptics/session.hh"
+#include "vtb/haptics/session.hh"
 #include "vtb/core/output.hh"
 #include "vtb/harness/solvers.hh"
 

@@ -115,23 +115,12 @@ void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>
 template <int dim>
 void write_frames(const Model<dim>& model, const Trajectory<dim>& traj, const std::filesystem::path& dir);
 
-/// Options of `vtb run` that override the scene.
-struct RunOverrides {
-  std::optional<std::string> solver;
-  std::optional<double> dt;
-  std::optional<double> duration;
-  bool frames = false; ///< also write frames.pvd + frames/frame_NNNN.vtu, one per sample
-};
-
-/// The scene with `vtb run`'s overrides applied; InputError for a non-positive or
-/// non-finite --dt/--duration, or a step longer than the run. Shared by every `run_scene`.
-Scene with_overrides(const Scene& scene, const RunOverrides& overrides);
-
 /// The spring integrators' options from [solver].
 IntegratorOptions integrator_options(const SolverDesc& solver);
 
-/// Everything `vtb run` does: load mesh, build model, simulate, write probes.csv,
-/// reactions.csv and summary.json into `out_dir` (all or nothing). Returns the report.
-RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
+/// Everything `vtb run` does with a spring solver: load mesh, build model, simulate, write
+/// probes.csv, reactions.csv and summary.json into `out_dir` (all or nothing), and with
+/// `frames` frames.pvd + frames/frame_NNNN.vtu, one per sample. Returns the report.
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false);
 
 } // namespace vtb

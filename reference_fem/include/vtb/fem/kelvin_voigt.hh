@@ -57,6 +57,6 @@ int mpi_rank(); ///< 0 without MPI
 
 /// `vtb run SCENE --solver fem`: same files as the spring solvers (distributed when run under
 /// mpirun with more than one rank; rank 0 writes).
-RunReport run_scene(const Scene& scene, const RunOverrides& overrides, const std::filesystem::path& out_dir);
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false);
 
 } // namespace vtb::fem

@@ -1,4 +1,4 @@
-#include "vtb/core/haptics/force_shaping.hh"
+#include "vtb/haptics/force_shaping.hh"
 
 #include <algorithm>
 #include <cmath>

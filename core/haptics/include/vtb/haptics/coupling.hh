@@ -3,7 +3,7 @@
 /// The virtual coupling between a device's handle and its proxy on the body, shared by the
 /// haptics session's servo loop and the viewer's device mode.
 
-#include "vtb/core/haptics/contact_result.hh"
+#include "vtb/haptics/contact_result.hh"
 #include "vtb/core/spring_kernels.hh"
 
 #include <array>

@@ -5,7 +5,7 @@
 /// the boundary from where contact began, so a probe pressed deep never pops through to the
 /// far side. Allocation-free after construction.
 
-#include "vtb/core/haptics/contact_result.hh"
+#include "vtb/haptics/contact_result.hh"
 #include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
 

@@ -1,4 +1,4 @@
-#include "vtb/core/haptics/contact3d.hh"
+#include "vtb/haptics/contact3d.hh"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>

@@ -22,8 +22,6 @@ struct HapticsOptions {
   int pin_cpu = -1;              ///< >= 0: the servo thread pinned to that core, the physics kept off it
 };
 
-/// Parses "stall@T" or "nan@T". Throws InputError otherwise.
-HapticsOptions::Fault parse_fault(const std::string& spec, double& time);
 
 /// One probe's record: handle position and the force sent to its device, per servo sample
 /// (device coordinates), and its totals.

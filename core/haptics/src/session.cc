@@ -1,14 +1,14 @@
-#include "vtb/core/haptics/session.hh"
+#include "vtb/haptics/session.hh"
 
-#include "vtb/core/haptics/contact2d.hh"
-#include "vtb/core/haptics/contact3d.hh"
-#include "vtb/core/haptics/coupling.hh"
-#include "vtb/core/haptics/device.hh"
-#include "vtb/core/haptics/force_shaping.hh"
-#include "vtb/core/haptics/triple_buffer.hh"
 #include "vtb/core/integrator.hh"
 #include "vtb/core/output.hh"
 #include "vtb/core/simulation.hh"
+#include "vtb/haptics/contact2d.hh"
+#include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/coupling.hh"
+#include "vtb/haptics/device.hh"
+#include "vtb/haptics/force_shaping.hh"
+#include "vtb/haptics/triple_buffer.hh"
 
 #include <nlohmann/json.hpp>
 
@@ -231,21 +231,6 @@ private:
 };
 
 } // namespace
-
-HapticsOptions::Fault parse_fault(const std::string& spec, double& time) {
-  const auto at = spec.find('@');
-  const std::string kind = spec.substr(0, at);
-  if (at == std::string::npos || (kind != "stall" && kind != "nan"))
-    throw InputError("--fault \"" + spec + "\": expected stall@T or nan@T (T in seconds)");
-  try {
-    std::size_t used = 0;
-    time = std::stod(spec.substr(at + 1), &used);
-    if (used != spec.size() - at - 1 || !(time >= 0) || !std::isfinite(time)) throw std::invalid_argument("");
-  } catch (const std::exception&) {
-    throw InputError("--fault \"" + spec + "\": T must be a time >= 0 in seconds");
-  }
-  return kind == "stall" ? HapticsOptions::Fault::stall : HapticsOptions::Fault::nan;
-}
 
 namespace {
 

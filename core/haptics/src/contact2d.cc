@@ -1,4 +1,4 @@
-#include "vtb/core/haptics/contact2d.hh"
+#include "vtb/haptics/contact2d.hh"
 
 #include <algorithm>
 #include <limits>

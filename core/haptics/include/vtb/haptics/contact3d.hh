@@ -15,7 +15,7 @@
 /// triangles that share a vertex with the current one while the distance falls, so a probe
 /// pressed deep never pops through to the far side. Inside/outside is ray parity on the tree.
 
-#include "vtb/core/haptics/contact_result.hh"
+#include "vtb/haptics/contact_result.hh"
 #include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
 

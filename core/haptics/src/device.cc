@@ -1,4 +1,4 @@
-#include "vtb/core/haptics/device.hh"
+#include "vtb/haptics/device.hh"
 
 #include "vtb/meshes/input_error.hh"
 
