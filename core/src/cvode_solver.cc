@@ -1,4 +1,5 @@
 #include "vtb/core/cvode_solver.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <cvode/cvode.h>
 #include <nvector/nvector_serial.h>
@@ -202,7 +203,7 @@ template <int dim>
 RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field) {
   using clock = std::chrono::steady_clock;
   RunReport rep;
-  rep.solver = "cvode";
+  rep.solver = solvers::kCvode;
   rep.dim = dim;
   rep.nodes = model.num_nodes();
   rep.springs = model.net.num_springs();

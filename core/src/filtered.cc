@@ -1,4 +1,5 @@
 #include "vtb/core/filtered.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/core/selected_inverse.hh"
 
@@ -54,9 +55,9 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model
 
 template <int dim>
 FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
-    : Integrator<dim>(o.dt), m_model(model), m_full(o.filter == "full"),
+    : Integrator<dim>(o.dt), m_model(model), m_full(o.filter == solvers::kFilterFull),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
-  if (o.filter != "full" && o.filter != "neighbors")
+  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors)
     throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors or full");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());

@@ -1,4 +1,5 @@
 #include "vtb/core/integrator.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
@@ -17,12 +18,12 @@ template <int dim> State<dim> initial_state(const Model<dim>& model) {
 template <int dim>
 std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& o) {
   if (!(o.dt > 0)) throw InputError("[solver].dt must be > 0");
-  if (o.kind == "explicit") return std::make_unique<ExplicitEuler<dim>>(model, o.dt);
-  if (o.kind == "filtered") return std::make_unique<FilteredImplicit<dim>>(model, o);
-  if (o.kind == "implicit-euler") return std::make_unique<ImplicitEuler<dim>>(model, o.dt);
-  if (o.kind == "cvode" || o.kind == "fem")
+  if (o.kind == solvers::kExplicit) return std::make_unique<ExplicitEuler<dim>>(model, o.dt);
+  if (o.kind == solvers::kFiltered) return std::make_unique<FilteredImplicit<dim>>(model, o);
+  if (o.kind == solvers::kImplicitEuler) return std::make_unique<ImplicitEuler<dim>>(model, o.dt);
+  if (o.kind == solvers::kCvode || o.kind == solvers::kFem)
     throw InputError("[solver].kind = \"" + o.kind + "\": this solver is not built yet (see the open issues)");
-  throw InputError("[solver].kind = \"" + o.kind + "\": must be explicit, filtered or implicit-euler");
+  throw InputError("[solver].kind = \"" + o.kind + "\": must be " + solvers::list(solvers::is_stepper));
 }
 
 template State<2> initial_state<2>(const Model<2>&);

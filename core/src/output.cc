@@ -1,4 +1,5 @@
 #include "vtb/core/output.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <nlohmann/json.hpp>
 
@@ -16,12 +17,12 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   j["solver"] = r.solver;
   j["dim"] = r.dim;
   j["nodes"] = r.nodes;
-  if (r.solver != "fem") {
+  if (r.solver != solvers::kFem) {
     j["free_nodes"] = r.free_nodes;
     j["springs"] = r.springs;
   }
   // dt is a fixed-step solver's step; CVODE chooses its own, so it reports their mean instead.
-  if (r.solver == "cvode")
+  if (r.solver == solvers::kCvode)
     j["mean_step"] = r.dt;
   else
     j["dt"] = r.dt;
@@ -37,8 +38,8 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["failure_time"] = r.failure_time;
   }
   j["max_strain"] = r.max_strain;
-  if (r.solver != "fem") j["max_spring_strain"] = r.max_spring_strain;
-  if (r.solver != "fem") {
+  if (r.solver != solvers::kFem) j["max_spring_strain"] = r.max_spring_strain;
+  if (r.solver != solvers::kFem) {
     j["courant_dt_estimate"] = r.courant_dt;
     j["calibration"] = r.calibration;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
@@ -52,7 +53,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     else
       j[key] = value;
   }
-  if (r.solver == "filtered") {
+  if (r.solver == solvers::kFiltered) {
     j["filter"] = r.filter;
     j["momentum_correction"] = r.momentum_correction;
     j["strain_limit"] = r.strain_limit;

@@ -1,6 +1,7 @@
 #include "vtb/core/scene.hh"
 
 #include "scene_reader.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include <fstream>
 #include <sstream>
@@ -179,9 +180,12 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
                          "degree", "refinements", "scheme", "static"});
-    s.solver.kind = r.string("kind", "filtered", {"explicit", "filtered", "implicit-euler", "cvode", "fem"});
+    std::vector<std::string_view> kinds;
+    for (const auto& e : solvers::kEntries)
+      if (e.scene_kind) kinds.emplace_back(e.name);
+    s.solver.kind = r.string("kind", solvers::kFiltered, kinds);
     s.solver.dt = r.number("dt", 1e-3, positive);
-    s.solver.filter = r.string("filter", "full", {"neighbors", "full"});
+    s.solver.filter = r.string("filter", solvers::kFilterFull, {solvers::kFilterNeighbors, solvers::kFilterFull});
     s.solver.momentum_correction = r.boolean("momentum_correction", true);
     s.solver.strain_limit = r.number("strain_limit", 0.0, non_negative);
     s.solver.springs = r.string("springs", "lloyd", {"lloyd", "van-gelder"});

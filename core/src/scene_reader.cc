@@ -119,7 +119,7 @@ bool TableReader::boolean(std::string_view key, std::optional<bool> fallback) co
 }
 
 std::string TableReader::string(std::string_view key, std::optional<std::string> fallback,
-                                std::initializer_list<std::string_view> choices) const {
+                                const std::vector<std::string_view>& choices) const {
   const toml::node* n = m_table.get(key);
   std::string v;
   if (!n) {
@@ -129,9 +129,13 @@ std::string TableReader::string(std::string_view key, std::optional<std::string>
     if (!n->is_string()) fail(key, "must be a string");
     v = n->value<std::string>().value();
   }
-  if (choices.size() > 0 && std::find(choices.begin(), choices.end(), v) == choices.end()) {
+  if (!choices.empty() && std::find(choices.begin(), choices.end(), v) == choices.end()) {
     std::string msg = "= \"" + v + "\": must be one of";
     for (auto c : choices) msg += " " + std::string(c);
+    const auto nearest = std::min_element(choices.begin(), choices.end(),
+                                          [&](auto a, auto b) { return edit_distance(v, a) < edit_distance(v, b); });
+    if (edit_distance(v, *nearest) <= std::max<std::size_t>(3, v.size() / 2))
+      msg += "; did you mean \"" + std::string(*nearest) + "\"?";
     fail(key, msg);
   }
   return v;

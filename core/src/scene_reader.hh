@@ -8,6 +8,12 @@
 
 #include <functional>
 #include <initializer_list>
+#include <vector>
+
+namespace vtb {
+/// Levenshtein distance: what "did you mean" suggestions rank by.
+std::size_t edit_distance(std::string_view a, std::string_view b);
+} // namespace vtb
 
 namespace vtb::detail {
 
@@ -26,8 +32,9 @@ public:
                 const std::function<std::string(double)>& check = {}) const;
   int integer(std::string_view key, std::optional<int> fallback, int min, int max) const;
   bool boolean(std::string_view key, std::optional<bool> fallback) const;
+  /// A string, one of `choices` when given (else the nearest choice is suggested).
   std::string string(std::string_view key, std::optional<std::string> fallback,
-                     std::initializer_list<std::string_view> choices = {}) const;
+                     const std::vector<std::string_view>& choices = {}) const;
   /// A vector of 1..max_len finite numbers (dimension is checked later against the mesh).
   Eigen::VectorXd vector(std::string_view key, std::size_t min_len, std::size_t max_len) const;
   /// A sub-table, or nullptr if absent; an error if present with another type.

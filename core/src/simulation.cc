@@ -1,4 +1,5 @@
 #include "vtb/core/simulation.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/core/calibration.hh"
 #include "vtb/core/cell_fields.hh"
@@ -119,7 +120,7 @@ StepStats step_stats(std::vector<double> t) {
 namespace {
 /// For the explicit scheme, what its failure means: the step against its stability limit.
 std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
-  if (o.kind != "explicit" || !(rep.courant_dt > 0)) return "";
+  if (o.kind != solvers::kExplicit || !(rep.courant_dt > 0)) return "";
   std::ostringstream os;
   os << "; dt = " << o.dt << " s is " << o.dt / rep.courant_dt << " times the explicit scheme's stability limit "
      << rep.courant_dt << " s (courant_dt_estimate)";
@@ -130,7 +131,7 @@ std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
   using clock = std::chrono::steady_clock;
-  if (o.kind == "cvode") return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+  if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
   RunReport rep;
   rep.solver = o.kind;
   rep.dim = dim;
@@ -141,7 +142,7 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
   rep.effective_poisson_ratio = spring_poisson_ratio(dim);
-  if (o.kind == "filtered") {
+  if (o.kind == solvers::kFiltered) {
     rep.filter = o.filter;
     rep.momentum_correction = o.momentum_correction && !model.has_constraints();
     rep.strain_limit = o.strain_limit;

@@ -5,6 +5,7 @@
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
 #include "vtb/core/integrator.hh"
+#include "vtb/core/solver_names.hh"
 #include "vtb/meshes/generate.hh"
 
 #include <benchmark/benchmark.h>
@@ -41,7 +42,7 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
   IntegratorOptions o;
   o.kind = kind;
   o.filter = filter;
-  o.dt = kind == "explicit" ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
+  o.dt = kind == solvers::kExplicit ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
   auto integ = make_integrator(model, o);
   State<dim> s = initial_state(model);
   for (int k = 0; k < 10; ++k) integ->step(s); // warm up
@@ -83,21 +84,21 @@ const Model<3>& box1701() {
   }                                                                                                                    \
   BENCHMARK(BM_step_##MESH##_##NAME)->Unit(benchmark::kMicrosecond);
 
-VTB_STEP_BENCH(plate126, "explicit", "", explicit)
-VTB_STEP_BENCH(plate126, "filtered", "neighbors", filtered_neighbors)
-VTB_STEP_BENCH(plate126, "filtered", "full", filtered_full)
-VTB_STEP_BENCH(plate126, "implicit-euler", "", implicit_euler)
-VTB_STEP_BENCH(plate517, "explicit", "", explicit)
-VTB_STEP_BENCH(plate517, "filtered", "neighbors", filtered_neighbors)
-VTB_STEP_BENCH(plate517, "filtered", "full", filtered_full)
-VTB_STEP_BENCH(plate517, "implicit-euler", "", implicit_euler)
-VTB_STEP_BENCH(box275, "explicit", "", explicit)
-VTB_STEP_BENCH(box275, "filtered", "neighbors", filtered_neighbors)
-VTB_STEP_BENCH(box275, "filtered", "full", filtered_full)
-VTB_STEP_BENCH(box275, "implicit-euler", "", implicit_euler)
-VTB_STEP_BENCH(box1701, "filtered", "neighbors", filtered_neighbors)
-VTB_STEP_BENCH(box1701, "filtered", "full", filtered_full)
-VTB_STEP_BENCH(box1701, "implicit-euler", "", implicit_euler)
+VTB_STEP_BENCH(plate126, solvers::kExplicit, "", explicit)
+VTB_STEP_BENCH(plate126, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
+VTB_STEP_BENCH(plate126, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(plate126, solvers::kImplicitEuler, "", implicit_euler)
+VTB_STEP_BENCH(plate517, solvers::kExplicit, "", explicit)
+VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
+VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(plate517, solvers::kImplicitEuler, "", implicit_euler)
+VTB_STEP_BENCH(box275, solvers::kExplicit, "", explicit)
+VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
+VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(box275, solvers::kImplicitEuler, "", implicit_euler)
+VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
+VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(box1701, solvers::kImplicitEuler, "", implicit_euler)
 
 void BM_precompute_plate517_neighbors(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));
@@ -106,8 +107,8 @@ BENCHMARK(BM_precompute_plate517_neighbors)->Unit(benchmark::kMillisecond);
 
 void BM_precompute_plate517_full_factor(benchmark::State& st) {
   IntegratorOptions o;
-  o.kind = "filtered";
-  o.filter = "full";
+  o.kind = solvers::kFiltered;
+  o.filter = solvers::kFilterFull;
   for (auto _ : st) benchmark::DoNotOptimize(make_integrator(plate517(), o));
 }
 BENCHMARK(BM_precompute_plate517_full_factor)->Unit(benchmark::kMillisecond);

@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/harness/compare.hh"
 
@@ -9,7 +10,7 @@ namespace vtb::cli {
 
 Action add_compare(CLI::App& app) {
   struct Opts {
-    std::string scene, reference = "fem", out;
+    std::string scene, reference = solvers::kFem, out;
     std::vector<std::string> solvers;
     double dt = 0;
     bool frames = false;
@@ -18,10 +19,7 @@ Action add_compare(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("compare", "Run several solvers on a scene; errors against a reference, timing, "
                                                 "and the error decomposition (compare.csv, decomposition.csv)");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
-  cmd->add_option("--solvers", o->solvers,
-                  "Comma-separated: explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem")
-      ->delimiter(',')
-      ->required();
+  cmd->add_option("--solvers", o->solvers, "Comma-separated: " + solvers::list())->delimiter(',')->required();
   cmd->add_option("--reference", o->reference, "fem (default) or cvode");
   cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");

@@ -1,5 +1,6 @@
 #include "commands.hh"
 #include "overrides.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/core/simulation.hh"
 #include "vtb/fem/kelvin_voigt.hh"
@@ -19,7 +20,7 @@ Action add_run(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
-  cmd->add_option("--solver", o->solver, "Override [solver].kind: explicit | filtered | implicit-euler | cvode | fem");
+  cmd->add_option("--solver", o->solver, "Override [solver].kind: " + solvers::list(solvers::is_scene_kind));
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
@@ -33,7 +34,8 @@ Action add_run(CLI::App& app) {
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const Scene run = with_overrides(scene, ov);
-    const RunReport r = run.solver.kind == "fem" ? fem::run_scene(run, out, o->frames) : run_scene(run, out, o->frames);
+    const RunReport r =
+        run.solver.kind == solvers::kFem ? fem::run_scene(run, out, o->frames) : run_scene(run, out, o->frames);
     std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
               << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "

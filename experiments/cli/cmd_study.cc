@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/harness/study.hh"
 
@@ -9,7 +10,7 @@ namespace vtb::cli {
 
 Action add_study(CLI::App& app) {
   struct Opts {
-    std::string scene, reference = "fem", out;
+    std::string scene, reference = solvers::kFem, out;
     std::vector<std::string> solvers;
     bool quick = false;
   };
@@ -19,7 +20,7 @@ Action add_study(CLI::App& app) {
                "reference, the Pareto front (study.csv, study_plot.tex and .png)");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
   cmd->add_option("--solvers", o->solvers,
-                  "Comma-separated (default filtered-full,filtered-neighbors,implicit-euler,explicit,cvode)")
+                  "Comma-separated, of " + solvers::list(solvers::is_spring) + " (default all but filtered)")
       ->delimiter(',');
   cmd->add_option("--reference", o->reference, "fem (P2, one refinement, dt/4; default) or cvode (rtol 1e-10)");
   cmd->add_flag("--quick", o->quick, "Short ladders and at most 1 s of simulated time");

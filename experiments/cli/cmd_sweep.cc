@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/harness/sweep.hh"
 
@@ -11,7 +12,8 @@ Action add_sweep(CLI::App& app) {
   struct Opts {
     std::string scene, out;
     std::vector<double> dts, scales{1.0};
-    std::vector<std::string> solvers{"explicit", "filtered-neighbors", "filtered-full", "implicit-euler"};
+    std::vector<std::string> solvers{solvers::kExplicit, solvers::kFilteredNeighbors, solvers::kFilteredFull,
+                                     solvers::kImplicitEuler};
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("sweep", "Stability map over time step and stiffness scale (stability.csv)");

@@ -1,5 +1,7 @@
 #include "commands.hh"
 
+#include "vtb/core/solver_registry.hh"
+
 #include "../viewer/viewer.hh"
 
 #include <iostream>
@@ -21,7 +23,7 @@ Action add_view(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Render N frames (1/60 s of simulated time each), then exit");
   cmd->add_option("--screenshot", o->screenshot, "With --frames: write the last frame to this PNG");
   cmd->add_option("--drag", o->drag, "Hold a pull from the first frame: X0,Y0:X1,Y1 in scene coordinates");
-  cmd->add_option("--solver", o->solver, "Start with this solver: filtered | implicit-euler | explicit");
+  cmd->add_option("--solver", o->solver, "Start with this solver: " + solvers::list(solvers::is_stepper));
   cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors");
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
   cmd->add_flag("--device", o->device,

@@ -1,4 +1,5 @@
 #include "app.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "colormap.hh"
 
@@ -27,10 +28,10 @@ const float kArrow[3] = {1.00f, 1.00f, 1.00f};
 } // namespace
 
 SimControls initial_controls(const Scene& scene, const ViewOptions& options, std::string* note) {
-  const bool interactive = std::any_of(kInteractiveSolvers.begin(), kInteractiveSolvers.end(),
-                                       [&](const char* k) { return scene.solver.kind == k; });
+  const auto names = interactive_solvers();
+  const bool interactive = std::find(names.begin(), names.end(), scene.solver.kind) != names.end();
   SimControls c;
-  c.solver = options.solver.value_or(interactive ? scene.solver.kind : "filtered");
+  c.solver = options.solver.value_or(interactive ? scene.solver.kind : solvers::kFiltered);
   c.filter = options.filter.value_or(scene.solver.filter);
   c.dt = options.dt.value_or(scene.solver.dt);
   if (!interactive && !options.solver && note)

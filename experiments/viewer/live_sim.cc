@@ -1,4 +1,5 @@
 #include "live_sim.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/simulation.hh"
@@ -22,10 +23,10 @@ LiveSim<dim>::LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls)
 }
 
 template <int dim> void LiveSim<dim>::rebuild() {
-  if (std::find_if(kInteractiveSolvers.begin(), kInteractiveSolvers.end(),
-                   [&](const char* s) { return m_controls.solver == s; }) == kInteractiveSolvers.end())
-    throw InputError("vtb view: solver \"" + m_controls.solver +
-                     "\" cannot run interactively (filtered, implicit-euler or explicit)");
+  const auto names = interactive_solvers();
+  if (std::find(names.begin(), names.end(), m_controls.solver) == names.end())
+    throw InputError("vtb view: solver \"" + m_controls.solver + "\" cannot run interactively (" +
+                     solvers::list(solvers::is_stepper) + ")");
   if (!(m_controls.dt > 0) || !std::isfinite(m_controls.dt)) throw InputError("vtb view: dt must be > 0");
   if (!(m_controls.stiffness_scale > 0)) throw InputError("vtb view: the stiffness scale must be > 0");
   Scene s = m_scene;
@@ -99,7 +100,7 @@ template <int dim> void LiveSim<dim>::check() {
   const double strain = finite ? max_strain(m_model->net, m_state.u) : INFINITY;
   if (!finite || !(strain <= kRunawayStrain)) {
     std::ostringstream os;
-    os << m_controls.solver << (m_controls.solver == "filtered" ? " (" + m_controls.filter + ")" : "")
+    os << m_controls.solver << (m_controls.solver == solvers::kFiltered ? " (" + m_controls.filter + ")" : "")
        << " went unstable at t = " << m_state.t << " s (dt = " << m_controls.dt
        << " s): " << (finite ? "runaway strain" : "non-finite state");
     m_failure = os.str();

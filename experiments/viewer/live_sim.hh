@@ -7,6 +7,7 @@
 
 #include "vtb/core/integrator.hh"
 #include "vtb/core/scene.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include <array>
 #include <memory>
@@ -17,13 +18,16 @@ namespace vtb::viewer {
 
 /// The solvers that can run interactively (one step at a time): the fixed-step spring
 /// integrators. cvode and fem produce whole trajectories and are run by `vtb run`/`compare`.
-inline constexpr std::array<const char*, 3> kInteractiveSolvers = {"filtered", "implicit-euler", "explicit"};
-inline constexpr std::array<const char*, 2> kFilters = {"full", "neighbors"};
+/// Read from the registry (its `interactive` flag).
+inline std::vector<std::string> interactive_solvers() {
+  return solvers::names(solvers::is_stepper);
+}
+inline constexpr std::array<const char*, 2> kFilters = {solvers::kFilterFull, solvers::kFilterNeighbors};
 
 /// What the panel controls; applying it rebuilds the model and the integrator.
 struct SimControls {
-  std::string solver = "filtered";
-  std::string filter = "full";
+  std::string solver = solvers::kFiltered;
+  std::string filter = solvers::kFilterFull;
   double dt = 1e-3;
   double stiffness_scale = 1.0;
 };

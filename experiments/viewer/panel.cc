@@ -1,6 +1,7 @@
 // The viewer's Dear ImGui panel (live control and readouts) and the colour scale bar.
 #include "app.hh"
 #include "colormap.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <GLFW/glfw3.h>
 #include <imgui.h>
@@ -24,14 +25,14 @@ template <int dim> void App<dim>::draw_panel() {
   ImGui::TextDisabled("solver");
   bool changed = false;
   if (ImGui::BeginCombo("kind", m_edit.solver.c_str())) {
-    for (const char* k : kInteractiveSolvers)
-      if (ImGui::Selectable(k, m_edit.solver == k)) {
+    for (const std::string& k : interactive_solvers())
+      if (ImGui::Selectable(k.c_str(), m_edit.solver == k)) {
         m_edit.solver = k;
         changed = true;
       }
     ImGui::EndCombo();
   }
-  if (m_edit.solver == "filtered" && ImGui::BeginCombo("filter", m_edit.filter.c_str())) {
+  if (m_edit.solver == solvers::kFiltered && ImGui::BeginCombo("filter", m_edit.filter.c_str())) {
     for (const char* f : kFilters)
       if (ImGui::Selectable(f, m_edit.filter == f)) {
         m_edit.filter = f;

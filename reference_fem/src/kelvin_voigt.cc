@@ -22,6 +22,7 @@
 // constrained rows and columns replaced by the identity (factorised once, UMFPACK).
 // The scheme's formulas are in time_scheme.hh, shared with the distributed solver.
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "grid.hh"
 #include "time_loop.hh"
@@ -414,7 +415,7 @@ void KelvinVoigtProblem<dim>::record(double t, Trajectory<dim>& out, bool record
 template <int dim> RunReport KelvinVoigtProblem<dim>::run(Trajectory<dim>& out, bool record_field) {
   using clock = std::chrono::steady_clock;
   RunReport rep;
-  rep.solver = "fem";
+  rep.solver = solvers::kFem;
   rep.dim = dim;
   rep.dt = m_opt.dt;
   rep.duration = m_model.duration;

@@ -2,6 +2,7 @@
 // schemes and lifting as kelvin_voigt.cc, on a parallel::fullydistributed::Triangulation (the
 // distributed triangulation that takes simplices) with Trilinos matrices and vectors and a
 // Trilinos direct solver. Every rank ends with the same trajectory (sums over ranks).
+#include "vtb/core/solver_names.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include "grid.hh"
@@ -50,7 +51,7 @@ public:
     using clock = std::chrono::steady_clock;
     const auto t0 = clock::now();
     RunReport rep;
-    rep.solver = "fem";
+    rep.solver = solvers::kFem;
     rep.dim = dim;
     rep.dt = m_opt.dt;
     rep.duration = m_model.duration;

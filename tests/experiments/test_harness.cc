@@ -3,7 +3,9 @@
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
 #include "vtb/core/explicit_euler.hh"
+#include "vtb/core/solver_registry.hh"
 #include "vtb/harness/compare.hh"
+#include "vtb/harness/solvers.hh"
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
 
@@ -164,6 +166,48 @@ TEST(Sweep, FindsTheExplicitBoundaryWhereThePredictionPutsIt) {
 
 namespace vtb {
 namespace {
+
+TEST(SolverRegistry, EveryEntryRunsAndUnknownNamesGetTheNearest) {
+  // Every registered solver runs through the harness's one call (its factory), on a small
+  // plate, to the end, recording every sample: a solver added to the table without a way to
+  // run it fails here.
+  Scene s = parse_scene(test::plate_scene(4, 2, R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.2, 0.0]
+[solver]
+dt = 1e-3
+)"),
+                        "plate.toml", ".");
+  s.duration = 0.02;
+  s.output_interval = 0.01;
+  const Model<2> model = build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
+  for (const auto& e : solvers::kEntries) {
+    Trajectory<2> tr;
+    const RunReport r = harness::run_solver(s, model, e.name, 0, tr);
+    EXPECT_TRUE(r.stable) << e.name;
+    EXPECT_EQ(tr.t.size(), 3u) << e.name;
+    EXPECT_EQ(std::string(r.solver), e.name) << "the report names the registry entry";
+  }
+  try {
+    solvers::find("implicit-eular", "--solvers");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind(
+                  "--solvers: unknown solver \"implicit-eular\"; did you mean \"implicit-euler\"?", 0),
+              0u)
+        << e.what();
+  }
+  // The scene parser reads the same table for [solver].kind, and suggests the nearest.
+  try {
+    parse_scene(test::plate_scene(4, 2, "[solver]\nkind = \"filterd\"\n"), "k.toml", ".");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("did you mean \"filtered\"?"), std::string::npos) << e.what();
+  }
+}
 
 TEST(Sampling, EverySolverRecordsAtTheScenesSampleTimesWhateverItsStep) {
   // A user's study: output every 5 ms, steps of 20 ms (four samples per step) or of 3 ms (steps

@@ -1,4 +1,5 @@
 #include "vtb/haptics/session.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/core/integrator.hh"
 #include "vtb/core/output.hh"
@@ -341,9 +342,10 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
 
   IntegratorOptions o = integrator_options(scene.solver);
   // The physics of a session steps at a fixed dt, one step between servo updates.
-  if (o.kind == "cvode" || o.kind == "fem")
+  if (o.kind == solvers::kCvode || o.kind == solvers::kFem)
     throw InputError(scene.file.string() + ": [solver].kind = \"" + o.kind +
-                     "\": a haptics session needs a fixed-step spring solver (filtered, implicit-euler or explicit)");
+                     "\": a haptics session needs a fixed-step spring solver (" + solvers::list(solvers::is_stepper) +
+                     ")");
 
   Snapshot<dim> init;
   init.x = model.net.rest;

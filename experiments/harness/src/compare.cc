@@ -1,4 +1,5 @@
 #include "vtb/harness/compare.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/harness/solvers.hh"
 
@@ -50,7 +51,7 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
   }
   // The decomposition, from whatever of its three runs exist.
   std::string filtered;
-  for (const char* f : {"filtered", "filtered-full", "filtered-neighbors"})
+  for (const char* f : {solvers::kFiltered, solvers::kFilteredFull, solvers::kFilteredNeighbors})
     if (runs.count(f)) {
       filtered = f;
       break;
@@ -59,9 +60,9 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
     if (!a.empty() && runs.count(a) && runs.count(b))
       res.decomposition.push_back({a, b, meaning, compare(runs[a], runs[b])});
   };
-  add(filtered, "cvode", "time-integration error of the approximation");
-  add("cvode", "fem", "modelling error of springs vs continuum");
-  add(filtered, "fem", "what a user sees");
+  add(filtered, solvers::kCvode, "time-integration error of the approximation");
+  add(solvers::kCvode, solvers::kFem, "modelling error of springs vs continuum");
+  add(filtered, solvers::kFem, "what a user sees");
   return res;
 }
 
@@ -75,12 +76,10 @@ std::string num(double x) {
 
 CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
                           double dt, std::ostream* progress, const KeepRuns& keep) {
-  if (reference != "fem" && reference != "cvode")
+  if (reference != solvers::kFem && reference != solvers::kCvode)
     throw InputError("--reference must be fem or cvode, not " + reference);
   for (const auto& s : solvers)
-    if (!known_solver(s))
-      throw InputError("--solvers: unknown solver \"" + s +
-                       "\" (explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode, fem)");
+    if (!known_solver(s)) throw InputError("--solvers: unknown solver \"" + s + "\" (" + solvers::list() + ")");
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);

@@ -1,4 +1,5 @@
 #include "vtb/harness/paper_data.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "paper_data_parts.hh"
 
@@ -71,7 +72,7 @@ void timing(const std::filesystem::path& dir, Out& out) {
          << tex_number(t.number(r, "steps_per_second")) << " & " << tex_number(t.number(r, "precompute_ms")) << " & "
          << tex_number(t.number(r, "realtime_factor")) << (t.text(r, "timing_only") == "true" ? "$^*$" : "") << " & "
          << tex_number(t.number(r, "displacement_error_vs_fem")) << " \\\\\n";
-    if (t.text(r, "solver") == "cvode")
+    if (t.text(r, "solver") == solvers::kCvode)
       calibration << tex_escape(label) << " & " << tex_number(t.number(r, "nodes")) << " & "
                   << tex_number(t.number(r, "displacement_error_vs_fem")) << " \\\\\n";
   }
@@ -82,27 +83,29 @@ void timing(const std::filesystem::path& dir, Out& out) {
   const auto at = [&](int nodes, int forces, const std::string& solver, const std::string& col) {
     return t.number(timing_row(t, nodes, forces, solver), col);
   };
-  const double full = at(517, 1, "filtered-full", "step_median_us"),
-               ie = at(517, 1, "implicit-euler", "step_median_us");
+  const double full = at(517, 1, solvers::kFilteredFull, "step_median_us"),
+               ie = at(517, 1, solvers::kImplicitEuler, "step_median_us");
   out.number("vtbFullStepUs", full);
   out.number("vtbIEStepUs", ie);
-  out.number("vtbCvodeStepUs", at(517, 1, "cvode", "step_median_us"));
-  out.number("vtbFemStepUs", at(517, 1, "fem", "step_median_us"));
+  out.number("vtbCvodeStepUs", at(517, 1, solvers::kCvode, "step_median_us"));
+  out.number("vtbFemStepUs", at(517, 1, solvers::kFem, "step_median_us"));
   out.number("vtbSpeedupIE", ie / full, 2);
-  out.number("vtbFullRT", at(517, 1, "filtered-full", "realtime_factor"));
-  out.number("vtbFullErr", at(517, 1, "filtered-full", "displacement_error_vs_fem"), 2);
-  out.number("vtbIEErr", at(517, 1, "implicit-euler", "displacement_error_vs_fem"), 2);
-  out.number("vtbCvodeErr", at(517, 1, "cvode", "displacement_error_vs_fem"), 2);
-  out.number("vtbFourFullErr", at(517, 4, "filtered-full", "displacement_error_vs_fem"), 2);
-  out.number("vtbFourCvodeErr", at(517, 4, "cvode", "displacement_error_vs_fem"), 2);
-  out.number("vtbPaperFpsLarge", at(517, 1, "filtered-full", "paper_fps_piii450"));
-  out.number("vtbPaperFpsSmall", at(123, 1, "filtered-full", "paper_fps_piii450"));
-  out.number("vtbFullFps", at(517, 1, "filtered-full", "steps_per_second"));
+  out.number("vtbFullRT", at(517, 1, solvers::kFilteredFull, "realtime_factor"));
+  out.number("vtbFullErr", at(517, 1, solvers::kFilteredFull, "displacement_error_vs_fem"), 2);
+  out.number("vtbIEErr", at(517, 1, solvers::kImplicitEuler, "displacement_error_vs_fem"), 2);
+  out.number("vtbCvodeErr", at(517, 1, solvers::kCvode, "displacement_error_vs_fem"), 2);
+  out.number("vtbFourFullErr", at(517, 4, solvers::kFilteredFull, "displacement_error_vs_fem"), 2);
+  out.number("vtbFourCvodeErr", at(517, 4, solvers::kCvode, "displacement_error_vs_fem"), 2);
+  out.number("vtbPaperFpsLarge", at(517, 1, solvers::kFilteredFull, "paper_fps_piii450"));
+  out.number("vtbPaperFpsSmall", at(123, 1, solvers::kFilteredFull, "paper_fps_piii450"));
+  out.number("vtbFullFps", at(517, 1, solvers::kFilteredFull, "steps_per_second"));
   out.number("vtbFpsRatio",
-             at(517, 1, "filtered-full", "steps_per_second") / at(517, 1, "filtered-full", "paper_fps_piii450"), 2);
-  out.number("vtbSmallFullStepUs", at(123, 1, "filtered-full", "step_median_us"));
+             at(517, 1, solvers::kFilteredFull, "steps_per_second") /
+                 at(517, 1, solvers::kFilteredFull, "paper_fps_piii450"),
+             2);
+  out.number("vtbSmallFullStepUs", at(123, 1, solvers::kFilteredFull, "step_median_us"));
   out.macro("vtbNbStable",
-            t.text(timing_row(t, 517, 1, "filtered-neighbors"), "stable") == "true" ? "stable" : "unstable");
+            t.text(timing_row(t, 517, 1, solvers::kFilteredNeighbors), "stable") == "true" ? "stable" : "unstable");
 }
 
 void fig3(const std::filesystem::path& dir, Out& out) {
@@ -114,7 +117,7 @@ void fig3(const std::filesystem::path& dir, Out& out) {
     if (e.path().extension() != ".csv" || f.find("_cells") != std::string::npos || u == std::string::npos) continue;
     snaps[f.substr(0, u)].emplace_back(std::stod(f.substr(u + 2)), e.path().stem().string());
   }
-  for (const char* model : {"filtered-full", "fem"})
+  for (const char* model : {solvers::kFilteredFull, solvers::kFem})
     if (snaps[model].size() != 3) throw InputError((dir / "fig3").string() + ": needs three snapshots of " + model);
   // One magnification for all panels: the largest displacement drawn as 15 % of the plate's
   // length, rounded down to 1, 2 or 5 times a power of ten.
@@ -153,7 +156,7 @@ void fig3(const std::filesystem::path& dir, Out& out) {
       }
       out.files.emplace_back("fig3_" + model + "_" + std::to_string(k) + ".dat", os.str());
     }
-  const auto& times = snaps["filtered-full"];
+  const auto& times = snaps[solvers::kFilteredFull];
   out.number("vtbFigThreeTa", times[0].first);
   out.number("vtbFigThreeTb", times[1].first);
   out.number("vtbFigThreeTc", times[2].first);

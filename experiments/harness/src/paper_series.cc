@@ -1,6 +1,7 @@
 // The plotted series of `paper_data`: accuracy against speed, convergence, decomposition,
 // stability, creep, scaling, the haptic loop.
 #include "paper_data_parts.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/harness/tex.hh"
 
@@ -101,24 +102,24 @@ void accuracy(const std::filesystem::path& dir, Out& out) {
   }
 
   // Convergence and decomposition over dt, against CVODE at rtol 1e-10.
-  for (const auto& [s, file] :
-       std::vector<std::pair<std::string, std::string>>{{"implicit-euler", "ie"}, {"filtered-full", "full"}}) {
+  for (const auto& [s, file] : std::vector<std::pair<std::string, std::string>>{{solvers::kImplicitEuler, "ie"},
+                                                                                {solvers::kFilteredFull, "full"}}) {
     const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
     const auto dt = column(a, "dt", mine), integ = column(a, "error_vs_cvode", mine),
                total = column(a, "error_vs_fem", mine);
     out.files.emplace_back("conv_" + file + ".dat", series("dt error total", {dt, integ, total}));
     out.number(file == "ie" ? "vtbIEOrder" : "vtbFullOrder", loglog_slope(dt, integ), 2);
   }
-  const auto cv = [&](std::size_t r) { return a.text(r, "solver") == "cvode" && ok(r); };
+  const auto cv = [&](std::size_t r) { return a.text(r, "solver") == solvers::kCvode && ok(r); };
   out.files.emplace_back("conv_cvode.dat",
                          series("rtol error", {column(a, "rtol", cv), column(a, "error_vs_cvode", cv)}));
   const CsvTable d = CsvTable::read(dir / "decomposition.csv");
   for (std::size_t r = 0; r < d.rows(); ++r)
-    if (d.text(r, "run") == "cvode" && d.text(r, "against") == "fem") {
+    if (d.text(r, "run") == solvers::kCvode && d.text(r, "against") == solvers::kFem) {
       const double model = d.number(r, "displacement_error_max");
       out.number("vtbModelErr", model, 2);
       const auto fixed = [&](std::size_t q) {
-        return a.text(q, "solver") == "filtered-full" || a.text(q, "solver") == "implicit-euler";
+        return a.text(q, "solver") == solvers::kFilteredFull || a.text(q, "solver") == solvers::kImplicitEuler;
       };
       const auto dts = column(a, "dt", fixed);
       const double lo = *std::min_element(dts.begin(), dts.end()), hi = *std::max_element(dts.begin(), dts.end());
@@ -151,11 +152,11 @@ void stability(const std::filesystem::path& dir, Out& out) {
         v = largest ? std::max(v, t.number(r, "dt_over_courant")) : std::min(v, t.number(r, "dt_over_courant"));
     return std::isfinite(v) && v > 0 ? v : std::nan("");
   };
-  out.number("vtbNbMaxStableRatio", ratio("filtered-neighbors", true, true), 2);
-  out.number("vtbNbMinUnstableRatio", ratio("filtered-neighbors", false, false), 2);
-  out.number("vtbExplicitMinUnstableRatio", ratio("explicit", false, false), 2);
-  for (const auto& [s, name] : std::vector<std::pair<std::string, std::string>>{{"filtered-full", "vtbFullStable"},
-                                                                                {"implicit-euler", "vtbIEStable"}}) {
+  out.number("vtbNbMaxStableRatio", ratio(solvers::kFilteredNeighbors, true, true), 2);
+  out.number("vtbNbMinUnstableRatio", ratio(solvers::kFilteredNeighbors, false, false), 2);
+  out.number("vtbExplicitMinUnstableRatio", ratio(solvers::kExplicit, false, false), 2);
+  for (const auto& [s, name] : std::vector<std::pair<std::string, std::string>>{
+           {solvers::kFilteredFull, "vtbFullStable"}, {solvers::kImplicitEuler, "vtbIEStable"}}) {
     int n = 0, ok = 0;
     for (std::size_t r = 0; r < t.rows(); ++r)
       if (t.text(r, "solver") == s) {
@@ -164,14 +165,14 @@ void stability(const std::filesystem::path& dir, Out& out) {
       }
     out.macro(name, std::to_string(ok) + " of " + std::to_string(n));
   }
-  out.number("vtbFullMaxRatio", ratio("filtered-full", true, true), 3);
+  out.number("vtbFullMaxRatio", ratio(solvers::kFilteredFull, true, true), 3);
 }
 
 void creep_scaling(const std::filesystem::path& dir, Out& out) {
   const CsvTable c = CsvTable::read(dir / "creep.csv");
   const auto all = [](std::size_t) { return true; };
   const auto t = column(c, "t", all), law = column(c, "analytic", all), full = column(c, "filtered_full", all),
-             ie = column(c, "implicit_euler", all), cv = column(c, "cvode", all);
+             ie = column(c, "implicit_euler", all), cv = column(c, solvers::kCvode, all);
   const auto mm_of = [](std::vector<double> v) {
     for (double& x : v) x *= 1e3;
     return v;
@@ -184,8 +185,8 @@ void creep_scaling(const std::filesystem::path& dir, Out& out) {
 
   const CsvTable s = CsvTable::read(dir / "scaling.csv");
   for (const int dim : {2, 3})
-    for (const auto& [solver, tag] :
-         std::vector<std::pair<std::string, std::string>>{{"filtered-full", "Full"}, {"implicit-euler", "IE"}}) {
+    for (const auto& [solver, tag] : std::vector<std::pair<std::string, std::string>>{
+             {solvers::kFilteredFull, "Full"}, {solvers::kImplicitEuler, "IE"}}) {
       const auto mine = [&](std::size_t r) { return s.number(r, "dim") == dim && s.text(r, "solver") == solver; };
       const auto nodes = column(s, "nodes", mine), step = column(s, "step_median_us", mine),
                  pre = column(s, "precompute_ms", mine), heap = column(s, "heap_mb", mine);

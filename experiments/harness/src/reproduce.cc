@@ -1,4 +1,5 @@
 #include "vtb/harness/reproduce.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "reproduce_parts.hh"
 
@@ -103,14 +104,14 @@ TimingRow explicit_timing_row(const Scene& scene, const Model<2>& model, const C
   m.output_interval = m.duration;
   Trajectory<2> tr;
   IntegratorOptions io;
-  io.kind = "explicit";
+  io.kind = solvers::kExplicit;
   io.dt = 0.5 * dtc;
   const auto a = clock_type::now();
   const RunReport rep = simulate(m, io, tr);
   const double w = std::chrono::duration<double>(clock_type::now() - a).count();
   TimingRow r;
   r.label = cs.label;
-  r.solver = "explicit";
+  r.solver = solvers::kExplicit;
   r.nodes = model.num_nodes();
   r.forces = cs.forces;
   r.paper_fps = cs.paper_fps;
@@ -131,7 +132,8 @@ TimingPart run_timing(const ReproduceOptions& o, double duration) {
   const std::vector<Case> cases = {{"517 nodes, one force", "plate517_step.toml", 1, 25.0},
                                    {"517 nodes, four forces", "plate517_four_forces.toml", 4, 25.0},
                                    {"123 nodes, one force", "plate123_step.toml", 1, 100.0}};
-  const std::vector<std::string> solvers = {"filtered-neighbors", "filtered-full", "implicit-euler", "cvode", "fem"};
+  const std::vector<std::string> solvers = {solvers::kFilteredNeighbors, solvers::kFilteredFull,
+                                            solvers::kImplicitEuler, solvers::kCvode, solvers::kFem};
   TimingPart part;
   for (std::size_t c = 0; c < cases.size(); ++c) {
     const Case& cs = cases[c];
@@ -162,24 +164,24 @@ TimingPart run_timing(const ReproduceOptions& o, double duration) {
       r.step_us = rep.step_seconds.median * 1e6;
       r.precompute_ms = rep.precompute_seconds * 1e3;
       r.realtime = (rep.stable ? duration : rep.failure_time) / wall[s];
-      r.error = rep.stable ? compare(runs[s], runs["fem"]).displacement_max : std::nan("");
+      r.error = rep.stable ? compare(runs[s], runs[solvers::kFem]).displacement_max : std::nan("");
       part.table.push_back(r);
     }
     part.table.push_back(explicit_timing_row(scene, model, cs, duration));
     if (c != 0) continue;
-    for (const char* a : {"filtered-full", "filtered-neighbors"}) {
+    for (const char* a : {solvers::kFilteredFull, solvers::kFilteredNeighbors}) {
       if (!reports[a].stable) continue;
       part.decomposition.push_back(
-          {a, "cvode", "time-integration error of the approximation", compare(runs[a], runs["cvode"])});
-      part.decomposition.push_back({a, "fem", "what a user sees", compare(runs[a], runs["fem"])});
+          {a, solvers::kCvode, "time-integration error of the approximation", compare(runs[a], runs[solvers::kCvode])});
+      part.decomposition.push_back({a, solvers::kFem, "what a user sees", compare(runs[a], runs[solvers::kFem])});
     }
-    part.decomposition.push_back({"implicit-euler", "cvode", "time-integration error of implicit Euler",
-                                  compare(runs["implicit-euler"], runs["cvode"])});
-    part.decomposition.push_back(
-        {"cvode", "fem", "modelling error of springs vs continuum", compare(runs["cvode"], runs["fem"])});
+    part.decomposition.push_back({solvers::kImplicitEuler, solvers::kCvode, "time-integration error of implicit Euler",
+                                  compare(runs[solvers::kImplicitEuler], runs[solvers::kCvode])});
+    part.decomposition.push_back({solvers::kCvode, solvers::kFem, "modelling error of springs vs continuum",
+                                  compare(runs[solvers::kCvode], runs[solvers::kFem])});
     part.fig_model = model;
-    part.fig_runs["filtered-full"] = std::move(runs["filtered-full"]);
-    part.fig_runs["fem"] = std::move(runs["fem"]);
+    part.fig_runs[solvers::kFilteredFull] = std::move(runs[solvers::kFilteredFull]);
+    part.fig_runs[solvers::kFem] = std::move(runs[solvers::kFem]);
   }
   return part;
 }
@@ -196,8 +198,8 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
   tight.solver.rtol = 1e-10;
   tight.solver.atol = 1e-14;
   Trajectory<2> ref_cvode, ref_fem;
-  run_solver(tight, model, "cvode", 0, ref_cvode);
-  run_solver(scene, model, "fem", scene.solver.dt / 4, ref_fem);
+  run_solver(tight, model, solvers::kCvode, 0, ref_cvode);
+  run_solver(scene, model, solvers::kFem, scene.solver.dt / 4, ref_fem);
   const std::vector<double> ladder =
       o.quick ? std::vector<double>{0.04, 0.01, 0.0025} : std::vector<double>{0.04, 0.02, 0.01, 0.005, 0.0025, 0.00125};
   auto row = [&](const std::string& solver, const Scene& sc, double dt, double rtol) {
@@ -212,15 +214,15 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
         << fmt(rep.step_seconds.median * 1e6, 6) << '\n';
     if (log) *log << "  " << solver << " dt " << fmt(rep.dt) << (ok ? "" : " (unstable)") << "\n";
   };
-  for (const char* s : {"filtered-full", "filtered-neighbors", "implicit-euler", "fem"})
+  for (const char* s : {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler, solvers::kFem})
     for (double dt : ladder) row(s, scene, dt, 0);
   for (double rtol : o.quick ? std::vector<double>{1e-3, 1e-6} : std::vector<double>{1e-2, 1e-4, 1e-6, 1e-8}) {
     Scene sc = scene;
     sc.solver.rtol = rtol;
     sc.solver.atol = rtol * 1e-4;
-    row("cvode", sc, 0, rtol);
+    row(solvers::kCvode, sc, 0, rtol);
   }
-  row("explicit", scene, 0, 0); // half its stability limit
+  row(solvers::kExplicit, scene, 0, 0); // half its stability limit
   write_text(o.out / "accuracy_speed.csv", acc.str());
 }
 
@@ -233,7 +235,9 @@ void write_stability(const ReproduceOptions& o) {
   const std::vector<double> scales =
       o.quick ? std::vector<double>{0.1, 10.0} : std::vector<double>{0.01, 0.1, 1.0, 10.0, 100.0};
   write_sweep(
-      run_sweep(scene, dts, scales, {"explicit", "filtered-neighbors", "filtered-full", "implicit-euler"}, o.progress),
+      run_sweep(scene, dts, scales,
+                {solvers::kExplicit, solvers::kFilteredNeighbors, solvers::kFilteredFull, solvers::kImplicitEuler},
+                o.progress),
       o.out / "stability.csv");
 }
 
@@ -278,8 +282,8 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
         "and in the paper `vtb.pdf`; without LaTeX the links below stay empty.\n\n";
   for (const auto& [file, title] : kReportFigures) md << "![" << title << "](figures/" << file << ".png)\n\n";
   md << "## Files\n\n- `timing_table.csv`: the table above.\n- `fig3/`: the plate at 0, " << duration / 2 << " and "
-     << duration
-     << " s (CSV with the cells and their strain, and VTU), filtered-full and FEM (the paper's Fig. 3).\n"
+     << duration << " s (CSV with the cells and their strain, and VTU), " << solvers::kFilteredFull
+     << " and FEM (the paper's Fig. 3).\n"
         "- `accuracy_speed.csv`: error against CVODE (rtol 1e-10) and against the FEM, and cost, over a dt ladder per "
         "solver (123-node plate).\n- `stability.csv`: stable or not over dt x stiffness scale, with the explicit "
         "scheme's predicted limit (criterion: "

@@ -1,8 +1,9 @@
 #include "reproduce_parts.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/core/force_jacobian.hh"
-#include "vtb/haptics/session.hh"
 #include "vtb/core/output.hh"
+#include "vtb/haptics/session.hh"
 #include "vtb/harness/solvers.hh"
 
 #include <Eigen/SparseCholesky>
@@ -64,10 +65,10 @@ template <int dim> std::string scaling_rows(const Scene& scene, const char* fami
   std::ostringstream os;
   with_model(scene, [&](const auto& model) {
     if constexpr (std::decay_t<decltype(model)>::dimension == dim) {
-      for (const char* solver : {"filtered-full", "implicit-euler"}) {
+      for (const char* solver : {solvers::kFilteredFull, solvers::kImplicitEuler}) {
         IntegratorOptions io = integrator_options(scene.solver);
-        io.kind = solver == std::string("implicit-euler") ? "implicit-euler" : "filtered";
-        io.filter = "full";
+        io.kind = solver == std::string(solvers::kImplicitEuler) ? solvers::kImplicitEuler : solvers::kFiltered;
+        io.filter = solvers::kFilterFull;
         const std::size_t before = heap_in_use();
         const auto a = std::chrono::steady_clock::now();
         auto integ = make_integrator(model, io);
@@ -121,7 +122,7 @@ void write_creep(const std::filesystem::path& out, const std::filesystem::path& 
   const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
   const double tau = scene.material.retardation_time;
   const double u_static = static_displacement(model, scene.duration).col(model.probes.at(0).second)(0);
-  const std::vector<std::string> solvers = {"filtered-full", "implicit-euler", "cvode"};
+  const std::vector<std::string> solvers = {solvers::kFilteredFull, solvers::kImplicitEuler, solvers::kCvode};
   std::vector<Trajectory<2>> runs(solvers.size());
   for (std::size_t k = 0; k < solvers.size(); ++k) run_solver(scene, model, solvers[k], 0, runs[k]);
   std::ostringstream os;

@@ -1,4 +1,5 @@
 #include "vtb/harness/solvers.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/fem/kelvin_voigt.hh"
@@ -9,30 +10,24 @@
 namespace vtb::harness {
 
 bool known_solver(const std::string& n) {
-  static const char* names[] = {"explicit", "filtered", "filtered-full", "filtered-neighbors", "implicit-euler",
-                                "cvode",    "fem"};
-  return std::find(std::begin(names), std::end(names), n) != std::end(names);
+  return std::any_of(std::begin(solvers::kEntries), std::end(solvers::kEntries),
+                     [&](const solvers::Entry& e) { return n == e.name; });
 }
 
 template <int dim>
 RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::string& solver, double dt,
                      Trajectory<dim>& out) {
-  if (!known_solver(solver))
-    throw InputError("unknown solver \"" + solver +
-                     "\": use explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, cvode or fem");
+  const solvers::Entry& entry = solvers::find(solver);
   const double step = dt > 0 ? dt : scene.solver.dt;
-  if (solver == "fem") {
+  if (!entry.springs) { // the continuum reference (reference_fem), the registry's one non-spring entry
     fem::FemOptions o = fem::options_from(scene.solver);
     o.dt = step;
     o.static_solve = false;
     return fem::simulate<dim>(model, scene.material, o, out, true);
   }
-  IntegratorOptions o = integrator_options(scene.solver);
-  o.kind = solver.rfind("filtered", 0) == 0 ? "filtered" : solver;
-  if (solver == "filtered-full") o.filter = "full";
-  if (solver == "filtered-neighbors") o.filter = "neighbors";
+  IntegratorOptions o = solvers::integrator_options(entry, scene.solver);
   o.dt = step;
-  if (solver == "explicit" && dt <= 0) {
+  if (solver == solvers::kExplicit && dt <= 0) {
     // Half the predicted limit, rounded down so that samples fall on steps like the others'.
     const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
     const double limit = 0.5 * explicit_critical_dt(max_omega_squared(model, false), tau, model.net.mass_damping);

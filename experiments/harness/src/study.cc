@@ -1,4 +1,5 @@
 #include "vtb/harness/study.hh"
+#include "vtb/core/solver_registry.hh"
 #include "vtb/harness/tex.hh"
 
 #include "vtb/core/cvode_solver.hh"
@@ -57,7 +58,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
   // the spring model's exact trajectory (CVODE at rtol 1e-10).
   Trajectory<dim> ref;
   RunReport rr;
-  if (o.reference == "fem") {
+  if (o.reference == solvers::kFem) {
     fem::FemOptions f = fem::options_from(scene.solver);
     f.degree = 2;
     f.refinements = 1;
@@ -65,7 +66,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
     f.static_solve = false;
     rr = fem::simulate<dim>(model, scene.material, f, ref, true);
     res.reference_note = "fem, P2, 1 refinement, " + f.scheme + ", dt = " + std::to_string(f.dt) + " s";
-  } else if (o.reference == "cvode") {
+  } else if (o.reference == solvers::kCvode) {
     rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
     res.reference_note = "cvode, rtol 1e-10, atol 1e-14";
   } else {
@@ -94,7 +95,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
     res.rows.push_back(std::move(row));
   };
   for (const auto& solver : o.solvers) {
-    if (solver == "cvode") {
+    if (solver == solvers::kCvode) {
       for (double rtol : rtol_ladder(o.quick)) {
         Trajectory<dim> tr;
         const auto a = clock::now();
@@ -107,7 +108,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
       continue;
     }
     std::vector<double> dts = dt_ladder(scene.solver.dt, o.quick);
-    if (solver == "explicit") {
+    if (solver == solvers::kExplicit) {
       const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
       const double limit = explicit_critical_dt(max_omega_squared(model, false), tau, model.net.mass_damping);
       dts = o.quick ? std::vector<double>{0.9 * limit} : std::vector<double>{0.9 * limit, 0.45 * limit};
@@ -153,9 +154,12 @@ std::string num(double x) {
 /// paper's own Pareto figure, paper/figures/accuracy_speed.tex, draws both: data/acc_NAME.dat
 /// per solver (cost error), data/pareto.dat, and data/numbers.tex naming the reference.
 std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r, const std::string& filter) {
-  const auto plotted = [&](const std::string& solver) { return solver == "filtered" ? "filtered-" + filter : solver; };
+  const auto plotted = [&](const std::string& solver) {
+    return solver == solvers::kFiltered ? "filtered-" + filter : solver;
+  };
   std::vector<std::pair<std::string, std::string>> files;
-  for (const char* name : {"filtered-full", "filtered-neighbors", "implicit-euler", "cvode", "fem", "explicit"}) {
+  for (const char* name : {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler,
+                           solvers::kCvode, solvers::kFem, solvers::kExplicit}) {
     std::ostringstream t;
     t << "cost error\n";
     for (const auto& row : r.rows)
@@ -171,7 +175,8 @@ std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r,
   p << "cost error\n";
   for (const auto* row : front) p << num(row->cost) << ' ' << num(row->error_all) << '\n';
   files.emplace_back("pareto.dat", p.str());
-  files.emplace_back("numbers.tex", tex_macro("vtbAccuracyReference", r.reference == "cvode" ? "CVODE" : "FEM"));
+  files.emplace_back("numbers.tex",
+                     tex_macro("vtbAccuracyReference", r.reference == solvers::kCvode ? "CVODE" : "FEM"));
   return files;
 }
 
@@ -186,10 +191,9 @@ std::string plot_tex(const std::filesystem::path& paper_dir) {
 
 StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream* log) {
   for (const auto& solver : o.solvers) // before any run: a typo costs nothing
-    if (!known_solver(solver) || solver == "fem")
-      throw InputError("vtb study: solver \"" + solver +
-                       "\" is not one to study (explicit, filtered, filtered-full, filtered-neighbors, implicit-euler, "
-                       "cvode)");
+    if (!known_solver(solver) || solver == solvers::kFem)
+      throw InputError("vtb study: solver \"" + solver + "\" is not one to study (" +
+                       solvers::list(solvers::is_spring) + ")");
   Scene scene = scene_in;
   if (o.quick && scene.duration > 1.0) { // a quick study looks at the first second
     scene.duration = 1.0;

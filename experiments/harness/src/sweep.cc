@@ -1,4 +1,5 @@
 #include "vtb/harness/sweep.hh"
+#include "vtb/core/solver_names.hh"
 
 #include "vtb/meshes/atomic_file.hh"
 
@@ -21,7 +22,7 @@ void sweep_scale(const Scene& scene, Model<dim> model, double scale, const std::
   const double w2 = max_omega_squared(model, model.free_nodes.size() * dim <= 1500);
   const double courant = explicit_critical_dt(w2, tau, scene.material.mass_damping);
   Trajectory<dim> ref;
-  const RunReport rr = run_solver(scene, model, "cvode", 0, ref);
+  const RunReport rr = run_solver(scene, model, solvers::kCvode, 0, ref);
   for (const auto& solver : solvers)
     for (double dt_req : dts) {
       SweepCell c;
@@ -58,7 +59,7 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
     if (!known_solver(s)) throw InputError("vtb sweep: unknown solver \"" + s + "\"");
     // CVODE chooses its own steps: a dt ladder would run the same integration at every dt
     // and report error 0 against itself.
-    if (s == "cvode" || s == "fem")
+    if (s == solvers::kCvode || s == solvers::kFem)
       throw InputError("vtb sweep: \"" + s +
                        "\" has no fixed dt to sweep (it is the reference the sweep measures against)");
   }

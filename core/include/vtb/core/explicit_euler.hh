@@ -4,6 +4,7 @@
 ///   v+ = v + dt M^-1 (f(u, v) + f_ext(t)),   u+ = u + dt v+.
 
 #include "vtb/core/integrator.hh"
+#include "vtb/core/solver_names.hh"
 
 namespace vtb {
 
@@ -11,7 +12,7 @@ template <int dim> class ExplicitEuler final : public Integrator<dim> {
 public:
   ExplicitEuler(const Model<dim>& model, double dt);
   void step(State<dim>& s) override;
-  std::string_view name() const override { return "explicit"; }
+  std::string_view name() const override { return solvers::kExplicit; }
 
 private:
   const Model<dim>& m_model;

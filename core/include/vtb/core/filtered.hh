@@ -26,6 +26,7 @@
 
 #include "vtb/core/integrator.hh"
 #include "vtb/core/ordered_ldlt.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <Eigen/SparseCore>
 
@@ -45,7 +46,7 @@ template <int dim> class FilteredImplicit final : public Integrator<dim> {
 public:
   FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
   void step(State<dim>& s) override;
-  std::string_view name() const override { return "filtered"; }
+  std::string_view name() const override { return solvers::kFiltered; }
 
 private:
   void correct_momentum(const State<dim>& s);

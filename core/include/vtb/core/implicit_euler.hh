@@ -10,6 +10,7 @@
 
 #include "vtb/core/integrator.hh"
 #include "vtb/core/ordered_ldlt.hh"
+#include "vtb/core/solver_names.hh"
 
 namespace vtb {
 
@@ -17,7 +18,7 @@ template <int dim> class ImplicitEuler final : public Integrator<dim> {
 public:
   ImplicitEuler(const Model<dim>& model, double dt);
   void step(State<dim>& s) override;
-  std::string_view name() const override { return "implicit-euler"; }
+  std::string_view name() const override { return solvers::kImplicitEuler; }
 
 private:
   const Model<dim>& m_model;

@@ -4,6 +4,7 @@
 /// advances the state by the fixed dt and allocates nothing.
 
 #include "vtb/core/model.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <memory>
 #include <string_view>
@@ -41,9 +42,9 @@ private:
 
 /// Options that select and tune a spring solver (from [solver]).
 struct IntegratorOptions {
-  std::string kind = "filtered";
+  std::string kind = solvers::kFiltered;
   double dt = 1e-3;
-  std::string filter = "full";
+  std::string filter = solvers::kFilterFull;
   bool momentum_correction = true;
   double strain_limit = 0.0;
   double rtol = 1e-8, atol = 1e-12; ///< cvode

@@ -5,6 +5,7 @@
 /// whose length depends on the mesh dimension are checked when the mesh is known
 /// (see model_builder.hh).
 
+#include "vtb/core/solver_names.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <Eigen/Core>
@@ -68,9 +69,9 @@ struct MeshDesc {
 };
 
 struct SolverDesc {
-  std::string kind = "filtered"; ///< explicit | filtered | implicit-euler | cvode | fem
+  std::string kind = solvers::kFiltered; ///< explicit | filtered | implicit-euler | cvode | fem
   double dt = 1e-3;
-  std::string filter = "full"; ///< full (default, stable) | neighbors (the paper, conditionally stable)
+  std::string filter = solvers::kFilterFull; ///< full (default, stable) | neighbors (the paper, conditionally stable)
   bool momentum_correction = true;
   double strain_limit = 0.0;     ///< 0 = off (the default: it changes the physics)
   std::string springs = "lloyd"; ///< lloyd | van-gelder

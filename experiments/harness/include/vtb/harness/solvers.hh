@@ -7,8 +7,7 @@
 
 namespace vtb::harness {
 
-/// Solver names the harness accepts: explicit, filtered (the scene's filter),
-/// filtered-full, filtered-neighbors, implicit-euler, cvode, fem.
+/// Whether `name` is in the solver registry (vtb/core/solver_registry.hh).
 bool known_solver(const std::string& name);
 
 /// Runs `solver` on the model (its dt from the scene unless `dt` > 0; explicit defaults to

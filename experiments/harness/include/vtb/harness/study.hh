@@ -5,6 +5,7 @@
 /// the Pareto front of error against wall time per simulated second.
 
 #include "vtb/core/scene.hh"
+#include "vtb/core/solver_names.hh"
 
 #include <filesystem>
 #include <ostream>
@@ -14,9 +15,10 @@
 namespace vtb::harness {
 
 struct StudyOptions {
-  std::vector<std::string> solvers = {"filtered-full", "filtered-neighbors", "implicit-euler", "explicit", "cvode"};
-  std::string reference = "fem"; ///< fem: P2 with one refinement at dt / 4; cvode: rtol 1e-10
-  bool quick = false;            ///< shorter ladders
+  std::vector<std::string> solvers = {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler,
+                                      solvers::kExplicit, solvers::kCvode};
+  std::string reference = solvers::kFem; ///< fem: P2 with one refinement at dt / 4; cvode: rtol 1e-10
+  bool quick = false;                    ///< shorter ladders
 };
 
 struct StudyRow {
@@ -34,7 +36,7 @@ struct StudyRow {
 
 struct StudyResult {
   std::string scene, reference;
-  std::string filter = "full"; ///< the scene's filter: what the solver "filtered" means
+  std::string filter = solvers::kFilterFull; ///< the scene's filter: what the solver `filtered` means
   int nodes = 0;
   double duration = 0;
   std::string reference_note; ///< what the reference run was

@@ -1,0 +1,19 @@
+#pragma once
+/// \file
+/// The solver names, each written once (the registry, solver_registry.hh, describes them).
+
+namespace vtb::solvers {
+
+inline constexpr const char* kExplicit = "explicit";
+inline constexpr const char* kFiltered = "filtered"; ///< the scene's [solver].filter
+inline constexpr const char* kFilteredFull = "filtered-full";
+inline constexpr const char* kFilteredNeighbors = "filtered-neighbors";
+inline constexpr const char* kImplicitEuler = "implicit-euler";
+inline constexpr const char* kCvode = "cvode";
+inline constexpr const char* kFem = "fem";
+
+/// The filters of `filtered` ([solver].filter).
+inline constexpr const char* kFilterFull = "full";
+inline constexpr const char* kFilterNeighbors = "neighbors";
+
+} // namespace vtb::solvers
