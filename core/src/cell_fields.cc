@@ -44,33 +44,9 @@ template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<di
   return worst;
 }
 
-template <int dim>
-void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
-                       std::vector<double>& out) {
-  out.assign(mesh.cells.size(), 0.0);
-  for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
-    const auto& cell = mesh.cells[c];
-    int n = 0;
-    for (int a = 0; a <= dim; ++a)
-      for (int b = a + 1; b <= dim; ++b) {
-        const std::array<int, 2> e = {std::min(cell[static_cast<std::size_t>(a)], cell[static_cast<std::size_t>(b)]),
-                                      std::max(cell[static_cast<std::size_t>(a)], cell[static_cast<std::size_t>(b)])};
-        const auto it = std::lower_bound(net.edge.begin(), net.edge.end(), e);
-        if (it == net.edge.end() || *it != e) continue;
-        const auto s = static_cast<Eigen::Index>(it - net.edge.begin());
-        const double l = (net.rest.col(e[1]) + u.col(e[1]) - net.rest.col(e[0]) - u.col(e[0])).norm();
-        out[c] += net.stiffness[s] * (l - net.rest_length[s]);
-        ++n;
-      }
-    if (n > 0) out[c] /= n;
-  }
-}
-
 template void cell_max_principal_strain<2>(const Mesh<2>&, const Nodal<2>&, std::vector<float>&);
 template void cell_max_principal_strain<3>(const Mesh<3>&, const Nodal<3>&, std::vector<float>&);
 template double max_small_strain<2>(const Mesh<2>&, const Nodal<2>&);
 template double max_small_strain<3>(const Mesh<3>&, const Nodal<3>&);
-template void cell_spring_force<2>(const Mesh<2>&, const SpringNetwork<2>&, const Nodal<2>&, std::vector<double>&);
-template void cell_spring_force<3>(const Mesh<3>&, const SpringNetwork<3>&, const Nodal<3>&, std::vector<double>&);
 
 } // namespace vtb

@@ -75,7 +75,7 @@ void write_pvd(const std::filesystem::path& dir, const std::vector<double>& time
 }
 
 /// The summary with each probe's node and its distance from the probe's scene point.
-template <int dim> std::string with_probes(const std::string& summary, const Model<dim>& model) {
+template <int dim> std::string with_probes(const std::string& summary, const Problem<dim>& model) {
   auto j = nlohmann::ordered_json::parse(summary);
   j["probes"] = nlohmann::ordered_json::array();
   for (std::size_t p = 0; p < model.probes.size(); ++p)
@@ -86,7 +86,7 @@ template <int dim> std::string with_probes(const std::string& summary, const Mod
 }
 
 template <int dim>
-void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
+void write_run_outputs(const std::filesystem::path& dir, const Problem<dim>& model, const Trajectory<dim>& traj,
                        const RunReport& report, const std::string& scene_name) {
   std::ostringstream probes, reactions;
   probes << std::setprecision(10) << "t,probe,ux,uy,uz\n";
@@ -108,9 +108,9 @@ void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model
                                {"summary.json", with_probes(summary_json(report, scene_name), model)}});
 }
 
-template void write_run_outputs<2>(const std::filesystem::path&, const Model<2>&, const Trajectory<2>&,
+template void write_run_outputs<2>(const std::filesystem::path&, const Problem<2>&, const Trajectory<2>&,
                                    const RunReport&, const std::string&);
-template void write_run_outputs<3>(const std::filesystem::path&, const Model<3>&, const Trajectory<3>&,
+template void write_run_outputs<3>(const std::filesystem::path&, const Problem<3>&, const Trajectory<3>&,
                                    const RunReport&, const std::string&);
 
 } // namespace vtb

@@ -1,7 +1,6 @@
 #include "vtb/core/solver_registry.hh"
 
 #include "scene_reader.hh"
-#include "vtb/core/simulation.hh"
 #include "vtb/meshes/input_error.hh"
 
 namespace vtb::solvers {
@@ -33,13 +32,6 @@ std::string list(bool (*keep)(const Entry&)) {
   std::string s;
   for (std::size_t i = 0; i < v.size(); ++i) s += (i == 0 ? "" : i + 1 == v.size() ? " or " : ", ") + v[i];
   return s;
-}
-
-IntegratorOptions integrator_options(const Entry& entry, const SolverDesc& solver) {
-  IntegratorOptions o = vtb::integrator_options(solver);
-  o.kind = entry.kind;
-  if (*entry.filter) o.filter = entry.filter;
-  return o;
 }
 
 } // namespace vtb::solvers

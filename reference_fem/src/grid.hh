@@ -3,7 +3,7 @@
 // triangulation of a scene's mesh, the material's Lame constants, the element matrices, the
 // rule for support points on a support's facets, and the strain measure of the summary.
 
-#include "vtb/core/model.hh"
+#include "vtb/core/problem.hh"
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/dofs/dof_handler.h>
@@ -32,7 +32,7 @@ template <int dim> dealii::Point<dim> to_point(const Eigen::Matrix<double, dim, 
 /// of traction loads get a boundary id per combination of loads (ids survive refinement);
 /// loads_of_id[id] lists the loads of id (id 0: none).
 template <int dim>
-void make_triangulation(const Model<dim>& m_model, int refinements, dealii::Triangulation<dim>& m_tria,
+void make_triangulation(const Problem<dim>& m_model, int refinements, dealii::Triangulation<dim>& m_tria,
                         std::vector<std::vector<int>>& m_loads_of_id) {
   const Mesh<dim>& mesh = m_model.mesh;
   std::vector<dealii::Point<dim>> vertices(static_cast<std::size_t>(mesh.num_nodes()));

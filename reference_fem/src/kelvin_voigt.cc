@@ -61,7 +61,7 @@ using namespace dealii;
 
 template <int dim> class KelvinVoigtProblem {
 public:
-  KelvinVoigtProblem(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options)
+  KelvinVoigtProblem(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options)
       : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt),
         m_fe(FE_SimplexP<dim>(options.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
         m_timer(m_timer_stream, TimerOutput::never, TimerOutput::wall_times) {}
@@ -81,7 +81,7 @@ private:
   void record(double t, Trajectory<dim>& out, bool record_field, RunReport& rep);
   void write_frame(const Vector<double>& u, std::size_t index);
 
-  const Model<dim>& m_model;
+  const Problem<dim>& m_model;
   const MaterialDesc& m_mat;
   const FemOptions m_opt;
   const TimeScheme m_scheme;
@@ -283,18 +283,9 @@ template <int dim> void KelvinVoigtProblem<dim>::initial_state() {
   m_u = 0;
   m_v = 0;
   m_a = 0;
-  // Initial velocity: the scene's translation and spin about the centroid, at every dof.
-  Eigen::Matrix<double, dim, 1> v0 = Eigen::Matrix<double, dim, 1>::Zero();
-  if (m_model.num_nodes() > 0) v0 = m_model.initial_velocity.rowwise().mean();
-  const Eigen::Matrix<double, dim, 1> centroid = (m_model.mesh.points * m_model.net.mass) / m_model.net.mass.sum();
-  // Recover the spin from the springs model's initial velocity field (v = v0 + w x r).
-  for (types::global_dof_index d = 0; d < n; ++d) {
-    // Interpolate the rigid field: fit from two nodes is exact for rigid motion; use the model.
-    (void)centroid;
-    m_v[d] = 0;
-  }
-  // The spring model holds v(x) = v_lin + w x (x - c) at its nodes; that field is affine, so
-  // interpolating it at the support points is exact: use the affine fit through the nodes.
+  // The problem holds the initial velocity v(x) = v_lin + w x (x - c) at the mesh's nodes;
+  // that field is affine, so interpolating it at the support points is exact: use the affine
+  // fit through the nodes.
   const Nodal<dim>& V = m_model.initial_velocity;
   Eigen::Matrix<double, dim + 1, Eigen::Dynamic> X(dim + 1, m_model.num_nodes());
   X.topRows(dim) = m_model.mesh.points;
@@ -499,7 +490,7 @@ FemOptions options_from(const SolverDesc& s) {
 }
 
 template <int dim>
-RunReport simulate(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+RunReport simulate(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                    Trajectory<dim>& out, bool record_field) {
   if (options.degree < 1 || options.degree > 2) throw InputError("[solver].degree must be 1 or 2");
   if (!(options.dt > 0)) throw InputError("[solver].dt must be > 0");
@@ -507,7 +498,7 @@ RunReport simulate(const Model<dim>& model, const MaterialDesc& material, const 
   return problem.run(out, record_field);
 }
 
-template RunReport simulate<2>(const Model<2>&, const MaterialDesc&, const FemOptions&, Trajectory<2>&, bool);
-template RunReport simulate<3>(const Model<3>&, const MaterialDesc&, const FemOptions&, Trajectory<3>&, bool);
+template RunReport simulate<2>(const Problem<2>&, const MaterialDesc&, const FemOptions&, Trajectory<2>&, bool);
+template RunReport simulate<3>(const Problem<3>&, const MaterialDesc&, const FemOptions&, Trajectory<3>&, bool);
 
 } // namespace vtb::fem

@@ -42,7 +42,7 @@ using Mat_t = TrilinosWrappers::SparseMatrix;
 
 template <int dim> class DistributedProblem {
 public:
-  DistributedProblem(const Model<dim>& model, const MaterialDesc& mat, const FemOptions& o)
+  DistributedProblem(const Problem<dim>& model, const MaterialDesc& mat, const FemOptions& o)
       : m_model(model), m_mat(mat), m_opt(o), m_scheme(o.scheme, o.static_solve, o.dt), m_comm(MPI_COMM_WORLD),
         m_tria(m_comm), m_fe(FE_SimplexP<dim>(o.degree), dim), m_mapping(FE_SimplexP<dim>(1)), m_dofs(m_tria),
         m_solver(m_control) {}
@@ -333,7 +333,7 @@ private:
 
   double m_max_strain = 0;
 
-  const Model<dim>& m_model;
+  const Problem<dim>& m_model;
   const MaterialDesc& m_mat;
   const FemOptions m_opt;
   const TimeScheme m_scheme;
@@ -379,15 +379,15 @@ int mpi_rank() {
 }
 
 template <int dim>
-RunReport simulate_distributed(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+RunReport simulate_distributed(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                                Trajectory<dim>& out, bool record_field) {
   DistributedProblem<dim> problem(model, material, options);
   return problem.run(out, record_field);
 }
 
-template RunReport simulate_distributed<2>(const Model<2>&, const MaterialDesc&, const FemOptions&, Trajectory<2>&,
+template RunReport simulate_distributed<2>(const Problem<2>&, const MaterialDesc&, const FemOptions&, Trajectory<2>&,
                                            bool);
-template RunReport simulate_distributed<3>(const Model<3>&, const MaterialDesc&, const FemOptions&, Trajectory<3>&,
+template RunReport simulate_distributed<3>(const Problem<3>&, const MaterialDesc&, const FemOptions&, Trajectory<3>&,
                                            bool);
 
 } // namespace vtb::fem

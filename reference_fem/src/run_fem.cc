@@ -6,7 +6,7 @@ namespace vtb::fem {
 RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
   FemOptions o = options_from(scene.solver);
   if (frames) o.frames_dir = out_dir / "frames";
-  return with_model(scene, [&](const auto& model) {
+  return with_problem(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     Trajectory<dim> traj;
     if (mpi_size() > 1) {

@@ -3,7 +3,8 @@
 
 #include "time_scheme.hh"
 
-#include "vtb/core/simulation.hh"
+#include "vtb/core/problem.hh"
+#include "vtb/core/run_report.hh"
 
 #include <algorithm>
 #include <chrono>

@@ -25,6 +25,7 @@ inline Model<2> single_element(double k, double c, double m, double F, double L 
   net.adj_node = {1, 0};
   net.adj_spring = {0, 0};
   net.calibration = "test";
+  model.mesh.points = net.rest; // two nodes and no cell: the problem's node count is the mesh's
   Support<2> fix;
   fix.name = "fix";
   fix.nodes = {0};

@@ -1,10 +1,10 @@
 #pragma once
 /// \file
-/// Per-cell fields of a deformed spring model, for the frames vtb writes and the viewer's
-/// colours: the cell's largest principal Green-Lagrange strain, and the mean axial force of
-/// the springs along its edges.
+/// Per-cell fields of a deformed mesh, for the frames vtb writes, the viewer's colours and
+/// every solver's max_strain (the springs' own per-cell force is in spring_network.hh).
 
-#include "vtb/core/spring_network.hh"
+#include "vtb/core/nodal.hh"
+#include "vtb/meshes/mesh.hh"
 
 #include <vector>
 
@@ -19,10 +19,5 @@ template <int dim> void cell_max_principal_strain(const Mesh<dim>& mesh, const N
 /// P1 interpolant of u on the mesh: the definition the FEM's summary uses (at its cells'
 /// centres), so that `max_strain` means one thing for every solver.
 template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<dim>& u);
-
-/// The mean over a cell's edges of its spring's axial force k (l - L0) (N, tension > 0).
-template <int dim>
-void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
-                       std::vector<double>& out);
 
 } // namespace vtb

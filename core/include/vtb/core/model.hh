@@ -1,81 +1,16 @@
 #pragma once
 /// \file
-/// What a scene asks the spring solvers to simulate: the network, its supports and drives,
-/// the loads, the initial state and the probes, resolved against the mesh.
+/// What the spring solvers simulate: the scene's Problem and the spring network made from it.
 
+#include "vtb/core/problem.hh"
 #include "vtb/core/spring_network.hh"
-#include "vtb/meshes/region.hh"
-
-#include <type_traits>
-#include <variant>
 
 namespace vtb {
 
-/// Switch-on profile of loads and drives: 0 before `start`, then a linear ramp to 1 over
-/// `ramp` seconds (a step when ramp = 0).
-inline double ramp_factor(double t, double start, double ramp) {
-  if (t < start) return 0.0;
-  if (ramp <= 0) return 1.0;
-  return t >= start + ramp ? 1.0 : (t - start) / ramp;
-}
-/// Time derivative of ramp_factor (0 at the kinks).
-inline double ramp_rate(double t, double start, double ramp) {
-  return (ramp > 0 && t >= start && t < start + ramp) ? 1.0 / ramp : 0.0;
-}
+template <int dim> struct Model : Problem<dim> { SpringNetwork<dim> net; };
 
-/// A fix (displacement 0) or drive (prescribed displacement), with its reaction reported.
-template <int dim> struct Support {
-  std::string name;
-  std::vector<int> nodes;
-  std::vector<std::array<int, dim>> facets; ///< boundary facets the region covers (for higher-order FEM)
-  std::optional<Box<dim>> box;              ///< the region's box, if it was given by one
-  bool driven = false;
-  Vec<dim> displacement = Vec<dim>::Zero();
-  double start = 0, ramp = 0;
-};
-
-/// A load: fixed nodal forces (lumped traction or point force) times the ramp.
-template <int dim> struct Load {
-  std::string name;
-  std::vector<int> nodes;
-  Nodal<dim> force; ///< column per entry of `nodes`
-  /// A uniform traction: the facets and the total force (empty facets: a nodal load).
-  std::vector<std::array<int, dim>> facets;
-  Vec<dim> total = Vec<dim>::Zero();
-  double start = 0, ramp = 0;
-};
-
-template <int dim> struct Model {
-  static constexpr int dimension = dim;
-  Mesh<dim> mesh;
-  SpringNetwork<dim> net;
-  std::vector<Support<dim>> supports;
-  std::vector<Load<dim>> loads;
-  std::vector<char> constrained; ///< per node: fixed or driven
-  std::vector<int> free_nodes;   ///< sorted
-  std::vector<int> free_index;   ///< node -> index in free_nodes, or -1
-  Nodal<dim> initial_velocity;
-  std::vector<std::pair<std::string, int>> probes; ///< name, node
-  std::vector<double> probe_distance;              ///< per probe: from its scene point to its node, m
-  double duration = 0, output_interval = 0;
-
-  int num_nodes() const { return net.num_nodes(); }
-  bool has_constraints() const { return free_nodes.size() != constrained.size(); }
-
-  /// f = external load at time t (f is overwritten; allocates nothing).
-  void external_forces(double t, Nodal<dim>& f) const;
-  /// Sets displacement and velocity of every constrained node for time t.
-  void apply_constraints(double t, Nodal<dim>& u, Nodal<dim>& v) const;
-};
-
-/// Resolves a scene against its mesh. Throws InputError naming the scene key when a vector
-/// has the wrong dimension, a probe or point region lies farther from its nearest node than
-/// the mesh's longest edge, a region selects no node, regions conflict (a node both fixed
-/// and driven, or in two drives), or the body is a mechanism that a solver cannot integrate.
+/// The problem (build_problem) and its spring network ([solver].springs calibration).
 template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
-
-/// Loads the scene's mesh (file or generator).
-AnyMesh load_mesh(const Scene& scene);
 
 /// Loads the scene's mesh, builds the model in the mesh's dimension and returns f(model); f
 /// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)

@@ -3,7 +3,8 @@
 /// Output files of `vtb run` (DESIGN.md §2): probes.csv, reactions.csv, summary.json.
 /// Files are written under a temporary name and renamed only when all are complete.
 
-#include "vtb/core/simulation.hh"
+#include "vtb/core/problem.hh"
+#include "vtb/core/run_report.hh"
 #include "vtb/meshes/atomic_file.hh" // write_files_atomically, IoError
 
 #include <filesystem>
@@ -14,7 +15,7 @@
 namespace vtb {
 
 template <int dim>
-void write_run_outputs(const std::filesystem::path& dir, const Model<dim>& model, const Trajectory<dim>& traj,
+void write_run_outputs(const std::filesystem::path& dir, const Problem<dim>& model, const Trajectory<dim>& traj,
                        const RunReport& report, const std::string& scene_name);
 
 /// frames.pvd listing frames/frame_NNNN.vtu with their times (the .vtu files written by the

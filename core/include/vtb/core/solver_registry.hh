@@ -10,7 +10,6 @@
 /// which the harness's run_solver dispatches to. vtb::core cannot name reference_fem, so the
 /// dispatch sits one layer up and a test checks that every entry runs.
 
-#include "vtb/core/integrator.hh"
 #include "vtb/core/scene.hh"
 #include "vtb/core/solver_names.hh"
 
@@ -50,9 +49,15 @@ inline constexpr Entry kEntries[] = {
 };
 
 /// Filters for names() and list().
-inline bool is_scene_kind(const Entry& e) { return e.scene_kind; }
-inline bool is_stepper(const Entry& e) { return e.interactive; } ///< one fixed step at a time (view, haptics)
-inline bool is_spring(const Entry& e) { return e.springs; }
+inline bool is_scene_kind(const Entry& e) {
+  return e.scene_kind;
+}
+inline bool is_stepper(const Entry& e) {
+  return e.interactive;
+} ///< one fixed step at a time (view, haptics)
+inline bool is_spring(const Entry& e) {
+  return e.springs;
+}
 
 /// The entry of `name`; InputError naming the nearest known name otherwise ("where" prefixes
 /// the message, e.g. "--solvers").
@@ -63,8 +68,5 @@ std::vector<std::string> names(bool (*keep)(const Entry&) = nullptr);
 
 /// "a, b, c or d": the names for a message or --help.
 std::string list(bool (*keep)(const Entry&) = nullptr);
-
-/// What a spring entry runs with: the scene's [solver] options, kind and filter set by the entry.
-IntegratorOptions integrator_options(const Entry& entry, const SolverDesc& solver);
 
 } // namespace vtb::solvers

@@ -3,13 +3,9 @@
 /// Kernels of one Voigt element (a linear spring in parallel with a dashpot along the
 /// edge), as free functions so that tests can check them alone. Hot loops inline them.
 
-#include <Eigen/Core>
+#include "vtb/core/nodal.hh"
 
 namespace vtb {
-
-template <int dim> using Vec = Eigen::Matrix<double, dim, 1>;
-template <int dim> using Mat = Eigen::Matrix<double, dim, dim>;
-template <int dim> using Nodal = Eigen::Matrix<double, dim, Eigen::Dynamic>; ///< one column per node
 
 /// Force on node i from the Voigt element (i, j):
 ///   f_i = [ k (l - L0) + c (v_j - v_i) . n ] n,   n = (x_j - x_i) / l,   l = |x_j - x_i|.

@@ -44,4 +44,9 @@ template <int dim> double max_strain(const SpringNetwork<dim>& net, const Nodal<
 template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u);
 template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v);
 
+/// The mean over a cell's edges of its spring's axial force k (l - L0) (N, tension > 0).
+template <int dim>
+void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
+                       std::vector<double>& out);
+
 } // namespace vtb

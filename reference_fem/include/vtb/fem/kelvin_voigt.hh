@@ -4,7 +4,10 @@
 /// plus mass damping, discretised with deal.II simplex finite elements on the very mesh the
 /// spring model uses. The public interface carries no deal.II type.
 
-#include "vtb/core/simulation.hh"
+#include "vtb/core/problem.hh"
+#include "vtb/core/run_report.hh"
+
+#include <filesystem>
 
 #include <memory>
 
@@ -23,20 +26,20 @@ struct FemOptions {
 
 FemOptions options_from(const SolverDesc& solver);
 
-/// Simulates the model's scene with the FEM and records, at every sample time, the probe
+/// Simulates the scene's problem with the FEM and records, at every sample time, the probe
 /// displacements, the support reactions (from the residual: the force each support exerts
 /// on the body) and, if asked, the displacement at every node of the scene's mesh (for
 /// node-by-node comparison with the spring model; the original nodes stay nodes under
 /// refinement and for P2). RunReport.extra holds cells, dofs and the phase times.
 template <int dim>
-RunReport simulate(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+RunReport simulate(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                    Trajectory<dim>& out, bool record_field = false);
 
 /// The same problem distributed over the MPI ranks of mpirun (parallel::fullydistributed
 /// triangulation, Trilinos matrices, a Trilinos direct solver); every rank returns the same
 /// trajectory. Requires an MpiScope alive.
 template <int dim>
-RunReport simulate_distributed(const Model<dim>& model, const MaterialDesc& material, const FemOptions& options,
+RunReport simulate_distributed(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                                Trajectory<dim>& out, bool record_field = false);
 
 /// Initialises and finalises MPI when the process was started by mpirun (OMPI_COMM_WORLD_SIZE
