@@ -58,19 +58,9 @@ std::string check_poisson(double v) {
 
 } // namespace
 
-Scene parse_scene(std::string_view text, const std::string& name, const std::filesystem::path& base_dir) {
-  toml::table root;
-  try {
-    root = toml::parse(text, name);
-  } catch (const toml::parse_error& e) {
-    throw InputError(name + ":" + std::to_string(e.source().begin.line) +
-                     ": TOML syntax: " + std::string(e.description()));
-  }
-  Scene s;
-  s.file = name;
-  const TableReader top(root, "", name,
-                        {"scene", "mesh", "material", "fix", "load", "drive", "initial", "probe", "solver", "haptics"});
+namespace {
 
+void read_scene_table(const TableReader& top, const std::string& name, Scene& s) {
   const toml::table* t = top.table("scene");
   if (!t) top.fail("scene", "missing (required table)");
   {
@@ -80,8 +70,10 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     s.output_interval = r.number("output_interval", std::nullopt, positive);
     if (s.output_interval > s.duration) r.fail("output_interval", "must not exceed [scene].duration");
   }
+}
 
-  t = top.table("mesh");
+void read_mesh(const TableReader& top, const std::string& name, const std::filesystem::path& base_dir, Scene& s) {
+  const toml::table* t = top.table("mesh");
   if (!t) top.fail("mesh", "missing (required table)");
   {
     const TableReader r(*t, "[mesh]", name, {"file", "generate"});
@@ -109,8 +101,10 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       }
     }
   }
+}
 
-  t = top.table("material");
+void read_material(const TableReader& top, const std::string& name, Scene& s) {
+  const toml::table* t = top.table("material");
   if (!t) top.fail("material", "missing (required table)");
   {
     const TableReader r(*t, "[material]", name,
@@ -122,7 +116,9 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     s.material.retardation_time = r.number("retardation_time", 0.0, non_negative);
     s.material.mass_damping = r.number("mass_damping", 0.0, non_negative);
   }
+}
 
+void read_regions(const TableReader& top, const std::string& name, Scene& s) {
   auto label = [](const TableReader& r, const char* kind, std::size_t i) {
     return r.has("name") ? r.string("name", std::nullopt) : std::string(kind) + "[" + std::to_string(i) + "]";
   };
@@ -153,8 +149,10 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     d.ramp = r.number("ramp", 0.0, non_negative);
     s.drives.push_back(std::move(d));
   }
+}
 
-  if ((t = top.table("initial"))) {
+void read_initial(const TableReader& top, const std::string& name, Scene& s) {
+  if (const toml::table* t = top.table("initial")) {
     const TableReader r(*t, "[initial]", name, {"velocity", "angular_velocity"});
     if (r.has("velocity")) s.initial_velocity = r.vector("velocity", 2, 3);
     if (r.has("angular_velocity")) {
@@ -164,7 +162,9 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
         s.initial_angular_velocity = r.vector("angular_velocity", 3, 3);
     }
   }
+}
 
+void read_probes(const TableReader& top, const std::string& name, Scene& s) {
   const auto probes = top.tables("probe");
   for (std::size_t i = 0; i < probes.size(); ++i) {
     const TableReader r(*probes[i], "[[probe]] #" + std::to_string(i + 1), name, {"name", "point"});
@@ -175,8 +175,10 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
       if (q.name == p.name) r.fail("name", "probe name \"" + p.name + "\" is used twice");
     s.probes.push_back(std::move(p));
   }
+}
 
-  if ((t = top.table("solver"))) {
+void read_solver(const TableReader& top, const std::string& name, Scene& s) {
+  if (const toml::table* t = top.table("solver")) {
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
                          "degree", "refinements", "scheme", "static"});
@@ -197,8 +199,60 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     s.solver.static_solve = r.boolean("static", false);
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }
+}
 
-  if ((t = top.table("haptics"))) {
+/// One scripted hand: [haptics.hand] or a [[haptics.probe]].
+HandDesc read_hand(const toml::table& ht, const std::string& path, const std::string& name) {
+  const TableReader hr(ht, path, name, {"waypoints", "duration", "grip_stiffness"});
+  HandDesc hand;
+  const toml::array* w = hr.node("waypoints") ? hr.node("waypoints")->as_array() : nullptr;
+  if (!w || w->empty()) hr.fail("waypoints", "must be a non-empty array of [x, y] points");
+  for (std::size_t i = 0; i < w->size(); ++i) {
+    const toml::array* p = w->get(i)->as_array();
+    if (!p || p->size() < 2 || p->size() > 3)
+      hr.fail("waypoints",
+              "entry " + std::to_string(i) + " must be [x, y] (device) or [x, y, z] (a point of a 3D scene)");
+    if (i > 0 && static_cast<Eigen::Index>(p->size()) != hand.waypoints.front().size())
+      hr.fail("waypoints", "entry " + std::to_string(i) + " has " + std::to_string(p->size()) +
+                               " coordinates, entry 0 has " + std::to_string(hand.waypoints.front().size()));
+    Eigen::VectorXd q(static_cast<Eigen::Index>(p->size()));
+    for (std::size_t k = 0; k < p->size(); ++k) {
+      const auto x = p->get(k)->value<double>();
+      if (!x || !std::isfinite(*x)) hr.fail("waypoints", "entry " + std::to_string(i) + " must hold finite numbers");
+      q[static_cast<Eigen::Index>(k)] = *x;
+    }
+    hand.waypoints.push_back(q);
+  }
+  hand.duration = hr.number("duration", std::nullopt, positive);
+  hand.grip_stiffness = hr.number("grip_stiffness", std::nullopt, positive);
+  return hand;
+}
+
+/// [haptics.plane]: where a 3D scene puts the 2-DOF device (orthonormal axes).
+DevicePlaneDesc read_plane(const toml::table& pt, const std::string& name) {
+  const TableReader pr(pt, "[haptics.plane]", name, {"origin", "x_axis", "y_axis"});
+  DevicePlaneDesc plane;
+  const auto vec3 = [&pr](std::string_view key, const Eigen::Vector3d& fallback) -> Eigen::Vector3d {
+    if (!pr.has(key)) return fallback;
+    const Eigen::VectorXd v = pr.vector(key, 3, 3);
+    return v;
+  };
+  plane.origin = vec3("origin", plane.origin);
+  plane.x_axis = vec3("x_axis", plane.x_axis);
+  plane.y_axis = vec3("y_axis", plane.y_axis);
+  for (auto [key, axis] : {std::pair{"x_axis", &plane.x_axis}, std::pair{"y_axis", &plane.y_axis}}) {
+    if (!(axis->norm() > 1e-12)) pr.fail(key, "must be a non-zero direction");
+    axis->normalize();
+  }
+  if (std::abs(plane.x_axis.dot(plane.y_axis)) > 1e-6)
+    pr.fail("y_axis", "must be orthogonal to x_axis (the device's two axes are at right angles)");
+  return plane;
+}
+
+void read_haptics(const TableReader& top, const std::string& name, Scene& s) {
+  const toml::table* t = top.table("haptics");
+  if (!t) return;
+  {
     const TableReader r(
         *t, "[haptics]", name,
         {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand", "probe", "plane"});
@@ -208,59 +262,39 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
     h.coupling_stiffness = r.number("coupling_stiffness", 400.0, positive);
     h.coupling_damping = r.number("coupling_damping", 2.0, non_negative);
     h.max_force = r.number("max_force", 4.0, positive);
-    const auto read_hand = [&name](const toml::table& ht, const std::string& path) {
-      const TableReader hr(ht, path, name, {"waypoints", "duration", "grip_stiffness"});
-      HandDesc hand;
-      const toml::array* w = hr.node("waypoints") ? hr.node("waypoints")->as_array() : nullptr;
-      if (!w || w->empty()) hr.fail("waypoints", "must be a non-empty array of [x, y] points");
-      for (std::size_t i = 0; i < w->size(); ++i) {
-        const toml::array* p = w->get(i)->as_array();
-        if (!p || p->size() < 2 || p->size() > 3)
-          hr.fail("waypoints",
-                  "entry " + std::to_string(i) + " must be [x, y] (device) or [x, y, z] (a point of a 3D scene)");
-        if (i > 0 && static_cast<Eigen::Index>(p->size()) != hand.waypoints.front().size())
-          hr.fail("waypoints", "entry " + std::to_string(i) + " has " + std::to_string(p->size()) +
-                                   " coordinates, entry 0 has " + std::to_string(hand.waypoints.front().size()));
-        Eigen::VectorXd q(static_cast<Eigen::Index>(p->size()));
-        for (std::size_t k = 0; k < p->size(); ++k) {
-          const auto x = p->get(k)->value<double>();
-          if (!x || !std::isfinite(*x))
-            hr.fail("waypoints", "entry " + std::to_string(i) + " must hold finite numbers");
-          q[static_cast<Eigen::Index>(k)] = *x;
-        }
-        hand.waypoints.push_back(q);
-      }
-      hand.duration = hr.number("duration", std::nullopt, positive);
-      hand.grip_stiffness = hr.number("grip_stiffness", std::nullopt, positive);
-      return hand;
-    };
-    if (const toml::table* ht = r.table("hand")) h.hand = read_hand(*ht, "[haptics.hand]");
+    if (const toml::table* ht = r.table("hand")) h.hand = read_hand(*ht, "[haptics.hand]", name);
     const auto hands = r.tables("probe");
     for (std::size_t i = 0; i < hands.size(); ++i)
-      h.probes.push_back(read_hand(*hands[i], "[[haptics.probe]] #" + std::to_string(i + 1)));
+      h.probes.push_back(read_hand(*hands[i], "[[haptics.probe]] #" + std::to_string(i + 1), name));
     if (!hands.empty() && h.device == "procat-sim" && !h.hand)
       r.fail("probe", "[[haptics.probe]] adds devices to the first one: [haptics.hand] is missing");
-    if (const toml::table* pt = r.table("plane")) {
-      const TableReader pr(*pt, "[haptics.plane]", name, {"origin", "x_axis", "y_axis"});
-      DevicePlaneDesc plane;
-      const auto vec3 = [&pr](std::string_view key, const Eigen::Vector3d& fallback) -> Eigen::Vector3d {
-        if (!pr.has(key)) return fallback;
-        const Eigen::VectorXd v = pr.vector(key, 3, 3);
-        return v;
-      };
-      plane.origin = vec3("origin", plane.origin);
-      plane.x_axis = vec3("x_axis", plane.x_axis);
-      plane.y_axis = vec3("y_axis", plane.y_axis);
-      for (auto [key, axis] : {std::pair{"x_axis", &plane.x_axis}, std::pair{"y_axis", &plane.y_axis}}) {
-        if (!(axis->norm() > 1e-12)) pr.fail(key, "must be a non-zero direction");
-        axis->normalize();
-      }
-      if (std::abs(plane.x_axis.dot(plane.y_axis)) > 1e-6)
-        pr.fail("y_axis", "must be orthogonal to x_axis (the device's two axes are at right angles)");
-      h.plane = plane;
-    }
+    if (const toml::table* pt = r.table("plane")) h.plane = read_plane(*pt, name);
     s.haptics = std::move(h);
   }
+}
+
+} // namespace
+
+Scene parse_scene(std::string_view text, const std::string& name, const std::filesystem::path& base_dir) {
+  toml::table root;
+  try {
+    root = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(name + ":" + std::to_string(e.source().begin.line) +
+                     ": TOML syntax: " + std::string(e.description()));
+  }
+  Scene s;
+  s.file = name;
+  const TableReader top(root, "", name,
+                        {"scene", "mesh", "material", "fix", "load", "drive", "initial", "probe", "solver", "haptics"});
+  read_scene_table(top, name, s);
+  read_mesh(top, name, base_dir, s);
+  read_material(top, name, s);
+  read_regions(top, name, s);
+  read_initial(top, name, s);
+  read_probes(top, name, s);
+  read_solver(top, name, s); // after [scene]: dt is checked against the duration
+  read_haptics(top, name, s);
   return s;
 }
 

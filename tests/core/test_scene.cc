@@ -243,6 +243,7 @@ TEST(Scene, RampAndStepProfiles) {
 namespace vtb {
 namespace {
 
+#ifdef VTB_HAVE_CGAL_MESHERS
 TEST(Scene, AnUnstructuredRectangleAndBoxComeFromCgal) {
   // mesher = "cgal": a rectangle with exactly the asked node count (mesh_polygon's contract),
   // covering [0, size] (the cells' areas sum to w h to round-off), with the structured
@@ -272,6 +273,7 @@ TEST(Scene, AnUnstructuredRectangleAndBoxComeFromCgal) {
   for (const char* g : {"left", "right", "bottom", "top", "front", "back"})
     EXPECT_GE(box.groups.at(g).nodes.size(), 3u) << g;
 }
+#endif
 
 } // namespace
 } // namespace vtb
