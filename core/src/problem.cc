@@ -127,12 +127,11 @@ template <int dim> Vec<dim> centre_of_mass(const Mesh<dim>& mesh) {
   return total > 0 ? Vec<dim>(sum / total) : Vec<dim>::Zero();
 }
 
-template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh) {
-  const std::string file = scene.file.string();
-  Problem<dim> model;
-  model.duration = scene.duration;
-  model.output_interval = scene.output_interval;
-  const double longest = longest_edge(mesh);
+/// Fixes and drives: their nodes (and facets, for higher-order FEM), marked constrained; a
+/// node may sit in two fixes but in no drive shared with anything.
+template <int dim>
+void resolve_supports(const Scene& scene, const Mesh<dim>& mesh, double longest, const std::string& file,
+                      Problem<dim>& model) {
   const int n = mesh.num_nodes();
   model.constrained.assign(static_cast<std::size_t>(n), 0);
   // A node may sit in two fixes (both hold it at zero) but in no drive shared with anything.
@@ -177,6 +176,13 @@ template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh
     model.supports.push_back(s);
     claim(static_cast<int>(model.supports.size()) - 1);
   }
+}
+
+/// Loads: a uniform traction lumped onto the loaded facets' vertices, or a point force shared
+/// by the region's nodes.
+template <int dim>
+void resolve_loads(const Scene& scene, const Mesh<dim>& mesh, double longest, const std::string& file,
+                   Problem<dim>& model) {
   for (const auto& l : scene.loads) {
     const Selection<dim> sel = resolve(mesh, longest, l.region, file);
     const Vec<dim> total = as_vec<dim>(l.total_force, l.region.label + ".total_force", file);
@@ -218,6 +224,11 @@ template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh
     }
     model.loads.push_back(std::move(load));
   }
+}
+
+/// The free nodes in order, and each node's index among them; refuses a body with none.
+template <int dim> void number_free_nodes(const std::string& file, Problem<dim>& model) {
+  const int n = static_cast<int>(model.constrained.size());
   model.free_index.assign(static_cast<std::size_t>(n), -1);
   for (int i = 0; i < n; ++i)
     if (!model.constrained[static_cast<std::size_t>(i)]) {
@@ -225,7 +236,12 @@ template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh
       model.free_nodes.push_back(i);
     }
   if (model.free_nodes.empty()) throw InputError(file + ": every node is constrained; nothing to simulate");
+}
 
+/// [initial]: a uniform velocity plus a spin about the centre of mass.
+template <int dim>
+void initial_velocity(const Scene& scene, const Mesh<dim>& mesh, const std::string& file, Problem<dim>& model) {
+  const int n = mesh.num_nodes();
   model.initial_velocity = Nodal<dim>::Zero(dim, n);
   if (scene.initial_velocity.size() > 0)
     model.initial_velocity.colwise() = as_vec<dim>(scene.initial_velocity, "[initial].velocity", file);
@@ -246,12 +262,31 @@ template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh
       }
     }
   }
+}
+
+/// Probes: each snapped to its nearest node, at most the longest edge away.
+template <int dim>
+void resolve_probes(const Scene& scene, const Mesh<dim>& mesh, double longest, const std::string& file,
+                    Problem<dim>& model) {
   for (const auto& p : scene.probes) {
     const Vec<dim> x = as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file);
     const int node = nearest_node(mesh, x);
     model.probes.push_back({p.name, node});
     model.probe_distance.push_back(snap_distance(mesh, longest, x, node, "probe \"" + p.name + "\"", file));
   }
+}
+
+template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh) {
+  const std::string file = scene.file.string();
+  Problem<dim> model;
+  model.duration = scene.duration;
+  model.output_interval = scene.output_interval;
+  const double longest = longest_edge(mesh);
+  resolve_supports(scene, mesh, longest, file, model);
+  resolve_loads(scene, mesh, longest, file, model);
+  number_free_nodes(file, model);
+  initial_velocity(scene, mesh, file, model);
+  resolve_probes(scene, mesh, longest, file, model);
   model.mesh = std::move(mesh);
   return model;
 }
