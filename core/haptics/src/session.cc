@@ -218,7 +218,7 @@ public:
     return true;
   }
 
-  std::vector<double>& step_times() { return m_step_us; }
+  const std::vector<double>& step_times() const { return m_step_us; }
 
 private:
   const Model<dim>& m_model;
@@ -324,14 +324,17 @@ void keep_off_cpu(int cpu) {
   if (CPU_COUNT(&set) > 0) pthread_setaffinity_np(pthread_self(), sizeof set, &set);
 }
 
-template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, const Model<dim>& model) {
-  const DevicePlane<dim> plane = device_plane(scene, model.mesh);
-  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
-  // A coupling stiffer than the device renders stably is limited to its maximum, as a device
-  // driver does; the summary and the CLI say so.
+/// The servo loop's own timing, whichever way it ran.
+struct LoopTiming {
+  std::vector<double> periods, tick_us; ///< each cycle's period and its own work, us
+  long misses = 0;                      ///< cycles that started more than half a period late
+  std::vector<std::string> setup;       ///< what the real-time servo thread was granted
+};
+
+/// A coupling stiffer than the device renders stably is limited to its maximum, as a device
+/// driver does; `notes` says so.
+HapticsDesc limited_coupling(const Scene& scene, double k_max, std::vector<std::string>& notes) {
   HapticsDesc h = *scene.haptics;
-  std::vector<std::string> notes;
-  const double k_max = devices.front()->spec().max_stiffness;
   if (h.coupling_stiffness > k_max) {
     std::ostringstream msg;
     msg << scene.file.string() << ": [haptics].coupling_stiffness = " << h.coupling_stiffness
@@ -339,13 +342,108 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     notes.push_back(msg.str());
     h.coupling_stiffness = k_max;
   }
+  return h;
+}
 
-  IntegratorOptions o = integrator_options(scene.solver);
+/// Simulated time only: servo and physics interleaved, deterministic (tests and replays).
+template <int dim, class Advance>
+LoopTiming run_lockstep(Servo<dim>& servo, Physics<dim>& physics, long ticks, double period, Advance advance_devices) {
+  LoopTiming lt;
+  lt.periods.reserve(static_cast<std::size_t>(ticks));
+  for (long k = 0; k < ticks; ++k) {
+    const double t = static_cast<double>(k) * period;
+    while (physics.time() + 1e-12 < t)
+      if (!physics.step()) break;
+    servo.tick(t);
+    advance_devices(period);
+    lt.periods.push_back(period * 1e6);
+  }
+  return lt;
+}
+
+/// Real time: the servo on its own thread at absolute deadlines (the last 200 us spun), the
+/// physics on this one paced to wall time.
+template <int dim, class Advance>
+LoopTiming run_realtime(Servo<dim>& servo, Physics<dim>& physics, long ticks, double period, const HapticsOptions& opt,
+                        Advance advance_devices) {
+  LoopTiming lt;
+  lt.periods.reserve(static_cast<std::size_t>(ticks));
+  lt.tick_us.reserve(static_cast<std::size_t>(ticks));
+  std::atomic<bool> done{false};
+  if (opt.lock_memory) lt.setup.push_back(mlockall(MCL_CURRENT | MCL_FUTURE) == 0 ? "mlock" : "mlock-denied");
+  if (opt.pin_cpu >= 0) keep_off_cpu(opt.pin_cpu); // the physics (this thread) leaves the servo's core
+  const auto start = steady::now() + std::chrono::milliseconds(5);
+  std::thread servo_thread([&] {
+    for (auto& g : set_up_servo_thread(opt)) lt.setup.push_back(std::move(g));
+    auto next = start;
+    auto last = start;
+    const auto p = std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(period));
+    for (long k = 0; k < ticks; ++k) {
+      std::this_thread::sleep_until(next - std::chrono::microseconds(200));
+      while (steady::now() < next) {
+      }
+      const auto now = steady::now();
+      if (now - next > p / 2) ++lt.misses;
+      if (k > 0) lt.periods.push_back(std::chrono::duration<double, std::micro>(now - last).count());
+      last = now;
+      servo.tick(static_cast<double>(k) * period);
+      lt.tick_us.push_back(std::chrono::duration<double, std::micro>(steady::now() - now).count());
+      advance_devices(period);
+      next += p;
+      if (now - next > 10 * p) next = now + p; // far behind: resynchronise rather than burst
+    }
+    done = true;
+  });
+  while (!done) {
+    const auto target =
+        start + std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(physics.time()));
+    std::this_thread::sleep_until(target);
+    if (!physics.step()) {
+      while (!done) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      break;
+    }
+  }
+  servo_thread.join();
+  if (opt.lock_memory) munlockall();
+  return lt;
+}
+
+/// The servo's report completed with the totals over probes and the loop's timing.
+template <int dim>
+HapticsReport finish_report(HapticsReport rep, LoopTiming lt, const Physics<dim>& physics, bool lockstep) {
+  rep.dim = dim;
+  rep.realtime_setup = std::move(lt.setup);
+  rep.samples = static_cast<long>(rep.t.size());
+  for (const ProbeTrace& p : rep.probes) {
+    rep.max_force = std::max(rep.max_force, p.max_force);
+    rep.saturated_samples += p.saturated_samples;
+    rep.nonfinite_samples += p.nonfinite_samples;
+    rep.energy_to_user += p.energy_to_user;
+  }
+  rep.period_max_us = lt.periods.empty() ? 0 : *std::max_element(lt.periods.begin(), lt.periods.end());
+  if (!lockstep) rep.period_us = lt.periods;
+  const StepStats cycle = step_stats(std::move(lt.periods)), tick = step_stats(std::move(lt.tick_us));
+  rep.rate_hz_mean = cycle.mean > 0 ? 1e6 / cycle.mean : 0.0;
+  rep.period_p99_us = cycle.p99;
+  rep.deadline_misses = lt.misses;
+  rep.tick_median_us = tick.median;
+  rep.tick_p99_us = tick.p99;
+  rep.physics_steps = static_cast<long>(physics.step_times().size());
+  rep.physics_step_median_us = step_stats(physics.step_times()).median;
+  return rep;
+}
+
+template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, const Model<dim>& model) {
+  const DevicePlane<dim> plane = device_plane(scene, model.mesh);
+  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
+  std::vector<std::string> notes;
+  const HapticsDesc h = limited_coupling(scene, devices.front()->spec().max_stiffness, notes);
   // The physics of a session steps at a fixed dt, one step between servo updates.
-  if (o.kind == solvers::kCvode || o.kind == solvers::kFem)
-    throw InputError(scene.file.string() + ": [solver].kind = \"" + o.kind +
+  if (!solvers::is_stepper(solvers::find(scene.solver.kind)))
+    throw InputError(scene.file.string() + ": [solver].kind = \"" + scene.solver.kind +
                      "\": a haptics session needs a fixed-step spring solver (" + solvers::list(solvers::is_stepper) +
                      ")");
+  const IntegratorOptions o = integrator_options(scene.solver);
 
   Snapshot<dim> init;
   init.x = model.net.rest;
@@ -359,86 +457,11 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   const auto advance_devices = [&devices](double dt) {
     for (auto& d : devices) d->advance(dt);
   };
-
-  std::vector<double> periods, tick_us;
-  periods.reserve(static_cast<std::size_t>(ticks));
-  tick_us.reserve(static_cast<std::size_t>(ticks));
-  long misses = 0;
-  std::vector<std::string> realtime_setup;
-  if (opt.lockstep) {
-    // Simulated time only: deterministic, for tests and replays.
-    for (long k = 0; k < ticks; ++k) {
-      const double t = static_cast<double>(k) * period;
-      while (physics.time() + 1e-12 < t)
-        if (!physics.step()) break;
-      servo.tick(t);
-      advance_devices(period);
-      periods.push_back(period * 1e6);
-    }
-  } else {
-    // Real time: the servo on its own thread, absolute deadlines, the last 200 us spun.
-    std::atomic<bool> done{false};
-    std::vector<std::string> setup;
-    if (opt.lock_memory) setup.push_back(mlockall(MCL_CURRENT | MCL_FUTURE) == 0 ? "mlock" : "mlock-denied");
-    if (opt.pin_cpu >= 0) keep_off_cpu(opt.pin_cpu); // the physics (this thread) leaves the servo's core
-    const auto start = steady::now() + std::chrono::milliseconds(5);
-    std::thread servo_thread([&] {
-      for (auto& g : set_up_servo_thread(opt)) setup.push_back(std::move(g));
-      auto next = start;
-      auto last = start;
-      const auto p = std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(period));
-      for (long k = 0; k < ticks; ++k) {
-        std::this_thread::sleep_until(next - std::chrono::microseconds(200));
-        while (steady::now() < next) {
-        }
-        const auto now = steady::now();
-        if (now - next > p / 2) ++misses;
-        if (k > 0) periods.push_back(std::chrono::duration<double, std::micro>(now - last).count());
-        last = now;
-        servo.tick(static_cast<double>(k) * period);
-        tick_us.push_back(std::chrono::duration<double, std::micro>(steady::now() - now).count());
-        advance_devices(period);
-        next += p;
-        if (now - next > 10 * p) next = now + p; // far behind: resynchronise rather than burst
-      }
-      done = true;
-    });
-    // Physics on this thread, paced to wall time.
-    while (!done) {
-      const auto target =
-          start + std::chrono::duration_cast<steady::duration>(std::chrono::duration<double>(physics.time()));
-      std::this_thread::sleep_until(target);
-      if (!physics.step()) {
-        while (!done) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-        break;
-      }
-    }
-    servo_thread.join();
-    if (opt.lock_memory) munlockall();
-    realtime_setup = std::move(setup);
-  }
-  HapticsReport rep = std::move(servo.report());
-  rep.realtime_setup = std::move(realtime_setup);
-  rep.dim = dim;
+  LoopTiming lt = opt.lockstep ? run_lockstep(servo, physics, ticks, period, advance_devices)
+                               : run_realtime(servo, physics, ticks, period, opt, advance_devices);
+  HapticsReport rep = finish_report(std::move(servo.report()), std::move(lt), physics, opt.lockstep);
   rep.coupling_stiffness = h.coupling_stiffness;
   rep.notes = std::move(notes);
-  rep.samples = static_cast<long>(rep.t.size());
-  for (const ProbeTrace& p : rep.probes) {
-    rep.max_force = std::max(rep.max_force, p.max_force);
-    rep.saturated_samples += p.saturated_samples;
-    rep.nonfinite_samples += p.nonfinite_samples;
-    rep.energy_to_user += p.energy_to_user;
-  }
-  rep.period_max_us = periods.empty() ? 0 : *std::max_element(periods.begin(), periods.end());
-  if (!opt.lockstep) rep.period_us = periods;
-  const StepStats cycle = step_stats(std::move(periods)), tick = step_stats(std::move(tick_us));
-  rep.rate_hz_mean = cycle.mean > 0 ? 1e6 / cycle.mean : 0.0;
-  rep.period_p99_us = cycle.p99;
-  rep.deadline_misses = misses;
-  rep.tick_median_us = tick.median;
-  rep.tick_p99_us = tick.p99;
-  rep.physics_steps = static_cast<long>(physics.step_times().size());
-  rep.physics_step_median_us = step_stats(physics.step_times()).median;
   return rep;
 }
 
