@@ -61,52 +61,63 @@ std::string element_name(int type) {
   return name + " (type " + std::to_string(type) + ")";
 }
 
-template <int dim> AnyMesh read_dim(const std::string& src) {
-  using Cell = typename Mesh<dim>::Cell;
-  using Facet = typename Mesh<dim>::Facet;
-  std::vector<std::size_t> node_tags;
-  std::vector<double> coords, param;
-  gmsh::model::mesh::getNodes(node_tags, coords, param, -1, -1, false, false);
-  if (coords.size() != 3 * node_tags.size()) throw InputError(src + ": inconsistent node block");
-
-  Mesh<dim> mesh;
-  mesh.source = src;
+/// The gmsh node block: tags, their index in the mesh, and the lookup that names a dangling tag.
+struct NodeTable {
+  std::string src;
+  std::vector<std::size_t> tags;
   std::unordered_map<std::size_t, int> index;
-  index.reserve(node_tags.size());
-  mesh.points.resize(dim, static_cast<Eigen::Index>(node_tags.size()));
-  for (std::size_t i = 0; i < node_tags.size(); ++i) {
-    if (!index.emplace(node_tags[i], static_cast<int>(i)).second)
-      throw InputError(src + ": node tag " + std::to_string(node_tags[i]) + " appears twice");
-    for (int a = 0; a < dim; ++a)
-      mesh.points(a, static_cast<Eigen::Index>(i)) = coords[3 * i + static_cast<std::size_t>(a)];
-    if (dim == 2 && coords[3 * i + 2] != 0.0)
-      throw InputError(src + ": node tag " + std::to_string(node_tags[i]) + " has z != 0 in a 2D mesh");
-  }
-  auto node = [&](std::size_t tag, const std::string& where) {
+  int at(std::size_t tag, const std::string& where) const {
     const auto it = index.find(tag);
     if (it == index.end())
       throw InputError(src + ": " + where + " refers to node tag " + std::to_string(tag) + ", which does not exist");
     return it->second;
-  };
+  }
+};
 
+/// The nodes' coordinates into mesh.points; refuses a repeated tag and, in 2D, z != 0.
+template <int dim> NodeTable read_nodes(const std::string& src, Mesh<dim>& mesh) {
+  NodeTable nodes{src, {}, {}};
+  std::vector<double> coords, param;
+  gmsh::model::mesh::getNodes(nodes.tags, coords, param, -1, -1, false, false);
+  if (coords.size() != 3 * nodes.tags.size()) throw InputError(src + ": inconsistent node block");
+  nodes.index.reserve(nodes.tags.size());
+  mesh.points.resize(dim, static_cast<Eigen::Index>(nodes.tags.size()));
+  for (std::size_t i = 0; i < nodes.tags.size(); ++i) {
+    if (!nodes.index.emplace(nodes.tags[i], static_cast<int>(i)).second)
+      throw InputError(src + ": node tag " + std::to_string(nodes.tags[i]) + " appears twice");
+    for (int a = 0; a < dim; ++a)
+      mesh.points(a, static_cast<Eigen::Index>(i)) = coords[3 * i + static_cast<std::size_t>(a)];
+    if (dim == 2 && coords[3 * i + 2] != 0.0)
+      throw InputError(src + ": node tag " + std::to_string(nodes.tags[i]) + " has z != 0 in a 2D mesh");
+  }
+  return nodes;
+}
+
+/// The top-dimensional cells (3-node triangles or 4-node tetrahedra; anything else is refused).
+template <int dim> void read_cells(const NodeTable& nodes, Mesh<dim>& mesh) {
+  using Cell = typename Mesh<dim>::Cell;
   std::vector<int> types;
   std::vector<std::vector<std::size_t>> elem_tags, elem_nodes;
   gmsh::model::mesh::getElements(types, elem_tags, elem_nodes, dim, -1);
   const int cell_type = dim == 2 ? kTriangle : kTetrahedron;
   for (std::size_t t = 0; t < types.size(); ++t) {
     if (types[t] != cell_type)
-      throw InputError(src + ": unsupported element " + element_name(types[t]) + " (element tag " +
+      throw InputError(nodes.src + ": unsupported element " + element_name(types[t]) + " (element tag " +
                        std::to_string(elem_tags[t].empty() ? 0 : elem_tags[t][0]) + "); vtb reads " +
                        (dim == 2 ? "3-node triangles" : "4-node tetrahedra"));
     for (std::size_t e = 0; e < elem_tags[t].size(); ++e) {
       Cell c{};
       for (int v = 0; v <= dim; ++v)
-        c[static_cast<std::size_t>(v)] = node(elem_nodes[t][e * (dim + 1) + static_cast<std::size_t>(v)],
-                                              "element tag " + std::to_string(elem_tags[t][e]));
+        c[static_cast<std::size_t>(v)] = nodes.at(elem_nodes[t][e * (dim + 1) + static_cast<std::size_t>(v)],
+                                                  "element tag " + std::to_string(elem_tags[t][e]));
       mesh.cells.push_back(c);
     }
   }
-  // Nodes that belong to no cell of the top dimension (e.g. geometry points) are dropped.
+}
+
+/// Drops the nodes that belong to no cell (e.g. geometry points); returns old index -> new
+/// index (-1: dropped).
+template <int dim> std::vector<int> drop_orphan_nodes(Mesh<dim>& mesh) {
   std::vector<int> remap(static_cast<std::size_t>(mesh.num_nodes()), -1);
   for (const auto& c : mesh.cells)
     for (int v : c) remap[static_cast<std::size_t>(v)] = 0;
@@ -121,6 +132,48 @@ template <int dim> AnyMesh read_dim(const std::string& src) {
     for (auto& c : mesh.cells)
       for (int& v : c) v = remap[static_cast<std::size_t>(v)];
   }
+  return remap;
+}
+
+/// One physical group of lower dimension: its nodes and, for facets, the facets.
+template <int dim>
+MeshGroup<dim> read_group(const NodeTable& nodes, const std::vector<int>& remap, int gdim, int gtag,
+                          const std::string& name) {
+  using Facet = typename Mesh<dim>::Facet;
+  MeshGroup<dim> g;
+  std::vector<int> entities;
+  gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, entities);
+  for (int ent : entities) {
+    std::vector<int> gt;
+    std::vector<std::vector<std::size_t>> gtags, gnodes;
+    gmsh::model::mesh::getElements(gt, gtags, gnodes, gdim, ent);
+    for (std::size_t t = 0; t < gt.size(); ++t) {
+      const int nv = gt[t] == kPoint ? 1 : gt[t] == kLine ? 2 : gt[t] == kTriangle ? 3 : -1;
+      if (nv < 0 || (gdim == dim - 1 && nv != dim))
+        throw InputError(nodes.src + ": group \"" + name + "\" holds unsupported element " + element_name(gt[t]));
+      for (std::size_t e = 0; e < gtags[t].size(); ++e) {
+        Facet f{};
+        for (int v = 0; v < nv; ++v) {
+          const int local = nodes.at(gnodes[t][e * static_cast<std::size_t>(nv) + static_cast<std::size_t>(v)],
+                                     "group \"" + name + "\"");
+          const int idx = remap[static_cast<std::size_t>(local)];
+          if (idx < 0)
+            throw InputError(nodes.src + ": group \"" + name + "\" uses node tag " +
+                             std::to_string(nodes.tags[static_cast<std::size_t>(local)]) +
+                             ", which belongs to no cell");
+          g.nodes.push_back(idx);
+          if (nv == dim) f[static_cast<std::size_t>(v)] = idx;
+        }
+        if (gdim == dim - 1) g.facets.push_back(f);
+      }
+    }
+  }
+  return g;
+}
+
+/// Every physical group below the domain's dimension, merged by name (unnamed ones are
+/// called "DIM_TAG").
+template <int dim> void read_groups(const NodeTable& nodes, const std::vector<int>& remap, Mesh<dim>& mesh) {
   gmsh::vectorpair groups;
   gmsh::model::getPhysicalGroups(groups, -1);
   for (const auto& [gdim, gtag] : groups) {
@@ -128,42 +181,22 @@ template <int dim> AnyMesh read_dim(const std::string& src) {
     std::string name;
     gmsh::model::getPhysicalName(gdim, gtag, name);
     if (name.empty()) name = std::to_string(gdim) + "_" + std::to_string(gtag);
-    MeshGroup<dim> g;
-    std::vector<int> entities;
-    gmsh::model::getEntitiesForPhysicalGroup(gdim, gtag, entities);
-    for (int ent : entities) {
-      std::vector<int> gt;
-      std::vector<std::vector<std::size_t>> gtags, gnodes;
-      gmsh::model::mesh::getElements(gt, gtags, gnodes, gdim, ent);
-      for (std::size_t t = 0; t < gt.size(); ++t) {
-        const int nv = gt[t] == kPoint ? 1 : gt[t] == kLine ? 2 : gt[t] == kTriangle ? 3 : -1;
-        if (nv < 0 || (gdim == dim - 1 && nv != dim))
-          throw InputError(src + ": group \"" + name + "\" holds unsupported element " + element_name(gt[t]));
-        for (std::size_t e = 0; e < gtags[t].size(); ++e) {
-          Facet f{};
-          for (int v = 0; v < nv; ++v) {
-            const int local = node(gnodes[t][e * static_cast<std::size_t>(nv) + static_cast<std::size_t>(v)],
-                                   "group \"" + name + "\"");
-            const int idx = remap[static_cast<std::size_t>(local)];
-            if (idx < 0)
-              throw InputError(src + ": group \"" + name + "\" uses node tag " +
-                               std::to_string(node_tags[static_cast<std::size_t>(local)]) +
-                               ", which belongs to no cell");
-            g.nodes.push_back(idx);
-            if (nv == dim) f[static_cast<std::size_t>(v)] = idx;
-          }
-          if (gdim == dim - 1) g.facets.push_back(f);
-        }
-      }
-    }
-    std::sort(g.nodes.begin(), g.nodes.end());
-    g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+    const MeshGroup<dim> g = read_group<dim>(nodes, remap, gdim, gtag, name);
     auto& slot = mesh.groups[name];
     slot.nodes.insert(slot.nodes.end(), g.nodes.begin(), g.nodes.end());
     std::sort(slot.nodes.begin(), slot.nodes.end());
     slot.nodes.erase(std::unique(slot.nodes.begin(), slot.nodes.end()), slot.nodes.end());
     slot.facets.insert(slot.facets.end(), g.facets.begin(), g.facets.end());
   }
+}
+
+template <int dim> AnyMesh read_dim(const std::string& src) {
+  Mesh<dim> mesh;
+  mesh.source = src;
+  const NodeTable nodes = read_nodes(src, mesh);
+  read_cells(nodes, mesh);
+  const std::vector<int> remap = drop_orphan_nodes(mesh);
+  read_groups(nodes, remap, mesh);
   return mesh;
 }
 
