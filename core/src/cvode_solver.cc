@@ -1,4 +1,6 @@
 #include "vtb/core/cvode_solver.hh"
+
+#include "vtb/core/force_jacobian.hh"
 #include "vtb/core/solver_names.hh"
 
 #include <cvode/cvode.h>
@@ -61,9 +63,10 @@ private:
 /// The ODE of the free nodes: state y = [u_free (dim nf); v_free (dim nf)].
 template <int dim> class SpringOde {
 public:
-  explicit SpringOde(const Model<dim>& model)
-      : m_model(model), m_nf(static_cast<int>(model.free_nodes.size())), m_u(dim, model.num_nodes()),
-        m_v(dim, model.num_nodes()), m_f(dim, model.num_nodes()), m_ext(dim, model.num_nodes()) {
+  explicit SpringOde(const Model<dim>& model, const Eigen::MatrixXd& applied = {})
+      : m_model(model), m_applied(applied), m_nf(static_cast<int>(model.free_nodes.size())),
+        m_u(dim, model.num_nodes()), m_v(dim, model.num_nodes()), m_f(dim, model.num_nodes()),
+        m_ext(dim, model.num_nodes()) {
     // Jacobian pattern: neighbours (and self) among free nodes, per free node.
     const auto& net = model.net;
     m_nb.resize(static_cast<std::size_t>(m_nf));
@@ -110,6 +113,7 @@ public:
       if (!std::isfinite(y[k])) return 1; // recoverable: CVODE retries with a smaller step
     unpack(t, y);
     m_model.external_forces(t, m_f);
+    if (m_applied.cols() == m_f.cols() && m_applied.rows() == dim) m_f += m_applied;
     add_internal_forces(m_model.net, m_u, m_v, m_f);
     for (int a = 0; a < m_nf; ++a) {
       const int i = m_model.free_nodes[static_cast<std::size_t>(a)];
@@ -154,23 +158,14 @@ public:
         for (int p = 0; p < dim; ++p) data[base + p] += scale * block(p, q) * inv_m;
       }
     };
-    for (int s = 0; s < net.num_springs(); ++s) {
-      const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
+    // The shared assembly's blocks: d(v'_a)/du_b = sign K_s / m_a, d(v'_a)/dv_b = sign D_s / m_a.
+    for_each_jacobian_block(net, m_u, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
       const int a = m_model.free_index[static_cast<std::size_t>(i)],
                 b = m_model.free_index[static_cast<std::size_t>(j)];
-      if (a < 0 && b < 0) continue;
-      const Vec<dim> xi = net.rest.col(i) + m_u.col(i), xj = net.rest.col(j) + m_u.col(j);
-      const Mat<dim> K = spring_jacobian<dim>(xi, xj, net.rest_length[s], net.stiffness[s], false);
-      const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping[s]);
-      for (const auto& [part, B] : {std::pair<int, Mat<dim>>{0, K}, std::pair<int, Mat<dim>>{1, C}}) {
-        if (a >= 0) add(part, a, a, B, -1.0);
-        if (b >= 0) add(part, b, b, B, -1.0);
-        if (a >= 0 && b >= 0) {
-          add(part, a, b, B, 1.0);
-          add(part, b, a, B, 1.0);
-        }
-      }
-    }
+      if (a < 0 || b < 0) return;
+      add(0, a, b, K, sign);
+      add(1, a, b, D, sign);
+    });
     if (net.mass_damping != 0)
       for (int a = 0; a < m_nf; ++a)
         add(1, a, a,
@@ -183,6 +178,7 @@ public:
 
 private:
   const Model<dim>& m_model;
+  Eigen::MatrixXd m_applied; ///< constant applied forces (empty: none)
   int m_nf;
   Nodal<dim> m_u, m_v, m_f, m_ext;
   std::vector<std::vector<int>> m_nb;
@@ -200,7 +196,8 @@ template <int dim> int jac_fn(realtype t, N_Vector y, N_Vector, SUNMatrix J, voi
 } // namespace
 
 template <int dim>
-RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field) {
+RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field,
+                         const Eigen::MatrixXd& applied) {
   using clock = std::chrono::steady_clock;
   RunReport rep;
   rep.solver = solvers::kCvode;
@@ -214,7 +211,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("[solver].rtol and atol must be > 0");
 
   const auto t0 = clock::now();
-  SpringOde<dim> ode(model);
+  SpringOde<dim> ode(model, applied);
   CvodeHandle h(ode.size(), ode.nonzeros());
   // Initial state: zero displacement, the scene's initial velocity.
   const State<dim> s0 = initial_state(model);
@@ -293,8 +290,9 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   return rep;
 }
 
-template <int dim> Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y) {
-  SpringOde<dim> ode(model);
+template <int dim>
+Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y, const Eigen::MatrixXd& applied) {
+  SpringOde<dim> ode(model, applied);
   if (y.size() != ode.size()) throw std::invalid_argument("cvode_rhs: y has the wrong size");
   Eigen::VectorXd g(ode.size());
   if (ode.rhs(t, y.data(), g.data()) != 0) g.setConstant(std::numeric_limits<double>::quiet_NaN());
@@ -319,12 +317,14 @@ template <int dim> Eigen::MatrixXd cvode_jacobian(const Model<dim>& model, doubl
   return dense;
 }
 
-template Eigen::VectorXd cvode_rhs<2>(const Model<2>&, double, const Eigen::VectorXd&);
-template Eigen::VectorXd cvode_rhs<3>(const Model<3>&, double, const Eigen::VectorXd&);
+template Eigen::VectorXd cvode_rhs<2>(const Model<2>&, double, const Eigen::VectorXd&, const Eigen::MatrixXd&);
+template Eigen::VectorXd cvode_rhs<3>(const Model<3>&, double, const Eigen::VectorXd&, const Eigen::MatrixXd&);
 template Eigen::MatrixXd cvode_jacobian<2>(const Model<2>&, double, const Eigen::VectorXd&);
 template Eigen::MatrixXd cvode_jacobian<3>(const Model<3>&, double, const Eigen::VectorXd&);
 
-template RunReport simulate_cvode<2>(const Model<2>&, const CvodeOptions&, Trajectory<2>&, bool);
-template RunReport simulate_cvode<3>(const Model<3>&, const CvodeOptions&, Trajectory<3>&, bool);
+template RunReport simulate_cvode<2>(const Model<2>&, const CvodeOptions&, Trajectory<2>&, bool,
+                                     const Eigen::MatrixXd&);
+template RunReport simulate_cvode<3>(const Model<3>&, const CvodeOptions&, Trajectory<3>&, bool,
+                                     const Eigen::MatrixXd&);
 
 } // namespace vtb

@@ -1,6 +1,7 @@
 #include "vtb/core/filtered.hh"
 #include "vtb/core/solver_names.hh"
 
+#include "vtb/core/force_jacobian.hh"
 #include "vtb/core/selected_inverse.hh"
 
 #include <Eigen/Dense>
@@ -16,17 +17,14 @@ template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<
     const int i = model.free_nodes[static_cast<std::size_t>(a)];
     trip.emplace_back(a, a, net.mass[i] * (1.0 + dt * net.mass_damping));
   }
-  for (int s = 0; s < net.num_springs(); ++s) {
-    const double w = dt * net.damping[s] + dt * dt * net.stiffness[s];
-    const int a = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][0])];
-    const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][1])];
-    if (a >= 0) trip.emplace_back(a, a, w);
-    if (b >= 0) trip.emplace_back(b, b, w);
-    if (a >= 0 && b >= 0) {
-      trip.emplace_back(a, b, -w);
-      trip.emplace_back(b, a, -w);
-    }
-  }
+  // The shared assembly at rest, each block taken by its trace: a spring's true Jacobian at
+  // rest is k n n^T (and c n n^T), whose trace is k (c), so H is the edge-weighted Laplacian
+  // M + dt C_L + dt^2 K_L of the paper, the isotropic part of the true M + dt D + dt^2 K.
+  const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
+  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+    const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
+    if (a >= 0 && b >= 0) trip.emplace_back(a, b, -sign * (dt * D.trace() + dt * dt * K.trace()));
+  });
   Eigen::SparseMatrix<double> H(nf, nf);
   H.setFromTriplets(trip.begin(), trip.end());
   return H;

@@ -10,21 +10,14 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
   std::vector<Eigen::Triplet<double>> tk, td;
   tk.reserve(static_cast<std::size_t>(net.num_springs()) * 4 * dim * dim);
   td.reserve(tk.capacity() + static_cast<std::size_t>(n));
-  auto scatter = [](std::vector<Eigen::Triplet<double>>& t, int i, int j, const Mat<dim>& B) {
-    for (int p = 0; p < dim; ++p)
-      for (int q = 0; q < dim; ++q) {
-        t.emplace_back(dim * i + p, dim * i + q, -B(p, q));
-        t.emplace_back(dim * j + p, dim * j + q, -B(p, q));
-        t.emplace_back(dim * i + p, dim * j + q, B(p, q));
-        t.emplace_back(dim * j + p, dim * i + q, B(p, q));
-      }
-  };
-  for (int s = 0; s < net.num_springs(); ++s) {
-    const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
-    const Vec<dim> xi = net.rest.col(i) + u.col(i), xj = net.rest.col(j) + u.col(j);
-    scatter(tk, i, j, spring_jacobian<dim>(xi, xj, net.rest_length[s], net.stiffness[s], clamp_compression));
-    scatter(td, i, j, dashpot_jacobian<dim>(xi, xj, net.damping[s]));
-  }
+  for_each_jacobian_block(net, u, clamp_compression,
+                          [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+                            for (int p = 0; p < dim; ++p)
+                              for (int q = 0; q < dim; ++q) {
+                                tk.emplace_back(dim * i + p, dim * j + q, sign * K(p, q));
+                                td.emplace_back(dim * i + p, dim * j + q, sign * D(p, q));
+                              }
+                          });
   for (int i = 0; i < net.num_nodes(); ++i)
     for (int p = 0; p < dim; ++p) td.emplace_back(dim * i + p, dim * i + p, -net.mass_damping * net.mass[i]);
   ForceJacobians<dim> J;

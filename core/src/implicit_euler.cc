@@ -1,5 +1,7 @@
 #include "vtb/core/implicit_euler.hh"
 
+#include "vtb/core/force_jacobian.hh"
+
 #include <algorithm>
 #include <limits>
 
@@ -77,25 +79,27 @@ template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force);
-  for (int sp = 0; sp < net.num_springs(); ++sp) {
-    const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];
-    const Vec<dim> xi = net.rest.col(i) + s.u.col(i), xj = net.rest.col(j) + s.u.col(j);
-    const Mat<dim> K = spring_jacobian<dim>(xi, xj, net.rest_length[sp], net.stiffness[sp], true);
-    const Mat<dim> B = dt * dt * K + dt * dashpot_jacobian<dim>(xi, xj, net.damping[sp]);
-    // df_i/dx_j = K and df_i/dx_i = -K, so the K v term of node i is K (v_j - v_i).
-    const Vec<dim> kv = dt * (K * (s.v.col(j) - s.v.col(i)));
-    m_force.col(i) += kv;
-    m_force.col(j) -= kv;
+  // The matrix M + dt^2 K + dt D in stiffness signs: each block of the shared assembly enters
+  // with -sign (df_i/du_i = -K_s). The upper triangle is stored: diagonal blocks through
+  // slots 0 and 1, the off-diagonal pair once, at the (i, j) block.
+  for_each_jacobian_block(net, s.u, true, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
     const auto* slot = &m_slot[static_cast<std::size_t>(sp * dim * dim)];
-    const bool both_free = fi[static_cast<std::size_t>(i)] >= 0 && fi[static_cast<std::size_t>(j)] >= 0;
+    const int which = i == j ? (i == net.edge[static_cast<std::size_t>(sp)][0] ? 0 : 1) : 2;
+    if (which == 2 && i != net.edge[static_cast<std::size_t>(sp)][0]) return; // (j, i): stored once
+    if (which == 2) {
+      // df_i/dx_j = K and df_i/dx_i = -K, so the K v term of node i is K (v_j - v_i).
+      const Vec<dim> kv = dt * (K * (s.v.col(j) - s.v.col(i)));
+      m_force.col(i) += kv;
+      m_force.col(j) -= kv;
+      if (fi[static_cast<std::size_t>(i)] < 0 || fi[static_cast<std::size_t>(j)] < 0) return;
+    }
+    const Mat<dim> B = -sign * (dt * dt * K + dt * D);
     for (int p = 0; p < dim; ++p)
       for (int q = 0; q < dim; ++q) {
-        const auto& sl = slot[p * dim + q];
-        if (sl[0] >= 0) A[sl[0]] += B(p, q);
-        if (sl[1] >= 0) A[sl[1]] += B(p, q);
-        if (both_free) A[sl[2]] -= B(p, q);
+        const int at = slot[p * dim + q][which];
+        if (at >= 0) A[at] += B(p, q);
       }
-  }
+  });
   for (int a = 0; a < nf; ++a) {
     const int i = m_model.free_nodes[static_cast<std::size_t>(a)];
     for (int p = 0; p < dim; ++p) m_rhs(m_solver.ordered(a * dim + p), 0) = dt * m_force(p, i);

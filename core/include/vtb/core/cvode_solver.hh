@@ -20,16 +20,20 @@ struct CvodeOptions {
 /// sample times). RunReport.extra holds CVODE's statistics (steps, Newton iterations,
 /// Jacobian evaluations, error-test failures, nonlinear convergence failures). A failure
 /// (too much work, repeated convergence failure, a non-finite state met by the right-hand
-/// side) stops the run with stable = false and CVODE's reason.
+/// side) stops the run with stable = false and CVODE's reason. `applied` (dim x nodes, N; empty
+/// = none) is added to the loads for the whole run, as the other integrators add
+/// State::applied each step.
 template <int dim>
 RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& options, Trajectory<dim>& out,
-                         bool record_field = false);
+                         bool record_field = false, const Eigen::MatrixXd& applied = {});
 
 /// The right-hand side g(t, y) that CVODE integrates, y = [u_free; v_free] (free nodes in
 /// order, node-major), and the analytic Jacobian dg/dy that CVODE's Newton iteration uses, as
 /// dense matrices: CVODE converges with a wrong Jacobian, so only a direct check of it (against
 /// differences of g) can find one.
-template <int dim> Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y);
+template <int dim>
+Eigen::VectorXd cvode_rhs(const Model<dim>& model, double t, const Eigen::VectorXd& y,
+                          const Eigen::MatrixXd& applied = {});
 template <int dim> Eigen::MatrixXd cvode_jacobian(const Model<dim>& model, double t, const Eigen::VectorXd& y);
 
 } // namespace vtb
