@@ -150,25 +150,22 @@ void resolve_supports(const Scene& scene, const Mesh<dim>& mesh, double longest,
       model.constrained[static_cast<std::size_t>(i)] = 1;
     }
   };
-  for (const auto& f : scene.fixes) {
+  const auto support_of = [&](const RegionDesc& region) {
     Support<dim> s;
-    s.name = f.region.label;
-    Selection<dim> sel = resolve(mesh, longest, f.region, file);
+    s.name = region.label;
+    Selection<dim> sel = resolve(mesh, longest, region, file);
     s.nodes = std::move(sel.nodes);
     s.facets = std::move(sel.facets);
-    if (f.region.box)
-      s.box = Box<dim>{as_vec<dim>(f.region.box->first, "", file), as_vec<dim>(f.region.box->second, "", file)};
-    model.supports.push_back(s);
+    if (region.box)
+      s.box = Box<dim>{as_vec<dim>(region.box->first, "", file), as_vec<dim>(region.box->second, "", file)};
+    return s;
+  };
+  for (const auto& f : scene.fixes) {
+    model.supports.push_back(support_of(f.region));
     claim(static_cast<int>(model.supports.size()) - 1);
   }
   for (const auto& d : scene.drives) {
-    Support<dim> s;
-    s.name = d.region.label;
-    Selection<dim> sel = resolve(mesh, longest, d.region, file);
-    s.nodes = std::move(sel.nodes);
-    s.facets = std::move(sel.facets);
-    if (d.region.box)
-      s.box = Box<dim>{as_vec<dim>(d.region.box->first, "", file), as_vec<dim>(d.region.box->second, "", file)};
+    Support<dim> s = support_of(d.region);
     s.driven = true;
     s.displacement = as_vec<dim>(d.displacement, d.region.label + ".displacement", file);
     s.start = d.start;

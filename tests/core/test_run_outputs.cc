@@ -15,13 +15,6 @@
 namespace vtb {
 namespace {
 
-std::string slurp(const std::filesystem::path& p) {
-  std::ifstream f(p);
-  std::stringstream s;
-  s << f.rdbuf();
-  return s.str();
-}
-
 TEST(RunOutputs, WritesTheContractFilesAndBalancedReactions) {
   const std::string text = test::plate_scene(8, 2, R"(
 [[fix]]
@@ -44,11 +37,11 @@ dt = 2e-3
   const auto dir = fresh / "out";
   const RunReport r = run_scene(scene, dir);
   ASSERT_TRUE(r.stable);
-  const std::string probes = slurp(dir / "probes.csv"), reactions = slurp(dir / "reactions.csv");
+  const std::string probes = test::read_text(dir / "probes.csv"), reactions = test::read_text(dir / "reactions.csv");
   EXPECT_EQ(probes.substr(0, probes.find('\n')), "t,probe,ux,uy,uz");
   EXPECT_EQ(reactions.substr(0, reactions.find('\n')), "t,region,fx,fy,fz");
   EXPECT_EQ(std::count(probes.begin(), probes.end(), '\n'), 1 + 101) << "header + samples at 0, 0.01, ..., 1";
-  const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
+  const auto j = nlohmann::json::parse(test::read_text(dir / "summary.json"));
   for (const char* key : {"solver", "nodes", "springs", "dt", "steps", "precompute_seconds", "step_seconds",
                           "total_seconds", "stable", "max_strain"})
     EXPECT_TRUE(j.contains(key)) << key;
@@ -81,7 +74,7 @@ TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
   EXPECT_FALSE(r.stable);
   // The explicit scheme's failure names its stability limit (the user's next step).
   EXPECT_NE(r.failure.find("times the explicit scheme's stability limit"), std::string::npos) << r.failure;
-  const auto j = nlohmann::json::parse(slurp(dir / "summary.json"));
+  const auto j = nlohmann::json::parse(test::read_text(dir / "summary.json"));
   EXPECT_EQ(j["stable"], false);
   EXPECT_LT(j["steps"].get<long>(), 1000);
 }

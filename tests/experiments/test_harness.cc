@@ -50,12 +50,7 @@ TEST(Metrics, KnownErrorsOnSyntheticTrajectories) {
 }
 
 TEST(Compare, RunsTheDecompositionOnASmallPlate) {
-  const Scene scene = parse_scene(test::plate_scene(8, 2, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.2, 0.0]
+  const Scene scene = parse_scene(test::pulled_plate(8, 2, R"(
 [solver]
 dt = 0.01
 )"),
@@ -99,12 +94,7 @@ dt = 0.01
 }
 
 TEST(Compare, KeepsEachSolversRunOutputsAndFrames) {
-  Scene s = parse_scene(test::plate_scene(4, 2, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.2, 0.0]
+  Scene s = parse_scene(test::pulled_plate(4, 2, R"(
 [[probe]]
 name = "tip"
 point = [0.2, 0.0]
@@ -171,12 +161,7 @@ TEST(SolverRegistry, EveryEntryRunsAndUnknownNamesGetTheNearest) {
   // Every registered solver runs through the harness's one call (its factory), on a small
   // plate, to the end, recording every sample: a solver added to the table without a way to
   // run it fails here.
-  Scene s = parse_scene(test::plate_scene(4, 2, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.2, 0.0]
+  Scene s = parse_scene(test::pulled_plate(4, 2, R"(
 [solver]
 dt = 1e-3
 )"),
@@ -220,12 +205,7 @@ TEST(Sampling, EverySolverRecordsAtTheScenesSampleTimesWhateverItsStep) {
   for (std::size_t k = 0; k < odd.size(); ++k) EXPECT_NEAR(odd[k], expect[k], 1e-15);
   EXPECT_EQ(odd.back(), 1.0) << "the last sample is at the duration exactly";
   EXPECT_EQ(sample_times(0.1, 0.05).size(), 3u);
-  Scene s = parse_scene(test::plate_scene(8, 2, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.2, 0.0]
+  Scene s = parse_scene(test::pulled_plate(8, 2, R"(
 )"),
                         "plate.toml", ".");
   s.duration = 0.1;
@@ -298,18 +278,14 @@ TEST(Study, LaddersAgainstCvodeShowFirstOrderAndWriteTheirFiles) {
   // implicit Euler's error falls with dt at first order (the quick ladder divides dt by 4
   // each time: a ratio of 4 (1 + O(dt/T)), asserted above 3), every row is measured against
   // the same samples, and study.csv and study_plot.tex are written whole.
-  Scene s = parse_scene(test::plate_scene(8, 2, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.2, 0.1]
+  Scene s = parse_scene(test::pulled_plate(8, 2, R"(
 [[probe]]
 name = "tip"
 point = [0.2, 0.025]
 [solver]
 dt = 2e-3
-)"),
+)",
+                                           "0.2, 0.1"),
                         "plate.toml", ".");
   s.duration = 0.2;
   s.output_interval = 0.02;

@@ -11,13 +11,6 @@
 namespace vtb {
 namespace {
 
-std::string read(const std::filesystem::path& p) {
-  std::ifstream f(p);
-  std::ostringstream os;
-  os << f.rdbuf();
-  return os.str();
-}
-
 bool any_part_file(const std::filesystem::path& dir) {
   for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
     if (e.path().string().find(".part") != std::string::npos) return true;
@@ -28,9 +21,9 @@ TEST(AtomicFile, WritesWholeFilesIntoNewFolders) {
   const test::FreshDir dir;
   write_file_atomically(dir / "a/b/one.txt", [](std::ostream& f) { f << "one"; });
   write_files_atomically(dir / "c", {{"x.csv", "1"}, {"y.csv", "2"}});
-  EXPECT_EQ(read(dir / "a/b/one.txt"), "one");
-  EXPECT_EQ(read(dir / "c/x.csv"), "1");
-  EXPECT_EQ(read(dir / "c/y.csv"), "2");
+  EXPECT_EQ(test::read_text(dir / "a/b/one.txt"), "one");
+  EXPECT_EQ(test::read_text(dir / "c/x.csv"), "1");
+  EXPECT_EQ(test::read_text(dir / "c/y.csv"), "2");
   EXPECT_FALSE(any_part_file(dir.path()));
 }
 
@@ -43,7 +36,7 @@ TEST(AtomicFile, AFailedWriterLeavesNothingAndKeepsTheOldFile) {
                                        throw std::runtime_error("writer failed midway");
                                      }),
                std::runtime_error);
-  EXPECT_EQ(read(dir / "f.txt"), "old") << "a reader never sees half a file";
+  EXPECT_EQ(test::read_text(dir / "f.txt"), "old") << "a reader never sees half a file";
   EXPECT_THROW(commit_file_atomically(dir / "g.png",
                                       [](const std::filesystem::path& tmp) {
                                         std::ofstream(tmp) << "partial";

@@ -57,6 +57,13 @@ inline std::string plate_scene(int nx, int ny, const std::string& extra, double 
          std::to_string(tau) + "\nmass_damping = " + std::to_string(mass_damping) + "\n" + extra;
 }
 
+/// A plate clamped on its left edge and pulled on its right by `force` (N), with `extra`
+/// appended (probes, [solver]): the harness tests' common scene.
+inline std::string pulled_plate(int nx, int ny, const std::string& extra, const std::string& force = "0.2, 0.0") {
+  return plate_scene(nx, ny,
+                     "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [" + force + "]\n" + extra);
+}
+
 /// Builds a 2D model from scene text.
 inline Model<2> model_from(const std::string& text) {
   const Scene s = parse_scene(text, "test.toml", ".");

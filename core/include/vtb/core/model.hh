@@ -16,14 +16,11 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
 /// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)
 /// and may move the model away.
 template <class F> auto with_model(const Scene& scene, F&& f) {
-  AnyMesh mesh = load_mesh(scene);
-  return std::visit(
-      [&](auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        Model<dim> model = build_model<dim>(scene, std::move(m));
-        return f(model);
-      },
-      mesh);
+  return with_mesh(scene, [&](auto& m) {
+    constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+    Model<dim> model = build_model<dim>(scene, std::move(m));
+    return f(model);
+  });
 }
 
 } // namespace vtb

@@ -83,17 +83,21 @@ template <int dim> Problem<dim> build_problem(const Scene& scene, Mesh<dim> mesh
 /// Loads the scene's mesh (file or generator).
 AnyMesh load_mesh(const Scene& scene);
 
-/// Loads the scene's mesh, builds the problem in the mesh's dimension and returns f(problem);
-/// f takes a `Problem<2>&` and a `Problem<3>&` (a generic lambda).
-template <class F> auto with_problem(const Scene& scene, F&& f) {
+/// Loads the scene's mesh and returns f(mesh) in the mesh's dimension; f takes a `Mesh<2>&`
+/// and a `Mesh<3>&` (a generic lambda) and may move the mesh away.
+template <class F> auto with_mesh(const Scene& scene, F&& f) {
   AnyMesh mesh = load_mesh(scene);
-  return std::visit(
-      [&](auto& m) {
-        constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        Problem<dim> problem = build_problem<dim>(scene, std::move(m));
-        return f(problem);
-      },
-      mesh);
+  return std::visit([&](auto& m) { return f(m); }, mesh);
+}
+
+/// Builds the problem in the mesh's dimension and returns f(problem); f takes a `Problem<2>&`
+/// and a `Problem<3>&` (a generic lambda).
+template <class F> auto with_problem(const Scene& scene, F&& f) {
+  return with_mesh(scene, [&](auto& m) {
+    constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+    Problem<dim> problem = build_problem<dim>(scene, std::move(m));
+    return f(problem);
+  });
 }
 
 } // namespace vtb
