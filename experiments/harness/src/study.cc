@@ -45,6 +45,75 @@ void mark_pareto(std::vector<StudyRow>& rows) {
 
 namespace {
 
+/// The reference, converged at its own step: the continuum (P2, one refinement, dt / 4), or the
+/// spring model's exact trajectory (CVODE at rtol 1e-10). Returns what it was.
+template <int dim>
+std::string reference_run(const Scene& scene, const Model<dim>& model, const std::string& reference,
+                          Trajectory<dim>& ref) {
+  RunReport rr;
+  std::string note;
+  if (reference == solvers::kFem) {
+    fem::FemOptions f = fem::options_from(scene.solver);
+    f.degree = 2;
+    f.refinements = 1;
+    f.dt = scene.solver.dt / 4;
+    f.static_solve = false;
+    rr = fem::simulate<dim>(model, scene.material, f, ref, true);
+    note = "fem, P2, 1 refinement, " + f.scheme + ", dt = " + std::to_string(f.dt) + " s";
+  } else if (reference == solvers::kCvode) {
+    rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
+    note = "cvode, rtol 1e-10, atol 1e-14";
+  } else {
+    throw InputError("vtb study: --reference must be fem or cvode, not \"" + reference + "\"");
+  }
+  if (!rr.stable) throw std::runtime_error("vtb study: the reference run failed: " + rr.failure);
+  return note;
+}
+
+/// A run's row: its cost and, when it stayed stable, its errors against the reference.
+template <int dim>
+StudyRow measured_row(StudyRow row, const RunReport& rep, const Trajectory<dim>& tr, const Trajectory<dim>& ref,
+                      double wall, double duration) {
+  row.stable = rep.stable;
+  row.failure = rep.failure;
+  row.step_median = rep.step_seconds.median;
+  row.total_seconds = wall;
+  row.cost = wall / duration;
+  if (row.dt == 0) row.dt = rep.dt;
+  if (rep.stable) {
+    const ErrorMetrics e = compare(tr, ref);
+    row.error_all = e.displacement_max;
+    row.error_probes = e.probe_max;
+  } else {
+    row.error_all = row.error_probes = std::nan("");
+  }
+  return row;
+}
+
+/// A run too long to take (more steps than the budget): a row that says so.
+StudyRow skipped_row(const std::string& solver, double dt, double steps, double budget) {
+  StudyRow row;
+  row.solver = solver;
+  row.dt = dt;
+  row.stable = false;
+  row.skipped = true;
+  row.error_all = row.error_probes = std::nan("");
+  std::ostringstream why;
+  why << "skipped: " << std::setprecision(3) << steps << " steps (more than " << budget << ")";
+  row.failure = why.str();
+  return row;
+}
+
+/// A fixed-step solver's ladder: the scene's dt ladder, or the explicit scheme's fractions of
+/// its stability limit.
+template <int dim>
+std::vector<double> solver_dts(const Scene& scene, const Model<dim>& model, const std::string& solver, bool quick) {
+  if (solver != solvers::kExplicit) return dt_ladder(scene.solver.dt, quick);
+  const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
+  const double limit = explicit_critical_dt(max_omega_squared(model, false), tau, model.net.mass_damping);
+  return quick ? std::vector<double>{0.9 * limit} : std::vector<double>{0.9 * limit, 0.45 * limit};
+}
+
 template <int dim>
 StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyOptions& o, std::ostream* log) {
   using clock = std::chrono::steady_clock;
@@ -54,44 +123,19 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
   res.filter = scene.solver.filter;
   res.nodes = model.num_nodes();
   res.duration = model.duration;
-  // The reference, converged at its own step: the continuum (P2, one refinement, dt / 4), or
-  // the spring model's exact trajectory (CVODE at rtol 1e-10).
   Trajectory<dim> ref;
-  RunReport rr;
-  if (o.reference == solvers::kFem) {
-    fem::FemOptions f = fem::options_from(scene.solver);
-    f.degree = 2;
-    f.refinements = 1;
-    f.dt = scene.solver.dt / 4;
-    f.static_solve = false;
-    rr = fem::simulate<dim>(model, scene.material, f, ref, true);
-    res.reference_note = "fem, P2, 1 refinement, " + f.scheme + ", dt = " + std::to_string(f.dt) + " s";
-  } else if (o.reference == solvers::kCvode) {
-    rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
-    res.reference_note = "cvode, rtol 1e-10, atol 1e-14";
-  } else {
-    throw InputError("vtb study: --reference must be fem or cvode, not \"" + o.reference + "\"");
-  }
-  if (!rr.stable) throw std::runtime_error("vtb study: the reference run failed: " + rr.failure);
+  res.reference_note = reference_run(scene, model, o.reference, ref);
   if (log) *log << "reference: " << res.reference_note << "\n";
-
-  auto measure = [&](StudyRow row, const RunReport& rep, const Trajectory<dim>& tr, double wall) {
-    row.stable = rep.stable;
-    row.failure = rep.failure;
-    row.step_median = rep.step_seconds.median;
-    row.total_seconds = wall;
-    row.cost = wall / model.duration;
-    if (row.dt == 0) row.dt = rep.dt;
-    if (rep.stable) {
-      const ErrorMetrics e = compare(tr, ref);
-      row.error_all = e.displacement_max;
-      row.error_probes = e.probe_max;
-    } else {
-      row.error_all = row.error_probes = std::nan("");
-    }
+  const auto add = [&](StudyRow row) {
     if (log)
       *log << "  " << row.solver << (row.rtol > 0 ? " rtol " : " dt ") << (row.rtol > 0 ? row.rtol : row.dt)
-           << (row.stable ? "" : " UNSTABLE") << ": error " << row.error_all << ", " << wall << " s\n";
+           << (row.skipped  ? " " + row.failure
+               : row.stable ? ""
+                            : " UNSTABLE")
+           << (row.skipped
+                   ? ""
+                   : ": error " + std::to_string(row.error_all) + ", " + std::to_string(row.total_seconds) + " s")
+           << "\n";
     res.rows.push_back(std::move(row));
   };
   for (const auto& solver : o.solvers) {
@@ -103,30 +147,14 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
         StudyRow row;
         row.solver = solver;
         row.rtol = rtol;
-        measure(row, rep, tr, std::chrono::duration<double>(clock::now() - a).count());
+        add(measured_row(row, rep, tr, ref, std::chrono::duration<double>(clock::now() - a).count(), model.duration));
       }
       continue;
     }
-    std::vector<double> dts = dt_ladder(scene.solver.dt, o.quick);
-    if (solver == solvers::kExplicit) {
-      const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
-      const double limit = explicit_critical_dt(max_omega_squared(model, false), tau, model.net.mass_damping);
-      dts = o.quick ? std::vector<double>{0.9 * limit} : std::vector<double>{0.9 * limit, 0.45 * limit};
-    }
-    for (double dt : dts) {
+    for (double dt : solver_dts(scene, model, solver, o.quick)) {
       const double steps = model.duration / dt, budget = o.quick ? 2e5 : 2e6;
       if (steps > budget) {
-        StudyRow row;
-        row.solver = solver;
-        row.dt = dt;
-        row.stable = false;
-        row.skipped = true;
-        row.error_all = row.error_probes = std::nan("");
-        std::ostringstream why;
-        why << "skipped: " << std::setprecision(3) << steps << " steps (more than " << budget << ")";
-        row.failure = why.str();
-        if (log) *log << "  " << solver << " dt " << dt << ": " << row.failure << "\n";
-        res.rows.push_back(std::move(row));
+        add(skipped_row(solver, dt, steps, budget));
         continue;
       }
       Trajectory<dim> tr;
@@ -135,7 +163,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
       StudyRow row;
       row.solver = solver;
       row.dt = dt;
-      measure(row, rep, tr, std::chrono::duration<double>(clock::now() - a).count());
+      add(measured_row(row, rep, tr, ref, std::chrono::duration<double>(clock::now() - a).count(), model.duration));
     }
   }
   mark_pareto(res.rows);
