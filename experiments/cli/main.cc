@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action view = vtb::cli::add_view(app);
   vtb::cli::Action study = vtb::cli::add_study(app);
   vtb::cli::Action paper_data = vtb::cli::add_paper_data(app);
+  vtb::cli::Action solver_list = vtb::cli::add_solvers(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -35,6 +36,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("view")) return view();
     if (app.got_subcommand("study")) return study();
     if (app.got_subcommand("paper-data")) return paper_data();
+    if (app.got_subcommand("solvers")) return solver_list();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

@@ -14,6 +14,8 @@ check() { # name, condition
 "$vtb" --help >/dev/null; check "vtb --help" '[ $? -eq 0 ]'
 "$vtb" run --help >/dev/null; check "vtb run --help" '[ $? -eq 0 ]'
 "$vtb" mesh --help >/dev/null; check "vtb mesh --help" '[ $? -eq 0 ]'
+"$vtb" solvers > "$work/solvers.txt"; rc=$?
+check "vtb solvers lists the registry (7 entries, with their keys)" '[ $rc -eq 0 ] && [ $(grep -c "\[solver\] keys:" "$work/solvers.txt") -eq 7 ] && grep -q "^implicit-euler " "$work/solvers.txt"'
 
 sed 's/young_modulus/youngs_modulus/' "$src/experiments/scenes/plate_step.toml" > "$work/typo.toml"
 "$vtb" run "$work/typo.toml" --out "$work/out_typo" 2> "$work/err"; rc=$?
