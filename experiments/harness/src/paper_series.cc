@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <map>
 #include <sstream>
@@ -52,31 +53,16 @@ double max_relative_deviation(const std::vector<double>& run, const std::vector<
 
 } // namespace
 
-void accuracy(const std::filesystem::path& dir, Out& out) {
-  const CsvTable a = CsvTable::read(dir / "accuracy_speed.csv");
-  const CsvTable meta = CsvTable::read(dir / "meta.csv");
-  double duration = 1;
-  for (std::size_t r = 0; r < meta.rows(); ++r)
-    if (meta.text(r, "key") == "duration_s") duration = meta.number(r, "value");
-  // Cost = wall time per simulated second: a cheap step at a tiny dt is not cheap.
-  struct Point {
-    double cost, error;
-    std::string solver;
-  };
-  std::vector<Point> points;
-  // A run identical to the reference (the FEM at the reference's own step) has error 0: no
-  // measurement, and no place on a log axis.
-  const auto ok = [&](std::size_t r) {
-    return a.text(r, "stable") == "true" && std::isfinite(a.number(r, "error_vs_fem")) &&
-           a.number(r, "error_vs_fem") > 0;
-  };
-  for (const std::string& s : distinct(a, "solver")) {
-    const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
-    std::vector<double> cost = column(a, "wall_seconds", mine), err = column(a, "error_vs_fem", mine);
-    for (double& c : cost) c /= duration;
-    for (std::size_t i = 0; i < cost.size(); ++i) points.push_back({cost[i], err[i], s});
-    out.files.emplace_back("acc_" + s + ".dat", series("cost error", {cost, err}));
-  }
+namespace {
+
+/// One run on the accuracy-against-cost plane.
+struct Point {
+  double cost, error;
+  std::string solver;
+};
+
+/// pareto.dat, and the numbers the caption states: the front's size and solvers, the lowest error.
+void pareto(const std::vector<Point>& points, Out& out) {
   std::vector<Point> front;
   for (const Point& p : points) {
     const bool dominated = std::any_of(points.begin(), points.end(), [&](const Point& q) {
@@ -100,8 +86,12 @@ void accuracy(const std::filesystem::path& dir, Out& out) {
     out.number("vtbBestErr", best->error, 2);
     out.macro("vtbBestSolver", "\\texttt{" + tex_escape(best->solver) + "}");
   }
+}
 
-  // Convergence and decomposition over dt, against CVODE at rtol 1e-10.
+/// conv_*.dat (error against CVODE over dt, and CVODE over its rtol), the fitted orders, and
+/// the spring model's own error for the decomposition figure.
+void convergence(const std::filesystem::path& dir, const CsvTable& a, const std::function<bool(std::size_t)>& ok,
+                 Out& out) {
   for (const auto& [s, file] : std::vector<std::pair<std::string, std::string>>{{solvers::kImplicitEuler, "ie"},
                                                                                 {solvers::kFilteredFull, "full"}}) {
     const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
@@ -125,6 +115,33 @@ void accuracy(const std::filesystem::path& dir, Out& out) {
       const double lo = *std::min_element(dts.begin(), dts.end()), hi = *std::max_element(dts.begin(), dts.end());
       out.files.emplace_back("model_err.dat", series("dt error", {{lo, hi}, {model, model}}));
     }
+}
+
+} // namespace
+
+void accuracy(const std::filesystem::path& dir, Out& out) {
+  const CsvTable a = CsvTable::read(dir / "accuracy_speed.csv");
+  const CsvTable meta = CsvTable::read(dir / "meta.csv");
+  double duration = 1;
+  for (std::size_t r = 0; r < meta.rows(); ++r)
+    if (meta.text(r, "key") == "duration_s") duration = meta.number(r, "value");
+  // Cost = wall time per simulated second: a cheap step at a tiny dt is not cheap.
+  std::vector<Point> points;
+  // A run identical to the reference (the FEM at the reference's own step) has error 0: no
+  // measurement, and no place on a log axis.
+  const auto ok = [&](std::size_t r) {
+    return a.text(r, "stable") == "true" && std::isfinite(a.number(r, "error_vs_fem")) &&
+           a.number(r, "error_vs_fem") > 0;
+  };
+  for (const std::string& s : distinct(a, "solver")) {
+    const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
+    std::vector<double> cost = column(a, "wall_seconds", mine), err = column(a, "error_vs_fem", mine);
+    for (double& c : cost) c /= duration;
+    for (std::size_t i = 0; i < cost.size(); ++i) points.push_back({cost[i], err[i], s});
+    out.files.emplace_back("acc_" + s + ".dat", series("cost error", {cost, err}));
+  }
+  pareto(points, out);
+  convergence(dir, a, ok, out);
 }
 
 void stability(const std::filesystem::path& dir, Out& out) {
