@@ -42,14 +42,68 @@ template <int dim> void print_info(const Mesh<dim>& m) {
 
 } // namespace
 
+namespace {
+
+struct MeshOpts {
+  std::string file, shape, out, in;
+  std::vector<double> size;
+  std::vector<int> divisions;
+  int nodes = 0;
+};
+
+/// `vtb mesh convert IN OUT`: a .msh (2.2 or 4.x) to .msh 4.1 or .vtu.
+void convert_mesh(const MeshOpts& o) {
+  const std::filesystem::path out(o.out);
+  if (out.extension() != ".msh" && out.extension() != ".vtu")
+    throw InputError("vtb mesh convert: output " + o.out + " must end in .msh or .vtu");
+  std::visit(
+      [&](const auto& mesh) {
+        if (out.extension() == ".vtu")
+          write_vtu(mesh, out);
+        else
+          write_msh(mesh, out);
+      },
+      read_msh(o.in));
+}
+
+/// `vtb mesh generate SHAPE ...`: the CGAL plate and solids, an unstructured (CGAL) rectangle
+/// or box with --nodes, or a structured one with --divisions.
+void generate_mesh(const MeshOpts& o) {
+  if (o.shape == "plate" || o.shape == "slab" || o.shape == "sphere") {
+    if (o.nodes <= 0) throw InputError("vtb mesh generate " + o.shape + ": --nodes N (N > 0) is required");
+    if (o.shape == "plate")
+      write_msh(mesh_polygon(paper_plate(), o.nodes), o.out);
+    else
+      write_msh(mesh_solid(o.shape, o.nodes), o.out);
+    return;
+  }
+  const std::size_t d = o.shape == "rectangle" ? 2 : 3;
+  if (o.nodes > 0) { // unstructured (CGAL)
+    if (o.size.size() != d || !o.divisions.empty())
+      throw InputError("vtb mesh generate " + o.shape + " --nodes N: needs --size with " + std::to_string(d) +
+                       " values and no --divisions");
+    if (d == 2)
+      write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes), o.out);
+    else
+      write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes), o.out);
+    return;
+  }
+  if (o.size.size() != d || o.divisions.size() != d)
+    throw InputError("vtb mesh generate " + o.shape + ": --size and --divisions need " + std::to_string(d) + " values");
+  if (d == 2)
+    write_msh(
+        generate_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), Eigen::Vector2i(o.divisions[0], o.divisions[1])),
+        o.out);
+  else
+    write_msh(generate_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]),
+                           Eigen::Vector3i(o.divisions[0], o.divisions[1], o.divisions[2])),
+              o.out);
+}
+
+} // namespace
+
 Action add_mesh(CLI::App& app) {
-  struct Opts {
-    std::string file, shape, out, in;
-    std::vector<double> size;
-    std::vector<int> divisions;
-    int nodes = 0;
-  };
-  auto o = std::make_shared<Opts>();
+  auto o = std::make_shared<MeshOpts>();
   CLI::App* cmd = app.add_subcommand("mesh", "Generate or inspect meshes");
   cmd->require_subcommand(1);
   CLI::App* info = cmd->add_subcommand("info", "Print counts, groups and sizes of a .msh file");
@@ -70,61 +124,13 @@ Action add_mesh(CLI::App& app) {
   conv->add_option("in", o->in, "Input .msh")->required();
   conv->add_option("out", o->out, "Output .msh or .vtu")->required();
   return [o, info, gen, conv]() {
-    if (conv->parsed()) {
-      const std::filesystem::path out(o->out);
-      if (out.extension() != ".msh" && out.extension() != ".vtu")
-        throw InputError("vtb mesh convert: output " + o->out + " must end in .msh or .vtu");
-      const AnyMesh m = read_msh(o->in);
-      std::visit(
-          [&](const auto& mesh) {
-            if (out.extension() == ".vtu")
-              write_vtu(mesh, out);
-            else
-              write_msh(mesh, out);
-          },
-          m);
-      std::cout << "wrote " << o->out << "\n";
-      return 0;
-    }
     if (info->parsed()) {
       std::visit([](const auto& m) { print_info(m); }, read_msh(o->file));
       return 0;
     }
-    if (gen->parsed()) {
-      if (o->shape == "plate" || o->shape == "slab" || o->shape == "sphere") {
-        if (o->nodes <= 0) throw InputError("vtb mesh generate " + o->shape + ": --nodes N (N > 0) is required");
-        if (o->shape == "plate")
-          write_msh(mesh_polygon(paper_plate(), o->nodes), o->out);
-        else
-          write_msh(mesh_solid(o->shape, o->nodes), o->out);
-        std::cout << "wrote " << o->out << "\n";
-        return 0;
-      }
-      const std::size_t d = o->shape == "rectangle" ? 2 : 3;
-      if (o->nodes > 0) { // unstructured (CGAL)
-        if (o->size.size() != d || !o->divisions.empty())
-          throw InputError("vtb mesh generate " + o->shape + " --nodes N: needs --size with " + std::to_string(d) +
-                           " values and no --divisions");
-        if (d == 2)
-          write_msh(mesh_rectangle(Eigen::Vector2d(o->size[0], o->size[1]), o->nodes), o->out);
-        else
-          write_msh(mesh_box(Eigen::Vector3d(o->size[0], o->size[1], o->size[2]), o->nodes), o->out);
-        std::cout << "wrote " << o->out << "\n";
-        return 0;
-      }
-      if (o->size.size() != d || o->divisions.size() != d)
-        throw InputError("vtb mesh generate " + o->shape + ": --size and --divisions need " + std::to_string(d) +
-                         " values");
-      if (d == 2)
-        write_msh(generate_rectangle(Eigen::Vector2d(o->size[0], o->size[1]),
-                                     Eigen::Vector2i(o->divisions[0], o->divisions[1])),
-                  o->out);
-      else
-        write_msh(generate_box(Eigen::Vector3d(o->size[0], o->size[1], o->size[2]),
-                               Eigen::Vector3i(o->divisions[0], o->divisions[1], o->divisions[2])),
-                  o->out);
-      std::cout << "wrote " << o->out << "\n";
-    }
+    if (conv->parsed()) convert_mesh(*o);
+    if (gen->parsed()) generate_mesh(*o);
+    std::cout << "wrote " << o->out << "\n";
     return 0;
   };
 }
