@@ -49,6 +49,10 @@ private:
   void draw_device();
   void draw_device_panel();
   void draw_panel();
+  void draw_solver_controls();
+  void draw_run_controls();
+  void draw_readouts();
+  void draw_messages();
   void draw_scale_bar();
   Eigen::Vector3d to3(const Vec<dim>& p) const;
   Vec<dim> from3(const Eigen::Vector3d& p) const;

@@ -12,16 +12,9 @@
 
 namespace vtb::viewer {
 
-template <int dim> void App<dim>::draw_panel() {
+/// The solver's controls; a change rebuilds the simulation (or says why it cannot).
+template <int dim> void App<dim>::draw_solver_controls() {
   const auto& sim = *m_sim;
-  const auto& st = sim.stats();
-  ImGui::SetNextWindowPos(ImVec2(0, 0));
-  ImGui::SetNextWindowSize(ImVec2(330, ImGui::GetIO().DisplaySize.y));
-  ImGui::Begin("vtb", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
-  ImGui::Text("%d nodes, %d springs, %s", sim.model().num_nodes(), sim.model().net.num_springs(),
-              dim == 2 ? "2D plate" : "3D solid");
-
-  ImGui::Separator();
   ImGui::TextDisabled("solver");
   bool changed = false;
   if (ImGui::BeginCombo("kind", m_edit.solver.c_str())) {
@@ -60,8 +53,10 @@ template <int dim> void App<dim>::draw_panel() {
       m_edit = m_sim->controls();
     }
   }
+}
 
-  ImGui::Separator();
+/// Pause, single step, reset, the pull's stiffness and the colouring.
+template <int dim> void App<dim>::draw_run_controls() {
   ImGui::TextDisabled("run");
   ImGui::Checkbox("pause", &m_paused);
   ImGui::SameLine();
@@ -72,8 +67,12 @@ template <int dim> void App<dim>::draw_panel() {
   if (ImGui::SliderFloat("pull N/m", &k, 0.1f, 1e4f, "%.3g", ImGuiSliderFlags_Logarithmic))
     m_sim->coupling_stiffness = k;
   ImGui::Checkbox("colour by strain (else |u|)", &m_color_by_strain);
+}
 
-  ImGui::Separator();
+/// Time, step cost, real-time factor, energy, strain, and the probe's trace.
+template <int dim> void App<dim>::draw_readouts() {
+  const auto& sim = *m_sim;
+  const auto& st = sim.stats();
   ImGui::TextDisabled("readouts");
   ImGui::Text("t = %.3f s, %ld steps", sim.state().t, st.steps);
   ImGui::Text("step %.1f us (median), physics %.2f ms/frame", st.step_median_us, m_physics_seconds * 1e3);
@@ -88,6 +87,11 @@ template <int dim> void App<dim>::draw_panel() {
     ImGui::Text("%s", label);
     ImGui::PlotLines("##trace", m_trace, n, 0, nullptr, 0.0f, FLT_MAX, ImVec2(300, 80));
   }
+}
+
+/// An unstable run (with its reset) and the last refused change.
+template <int dim> void App<dim>::draw_messages() {
+  const auto& sim = *m_sim;
   if (!sim.failure().empty()) {
     ImGui::PushTextWrapPos(320);
     ImGui::TextColored(ImVec4(1, 0.2f, 0.2f, 1), "UNSTABLE: %s", sim.failure().c_str());
@@ -99,6 +103,22 @@ template <int dim> void App<dim>::draw_panel() {
     ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "%s", m_message.c_str());
     ImGui::PopTextWrapPos();
   }
+}
+
+template <int dim> void App<dim>::draw_panel() {
+  const auto& sim = *m_sim;
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(330, ImGui::GetIO().DisplaySize.y));
+  ImGui::Begin("vtb", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
+  ImGui::Text("%d nodes, %d springs, %s", sim.model().num_nodes(), sim.model().net.num_springs(),
+              dim == 2 ? "2D plate" : "3D solid");
+  ImGui::Separator();
+  draw_solver_controls();
+  ImGui::Separator();
+  draw_run_controls();
+  ImGui::Separator();
+  draw_readouts();
+  draw_messages();
   draw_device_panel();
   ImGui::Separator();
   ImGui::TextDisabled("mouse");
