@@ -195,6 +195,57 @@ template <int dim> int jac_fn(realtype t, N_Vector y, N_Vector, SUNMatrix J, voi
 
 } // namespace
 
+/// CVODE's initial state: zero displacement, the scene's initial velocity, on the free nodes.
+template <int dim> void initial_y(const Model<dim>& model, double* y) {
+  const State<dim> s0 = initial_state(model);
+  const int N = dim * static_cast<int>(model.free_nodes.size());
+  for (std::size_t a = 0; a < model.free_nodes.size(); ++a)
+    for (int p = 0; p < dim; ++p) {
+      y[static_cast<int>(a) * dim + p] = 0.0;
+      y[N + static_cast<int>(a) * dim + p] = s0.v(p, model.free_nodes[a]);
+    }
+}
+
+/// CVODE set up on the ODE: BDF with the KLU linear solver, the analytic Jacobian, the
+/// tolerances, the step budget, and a stop at the duration.
+template <int dim> void configure(const CvodeHandle& h, SpringOde<dim>& ode, const CvodeOptions& o, double duration) {
+  const auto check = [](int flag, const char* what) {
+    if (flag < 0) throw std::runtime_error(std::string("cvode: ") + what + " failed: " + CVodeGetReturnFlagName(flag));
+  };
+  check(CVodeInit(h.mem(), rhs_fn<dim>, 0.0, h.y()), "CVodeInit");
+  check(CVodeSStolerances(h.mem(), o.rtol, o.atol), "CVodeSStolerances");
+  check(CVodeSetUserData(h.mem(), &ode), "CVodeSetUserData");
+  check(CVodeSetLinearSolver(h.mem(), h.solver(), h.matrix()), "CVodeSetLinearSolver");
+  check(CVodeSetJacFn(h.mem(), jac_fn<dim>), "CVodeSetJacFn");
+  check(CVodeSetMaxNumSteps(h.mem(), o.max_steps), "CVodeSetMaxNumSteps");
+  check(CVodeSetStopTime(h.mem(), duration), "CVodeSetStopTime");
+}
+
+/// CVODE's counters into the report: steps (and their mean as `dt`), Newton iterations,
+/// Jacobian evaluations, error-test and convergence failures.
+void report_statistics(void* mem, const CvodeOptions& o, double duration, double total, std::vector<double> per_step,
+                       RunReport& rep) {
+  long nst = 0, nni = 0, nje = 0, netf = 0, nncf = 0;
+  CVodeGetNumSteps(mem, &nst);
+  CVodeGetNumNonlinSolvIters(mem, &nni);
+  CVodeGetNumJacEvals(mem, &nje);
+  CVodeGetNumErrTestFails(mem, &netf);
+  CVodeGetNumNonlinSolvConvFails(mem, &nncf);
+  rep.steps = rep.steps_taken = nst;
+  rep.dt = nst > 0 ? duration / static_cast<double>(nst) : 0.0; // mean step
+  rep.step_seconds = step_stats(std::move(per_step));
+  rep.step_seconds.mean = nst > 0 ? total / static_cast<double>(nst) : 0.0;
+  rep.extra = {
+      {"rtol", o.rtol},
+      {"atol", o.atol},
+      {"cvode_steps", static_cast<double>(nst)},
+      {"newton_iterations", static_cast<double>(nni)},
+      {"jacobian_evaluations", static_cast<double>(nje)},
+      {"error_test_failures", static_cast<double>(netf)},
+      {"nonlinear_convergence_failures", static_cast<double>(nncf)},
+  };
+}
+
 template <int dim>
 RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field,
                          const Eigen::MatrixXd& applied) {
@@ -213,25 +264,9 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   const auto t0 = clock::now();
   SpringOde<dim> ode(model, applied);
   CvodeHandle h(ode.size(), ode.nonzeros());
-  // Initial state: zero displacement, the scene's initial velocity.
-  const State<dim> s0 = initial_state(model);
+  initial_y(model, N_VGetArrayPointer(h.y()));
   double* y = N_VGetArrayPointer(h.y());
-  const int N = dim * static_cast<int>(model.free_nodes.size());
-  for (std::size_t a = 0; a < model.free_nodes.size(); ++a)
-    for (int p = 0; p < dim; ++p) {
-      y[static_cast<int>(a) * dim + p] = 0.0;
-      y[N + static_cast<int>(a) * dim + p] = s0.v(p, model.free_nodes[a]);
-    }
-  auto check = [](int flag, const char* what) {
-    if (flag < 0) throw std::runtime_error(std::string("cvode: ") + what + " failed: " + CVodeGetReturnFlagName(flag));
-  };
-  check(CVodeInit(h.mem(), rhs_fn<dim>, 0.0, h.y()), "CVodeInit");
-  check(CVodeSStolerances(h.mem(), o.rtol, o.atol), "CVodeSStolerances");
-  check(CVodeSetUserData(h.mem(), &ode), "CVodeSetUserData");
-  check(CVodeSetLinearSolver(h.mem(), h.solver(), h.matrix()), "CVodeSetLinearSolver");
-  check(CVodeSetJacFn(h.mem(), jac_fn<dim>), "CVodeSetJacFn");
-  check(CVodeSetMaxNumSteps(h.mem(), o.max_steps), "CVodeSetMaxNumSteps");
-  check(CVodeSetStopTime(h.mem(), model.duration), "CVodeSetStopTime");
+  configure(h, ode, o, model.duration);
   rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
   const std::vector<double> times = sample_times(model.duration, model.output_interval);
@@ -267,25 +302,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
     record(t);
   }
   const double total = std::chrono::duration<double>(clock::now() - start).count();
-  long nst = 0, nni = 0, nje = 0, netf = 0, nncf = 0;
-  CVodeGetNumSteps(h.mem(), &nst);
-  CVodeGetNumNonlinSolvIters(h.mem(), &nni);
-  CVodeGetNumJacEvals(h.mem(), &nje);
-  CVodeGetNumErrTestFails(h.mem(), &netf);
-  CVodeGetNumNonlinSolvConvFails(h.mem(), &nncf);
-  rep.steps = rep.steps_taken = nst;
-  rep.dt = nst > 0 ? model.duration / static_cast<double>(nst) : 0.0; // mean step
-  rep.step_seconds = step_stats(std::move(per_step));
-  rep.step_seconds.mean = nst > 0 ? total / static_cast<double>(nst) : 0.0;
-  rep.extra = {
-      {"rtol", o.rtol},
-      {"atol", o.atol},
-      {"cvode_steps", static_cast<double>(nst)},
-      {"newton_iterations", static_cast<double>(nni)},
-      {"jacobian_evaluations", static_cast<double>(nje)},
-      {"error_test_failures", static_cast<double>(netf)},
-      {"nonlinear_convergence_failures", static_cast<double>(nncf)},
-  };
+  report_statistics(h.mem(), o, model.duration, total, std::move(per_step), rep);
   rep.total_seconds = total;
   return rep;
 }
