@@ -63,10 +63,9 @@ std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
 }
 } // namespace
 
-template <int dim>
-RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
-  using clock = std::chrono::steady_clock;
-  if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+/// What a spring run reports before it starts: sizes, the step, the calibration, the filter's
+/// options, and the explicit scheme's predicted limit.
+template <int dim> RunReport report_header(const Model<dim>& model, const IntegratorOptions& o) {
   RunReport rep;
   rep.solver = o.kind;
   rep.dim = dim;
@@ -82,11 +81,24 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
     rep.momentum_correction = o.momentum_correction && !model.has_constraints();
     rep.strain_limit = o.strain_limit;
   }
-  {
-    const double w2 = max_omega_squared(model, false);
-    const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
-    rep.courant_dt = explicit_critical_dt(w2, tau, model.net.mass_damping);
-  }
+  const double w2 = max_omega_squared(model, false);
+  const double tau = model.net.stiffness.size() ? model.net.damping[0] / model.net.stiffness[0] : 0.0;
+  rep.courant_dt = explicit_critical_dt(w2, tau, model.net.mass_damping);
+  return rep;
+}
+
+/// Stops the run as unstable at t: why, with the explicit scheme's stability limit when it applies.
+void fail(RunReport& rep, const std::string& why, const IntegratorOptions& o, double t) {
+  rep.stable = false;
+  rep.failure = why + explicit_hint(o, rep);
+  rep.failure_time = t;
+}
+
+template <int dim>
+RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
+  using clock = std::chrono::steady_clock;
+  if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+  RunReport rep = report_header(model, o);
 
   const auto t0 = clock::now();
   auto integrator = make_integrator(model, o);
@@ -117,19 +129,17 @@ RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajecto
     s.t = t1;
     ++rep.steps_taken;
     if (!s.u.allFinite() || !s.v.allFinite()) {
-      rep.stable = false;
-      rep.failure = "non-finite displacement or velocity" + explicit_hint(o, rep);
-      rep.failure_time = s.t;
+      fail(rep, "non-finite displacement or velocity", o, s.t);
       break;
     }
     if (crossing) {
       record();
       interpolate_last_step(traj, samples.take(t1, o.dt));
       if (!(rep.max_spring_strain <= kRunawayStrain)) {
-        rep.stable = false;
-        rep.failure = "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
-                      "% of its rest length)" + explicit_hint(o, rep);
-        rep.failure_time = s.t;
+        fail(rep,
+             "runaway strain (a spring beyond " + std::to_string(static_cast<int>(kRunawayStrain * 100)) +
+                 "% of its rest length)",
+             o, s.t);
         break;
       }
     }
