@@ -226,6 +226,60 @@ AnyMesh read_msh_in_process(const std::string& src) {
 /// Runs read_msh_in_process in a child process, so that a reader that crashes, hangs or
 /// exhausts memory on a hostile file costs a clean refusal, not the caller. The child sends
 /// 'M' + the serialised mesh, or 'E' + the error message.
+/// The reader process: reads the file, writes "M" + the serialized mesh or "E" + the error to
+/// the pipe, and exits; a fault kills it plainly (the parent turns the signal into a refusal).
+[[noreturn]] void run_reader_child(const std::string& src, int out_fd) {
+  // The child dies plainly on a fault: no sanitizer or fuzzer report, no core dump; the
+  // parent turns the signal into a refusal.
+  for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
+  // What a failing reader prints (glibc's "double free", gmsh's messages) is not for the
+  // user: the parent reports one line.
+  if (const int null = open("/dev/null", O_WRONLY); null >= 0) {
+    dup2(null, STDOUT_FILENO);
+    dup2(null, STDERR_FILENO);
+    close(null);
+  }
+  std::string out;
+  try {
+    out = "M" + serialize(read_msh_in_process(src));
+  } catch (const std::exception& e) {
+    out = std::string("E") + e.what();
+  }
+  for (std::size_t done = 0; done < out.size();) {
+    const ssize_t w = write(out_fd, out.data() + done, out.size() - done);
+    if (w <= 0) _exit(3);
+    done += static_cast<std::size_t>(w);
+  }
+  _exit(0);
+}
+
+/// Everything the reader writes before it exits or the deadline passes; `timed_out` says which.
+std::string read_until(int fd, std::chrono::steady_clock::time_point deadline, bool& timed_out) {
+  timed_out = false;
+  std::string data;
+  char buf[1 << 16];
+  for (;;) {
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) {
+      timed_out = true;
+      break;
+    }
+    pollfd p{fd, POLLIN, 0};
+    const int r = poll(&p, 1, static_cast<int>(left.count()));
+    if (r < 0 && errno == EINTR) continue;
+    if (r == 0) {
+      timed_out = true;
+      break;
+    }
+    const ssize_t n = read(fd, buf, sizeof buf);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) break;
+    data.append(buf, static_cast<std::size_t>(n));
+  }
+  return data;
+}
+
 AnyMesh read_msh_isolated(const std::string& src, std::chrono::seconds limit) {
   int fds[2];
   if (pipe(fds) != 0) throw InputError(src + ": cannot create a pipe for the mesh reader");
@@ -239,53 +293,11 @@ AnyMesh read_msh_isolated(const std::string& src, std::chrono::seconds limit) {
   }
   if (pid == 0) {
     close(fds[0]);
-    // The child dies plainly on a fault: no sanitizer or fuzzer report, no core dump; the
-    // parent turns the signal into a refusal.
-    for (int sig : {SIGSEGV, SIGBUS, SIGABRT, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
-    // What a failing reader prints (glibc's "double free", gmsh's messages) is not for the
-    // user: the parent reports one line.
-    if (const int null = open("/dev/null", O_WRONLY); null >= 0) {
-      dup2(null, STDOUT_FILENO);
-      dup2(null, STDERR_FILENO);
-      close(null);
-    }
-    std::string out;
-    try {
-      out = "M" + serialize(read_msh_in_process(src));
-    } catch (const std::exception& e) {
-      out = std::string("E") + e.what();
-    }
-    for (std::size_t done = 0; done < out.size();) {
-      const ssize_t w = write(fds[1], out.data() + done, out.size() - done);
-      if (w <= 0) _exit(3);
-      done += static_cast<std::size_t>(w);
-    }
-    _exit(0);
+    run_reader_child(src, fds[1]);
   }
   close(fds[1]);
-  std::string data;
-  char buf[1 << 16];
-  const auto deadline = std::chrono::steady_clock::now() + limit;
   bool timed_out = false;
-  for (;;) {
-    const auto left =
-        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
-    if (left.count() <= 0) {
-      timed_out = true;
-      break;
-    }
-    pollfd p{fds[0], POLLIN, 0};
-    const int r = poll(&p, 1, static_cast<int>(left.count()));
-    if (r < 0 && errno == EINTR) continue;
-    if (r == 0) {
-      timed_out = true;
-      break;
-    }
-    const ssize_t n = read(fds[0], buf, sizeof buf);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) break;
-    data.append(buf, static_cast<std::size_t>(n));
-  }
+  const std::string data = read_until(fds[0], std::chrono::steady_clock::now() + limit, timed_out);
   close(fds[0]);
   if (timed_out) kill(pid, SIGKILL);
   int status = 0;
