@@ -267,6 +267,20 @@ total_force = [0.2, 0.05]
   EXPECT_LT((a.field.back() - b.field.back()).norm(), 1e-6 * b.field.back().norm());
 }
 
+/// Runs the undamped model with the neighbour filter for 2000 steps at each multiple of the
+/// explicit (Courant) step: stable at 1x, divergent at every larger multiple.
+template <int dim>
+void expect_neighbour_filter_stable_only_at_the_explicit_step(Model<dim> model, std::initializer_list<double> mults) {
+  const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
+  for (double mult : mults) {
+    model.duration = 2000 * mult * dtc;
+    model.output_interval = model.duration / 20;
+    Trajectory<dim> tr;
+    const RunReport r = simulate(model, opts("filtered", mult * dtc, "neighbors"), tr);
+    EXPECT_EQ(r.stable, mult == 1.0) << "at " << mult << "x the explicit step";
+  }
+}
+
 TEST(Integrators, NeighbourFilterDivergesBeyondAFewExplicitSteps) {
   // The paper's truncated filter is conditionally stable (see FilterMatrix tests): on the
   // undamped 16x4 plate the spectral radius of its linearised step is below 1 at the explicit
@@ -275,14 +289,7 @@ TEST(Integrators, NeighbourFilterDivergesBeyondAFewExplicitSteps) {
   const std::string text = test::plate_scene(
       16, 4, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.2, 0.0]\n", 0.0);
   Model<2> model = test::model_from(text);
-  const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
-  for (double mult : {1.0, 2.0, 10.0}) {
-    model.duration = 2000 * mult * dtc;
-    model.output_interval = model.duration / 20;
-    Trajectory<2> tr;
-    const RunReport r = simulate(model, opts("filtered", mult * dtc, "neighbors"), tr);
-    EXPECT_EQ(r.stable, mult == 1.0) << "at " << mult << "x the explicit step";
-  }
+  expect_neighbour_filter_stable_only_at_the_explicit_step(model, {1.0, 2.0, 10.0});
 }
 
 } // namespace
@@ -558,14 +565,7 @@ TEST(Integrators3D, NeighbourFilterIsStableAtTheExplicitStepAndDivergesAtTenTime
   // The truncation's conditional stability in 3D (undamped clamped box): stable at the
   // explicit limit, divergent at 10x, as on the plate.
   Model<3> model = clamped_box(0.0);
-  const double dtc = explicit_critical_dt(max_omega_squared(model, true), 0.0, 0.0);
-  for (double mult : {1.0, 10.0}) {
-    model.duration = 2000 * mult * dtc;
-    model.output_interval = model.duration / 20;
-    Trajectory<3> tr;
-    const RunReport r = simulate(model, opts("filtered", mult * dtc, "neighbors"), tr);
-    EXPECT_EQ(r.stable, mult == 1.0) << "at " << mult << "x the explicit step";
-  }
+  expect_neighbour_filter_stable_only_at_the_explicit_step(model, {1.0, 10.0});
 }
 
 } // namespace

@@ -78,8 +78,7 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
                           double dt, std::ostream* progress, const KeepRuns& keep) {
   if (reference != solvers::kFem && reference != solvers::kCvode)
     throw InputError("--reference must be fem or cvode, not " + reference);
-  for (const auto& s : solvers)
-    if (!known_solver(s)) throw InputError("--solvers: unknown solver \"" + s + "\" (" + solvers::list() + ")");
+  for (const auto& s : solvers) solvers::find(s, "--solvers"); // an unknown name: InputError with the nearest one
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);

@@ -9,11 +9,6 @@
 
 namespace vtb::harness {
 
-bool known_solver(const std::string& n) {
-  return std::any_of(std::begin(solvers::kEntries), std::end(solvers::kEntries),
-                     [&](const solvers::Entry& e) { return n == e.name; });
-}
-
 template <int dim>
 RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::string& solver, double dt,
                      Trajectory<dim>& out) {

@@ -219,7 +219,7 @@ std::string plot_tex(const std::filesystem::path& paper_dir) {
 
 StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream* log) {
   for (const auto& solver : o.solvers) // before any run: a typo costs nothing
-    if (!known_solver(solver) || solver == solvers::kFem)
+    if (!solvers::find(solver, "vtb study").springs)
       throw InputError("vtb study: solver \"" + solver + "\" is not one to study (" +
                        solvers::list(solvers::is_spring) + ")");
   Scene scene = scene_in;

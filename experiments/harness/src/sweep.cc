@@ -1,5 +1,5 @@
 #include "vtb/harness/sweep.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "vtb/meshes/atomic_file.hh"
 
@@ -56,7 +56,7 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
   for (double s : scales)
     if (!(s > 0) || !std::isfinite(s)) throw InputError("vtb sweep: --stiffness-scale values must be > 0");
   for (const auto& s : solvers) {
-    if (!known_solver(s)) throw InputError("vtb sweep: unknown solver \"" + s + "\"");
+    solvers::find(s, "vtb sweep"); // an unknown name: InputError with the nearest one
     // CVODE chooses its own steps: a dt ladder would run the same integration at every dt
     // and report error 0 against itself.
     if (s == solvers::kCvode || s == solvers::kFem)

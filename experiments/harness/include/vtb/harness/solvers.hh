@@ -7,9 +7,6 @@
 
 namespace vtb::harness {
 
-/// Whether `name` is in the solver registry (vtb/core/solver_registry.hh).
-bool known_solver(const std::string& name);
-
 /// Runs `solver` on the model (its dt from the scene unless `dt` > 0; explicit defaults to
 /// half its predicted stability limit when the scene's dt is above it).
 template <int dim>
