@@ -343,5 +343,58 @@ static = true
   EXPECT_LE(tips[1], uniaxial) << "below the static bound";
 }
 
+TEST(KelvinVoigtFem, PlaneStressDisplacementScalesInverselyWithThickness) {
+  // In 2D, K and M carry the thickness t and the loads are total forces (traction over a
+  // facet's length, point forces on a node), so M a + C v + K u = f gives u(t * s) = u(t) / s
+  // exactly, statically and in time; the reactions balance the same total forces. The two
+  // runs differ only by scaled matrices, so they agree to direct-solver round-off (1e-9).
+  auto scene = [](double thickness) {
+    return R"(
+[scene]
+duration = 0.2
+output_interval = 0.05
+[mesh]
+generate = { shape = "rectangle", size = [1.0, 0.2], divisions = [10, 3] }
+[material]
+young_modulus = 1000.0
+poisson_ratio = 0.3
+density = 1.0
+retardation_time = 0.01
+thickness = )" +
+           num(thickness) +
+           R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.3, -0.1]
+[[load]]
+point = [0.5, 0.2]
+total_force = [0.0, -0.2]
+start = 0.05
+)";
+  };
+  const Case thin = make(scene(0.01)), thick = make(scene(0.04));
+  for (const bool is_static : {true, false}) {
+    fem::FemOptions o;
+    o.static_solve = is_static;
+    o.dt = 0.01;
+    Trajectory<2> a, b;
+    fem::simulate<2>(thin.model, thin.scene.material, o, a, true);
+    fem::simulate<2>(thick.model, thick.scene.material, o, b, true);
+    ASSERT_EQ(a.field.size(), b.field.size());
+    const double scale = a.field.back().cwiseAbs().maxCoeff();
+    ASSERT_GT(scale, 0.0);
+    for (std::size_t k = 0; k < a.field.size(); ++k) {
+      EXPECT_LE((a.field[k] - 4.0 * b.field[k]).cwiseAbs().maxCoeff(), 1e-9 * scale) << "sample " << k;
+      EXPECT_LE((a.reaction[k][0] - b.reaction[k][0]).norm(), 1e-9 * a.reaction[k][0].norm() + 1e-12);
+    }
+    // Statics: the clamp holds the sum of the loads.
+    if (is_static) {
+      EXPECT_NEAR(a.reaction.back()[0].x(), -0.3, 1e-9);
+    }
+  }
+}
+
 } // namespace
 } // namespace vtb

@@ -25,6 +25,8 @@ struct FemOptions {
 };
 
 FemOptions options_from(const SolverDesc& solver);
+/// Throws InputError unless the degree is 1 or 2 and dt > 0.
+void check_options(const FemOptions& options);
 
 /// Simulates the scene's problem with the FEM and records, at every sample time, the probe
 /// displacements, the support reactions (from the residual: the force each support exerts
@@ -35,9 +37,9 @@ template <int dim>
 RunReport simulate(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                    Trajectory<dim>& out, bool record_field = false);
 
-/// The same problem distributed over the MPI ranks of mpirun (parallel::fullydistributed
-/// triangulation, Trilinos matrices, a Trilinos direct solver); every rank returns the same
-/// trajectory. Requires an MpiScope alive.
+/// The same solver (one code path, another linear-algebra backend) distributed over the MPI
+/// ranks of mpirun (parallel::fullydistributed triangulation, Trilinos matrices, a Trilinos
+/// direct solver); every rank returns the same trajectory. Requires an MpiScope alive.
 template <int dim>
 RunReport simulate_distributed(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options,
                                Trajectory<dim>& out, bool record_field = false);
