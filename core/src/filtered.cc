@@ -60,9 +60,12 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (m_full) {
-    m_h = std::make_unique<OrderedLDLT>(filter_system_matrix(model, o.dt));
-    if (!m_h->factorize()) throw std::runtime_error("filtered: H is not positive definite");
-    m_rhs.resize(nf, dim);
+    OrderedLDLT factor(filter_system_matrix(model, o.dt));
+    if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
+    m_h = std::make_unique<NodalSolve>(factor);
+    m_free_of_row.resize(static_cast<std::size_t>(nf));
+    for (int a = 0; a < static_cast<int>(nf); ++a) m_free_of_row[static_cast<std::size_t>(factor.ordered(a))] = a;
+    m_rhs.resize(dim, nf);
   } else {
     m_sparse = filter_matrix_neighbors(model, o.dt);
   }
@@ -88,10 +91,10 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   // dv = dt W a.
   if (m_full) {
     // W a = H^-1 M a = H^-1 F_node.
-    for (Eigen::Index a = 0; a < nf; ++a)
-      m_rhs.row(m_h->ordered(static_cast<int>(a))) = m_force.col(free[static_cast<std::size_t>(a)]).transpose();
-    m_h->solve_in_place(m_rhs);
-    for (Eigen::Index a = 0; a < nf; ++a) m_dv.col(a) = dt * m_rhs.row(m_h->ordered(static_cast<int>(a))).transpose();
+    for (Eigen::Index r = 0; r < nf; ++r)
+      m_rhs.col(r) = m_force.col(free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])]);
+    m_h->solve_in_place<dim>(m_rhs);
+    for (Eigen::Index r = 0; r < nf; ++r) m_dv.col(m_free_of_row[static_cast<std::size_t>(r)]) = dt * m_rhs.col(r);
   } else {
     const int* ptr = m_sparse.outerIndexPtr();
     const int* col = m_sparse.innerIndexPtr();

@@ -53,16 +53,27 @@ void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
                          double extra_damping_per_k) {
   const int ns = net.num_springs();
   const auto* e = net.edge.data();
+  // Springs come sorted by their first node (unique_edges), so node i's force is summed in
+  // registers and stored once per run of springs: adding into f.col(i) spring by spring
+  // makes every spring wait for the previous one's store (measured 1.4x slower on the plate).
+  int i = ns > 0 ? e[0][0] : 0;
+  Vec<dim> xi = net.rest.col(i) + u.col(i), fi_sum = Vec<dim>::Zero();
   for (int s = 0; s < ns; ++s) {
-    const int i = e[s][0], j = e[s][1];
-    const Vec<dim> xi = net.rest.col(i) + u.col(i);
+    if (e[s][0] != i) {
+      f.col(i) += fi_sum;
+      i = e[s][0];
+      xi = net.rest.col(i) + u.col(i);
+      fi_sum.setZero();
+    }
+    const int j = e[s][1];
     const Vec<dim> xj = net.rest.col(j) + u.col(j);
     const double k = net.stiffness[s];
     const Vec<dim> fi =
         voigt_force<dim>(xi, xj, v.col(i), v.col(j), net.rest_length[s], k, net.damping[s] + extra_damping_per_k * k);
-    f.col(i) += fi;
+    fi_sum += fi;
     f.col(j) -= fi;
   }
+  if (ns > 0) f.col(i) += fi_sum;
   if (net.mass_damping != 0) f.noalias() -= net.mass_damping * (v * net.mass.asDiagonal());
 }
 

@@ -5,6 +5,7 @@
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
 #include "vtb/core/integrator.hh"
+#include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
 #include "vtb/meshes/generate.hh"
 
@@ -99,6 +100,73 @@ VTB_STEP_BENCH(box275, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(box1701, solvers::kImplicitEuler, "", implicit_euler)
+
+// The filtered step's kernels alone, on the 517-node plate and the 1701-node box: the spring
+// forces (a mid-run state), the solve with H's factor for all coordinates at once (nodal
+// layout, docs/performance.md) against Eigen's triangular solves one coordinate at a time.
+template <int dim> State<dim> midrun_state(const Model<dim>& model) {
+  IntegratorOptions o;
+  auto integ = make_integrator(model, o);
+  State<dim> s = initial_state(model);
+  for (int k = 0; k < 50; ++k) integ->step(s);
+  return s;
+}
+
+template <int dim> void spring_forces(benchmark::State& st, const Model<dim>& model) {
+  const State<dim> s = midrun_state(model);
+  Nodal<dim> f = Nodal<dim>::Zero(dim, model.num_nodes());
+  for (auto _ : st) {
+    add_internal_forces(model.net, s.u, s.v, f, 1e-3);
+    benchmark::DoNotOptimize(f.data());
+  }
+  st.counters["springs"] = model.net.num_springs();
+}
+void BM_kernel_forces_plate517(benchmark::State& st) {
+  spring_forces(st, plate517());
+}
+void BM_kernel_forces_box1701(benchmark::State& st) {
+  spring_forces(st, box1701());
+}
+BENCHMARK(BM_kernel_forces_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_forces_box1701)->Unit(benchmark::kMicrosecond);
+
+template <int dim> void solve(benchmark::State& st, const Model<dim>& model, bool nodal) {
+  OrderedLDLT factor(filter_system_matrix(model, 1e-3));
+  factor.factorize();
+  const NodalSolve fast(factor);
+  const auto n = factor.size();
+  const Nodal<dim> rhs = Nodal<dim>::Random(dim, n);
+  Nodal<dim> x = rhs;
+  Eigen::MatrixXd y = rhs.transpose();
+  for (auto _ : st) {
+    if (nodal) {
+      x = rhs;
+      fast.solve_in_place<dim>(x);
+      benchmark::DoNotOptimize(x.data());
+    } else {
+      y = rhs.transpose();
+      factor.solve_in_place(y);
+      benchmark::DoNotOptimize(y.data());
+    }
+  }
+  st.counters["L_nonzeros"] = static_cast<double>(fast.factor_nonzeros());
+}
+void BM_kernel_solve_nodal_plate517(benchmark::State& st) {
+  solve(st, plate517(), true);
+}
+void BM_kernel_solve_eigen_plate517(benchmark::State& st) {
+  solve(st, plate517(), false);
+}
+void BM_kernel_solve_nodal_box1701(benchmark::State& st) {
+  solve(st, box1701(), true);
+}
+void BM_kernel_solve_eigen_box1701(benchmark::State& st) {
+  solve(st, box1701(), false);
+}
+BENCHMARK(BM_kernel_solve_nodal_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_solve_eigen_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_solve_nodal_box1701)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_solve_eigen_box1701)->Unit(benchmark::kMicrosecond);
 
 void BM_precompute_plate517_neighbors(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));

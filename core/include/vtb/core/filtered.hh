@@ -25,7 +25,7 @@
 /// two triangular solves; it is unconditionally stable for the linear problem.
 
 #include "vtb/core/integrator.hh"
-#include "vtb/core/ordered_ldlt.hh"
+#include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
 
 #include <Eigen/SparseCore>
@@ -56,11 +56,12 @@ private:
   bool m_full;
   bool m_correct;
   double m_strain_limit;
-  std::unique_ptr<OrderedLDLT> m_h;                      ///< full: factorised H
+  std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
+  std::vector<int> m_free_of_row;                        ///< full: factor row -> free index
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node
   Nodal<dim> m_acc, m_dv;                                ///< per free node
-  Eigen::MatrixXd m_rhs;                                 ///< full: ordered free nodes x dim
+  Nodal<dim> m_rhs;                                      ///< full: dim x free nodes, factor order
 };
 
 } // namespace vtb

@@ -27,6 +27,9 @@ public:
   bool factorize();
   /// Solves in place for right-hand sides given in the ordered numbering.
   void solve_in_place(Eigen::Ref<Eigen::MatrixXd> x) const;
+  /// The factor L (unit lower, columns) and D of A = L D L^T in the ordered numbering.
+  const Eigen::SparseMatrix<double>& lower() const { return m_factor.lower(); }
+  const Eigen::VectorXd& diagonal() const { return m_factor.diagonal(); }
 
 private:
   class Factor : public Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Upper, Eigen::NaturalOrdering<int>> {
@@ -35,6 +38,7 @@ private:
     void refactorize(const Eigen::SparseMatrix<double>& upper) { this->template factorize_preordered<true>(upper); }
     /// D of L D L^T by reference (vectorD() returns a copy).
     const Eigen::VectorXd& diagonal() const { return this->m_diag; }
+    const Eigen::SparseMatrix<double>& lower() const { return this->m_matrix; }
   };
   std::vector<int> m_perm;
   Eigen::SparseMatrix<double> m_upper;

@@ -5,6 +5,8 @@
 
 #include "vtb/core/nodal.hh"
 
+#include <cmath>
+
 namespace vtb {
 
 /// Force on node i from the Voigt element (i, j):
@@ -15,10 +17,11 @@ template <int dim>
 inline Vec<dim> voigt_force(const Vec<dim>& xi, const Vec<dim>& xj, const Vec<dim>& vi, const Vec<dim>& vj,
                             double rest_length, double k, double c) {
   const Vec<dim> d = xj - xi;
-  const double l = d.norm();
-  if (!(l > 0)) return Vec<dim>::Zero();
-  const Vec<dim> n = d / l;
-  return (k * (l - rest_length) + c * n.dot(vj - vi)) * n;
+  const double l2 = d.squaredNorm();
+  if (!(l2 > 0)) return Vec<dim>::Zero();
+  // One square root and one division per element (n = d / l would divide dim times).
+  const double inv_l = 1.0 / std::sqrt(l2);
+  return ((k * (l2 * inv_l - rest_length) + c * inv_l * d.dot(vj - vi)) * inv_l) * d;
 }
 
 /// Stiffness block of a spring, K = d f_i / d x_j = -d f_i / d x_i:
