@@ -181,7 +181,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
   if (const toml::table* t = top.table("solver")) {
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
-                         "degree", "refinements", "scheme", "static"});
+                         "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static"});
     std::vector<std::string_view> kinds;
     for (const auto& e : solvers::kEntries)
       if (e.scene_kind) kinds.emplace_back(e.name);
@@ -193,6 +193,9 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.springs = r.string("springs", "lloyd", {"lloyd", "van-gelder"});
     s.solver.rtol = r.number("rtol", 1e-8, positive);
     s.solver.atol = r.number("atol", 1e-12, positive);
+    s.solver.linear_solver = r.string("linear_solver", "auto", {"auto", "direct", "cg"});
+    s.solver.cg_tolerance = r.number("cg_tolerance", 1e-8, positive);
+    if (s.solver.cg_tolerance >= 1) r.fail("cg_tolerance", "must be below 1");
     s.solver.degree = r.integer("degree", 1, 1, 2);
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
     s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});

@@ -158,6 +158,8 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
   o.strain_limit = s.strain_limit;
   o.rtol = s.rtol;
   o.atol = s.atol;
+  o.linear_solver = s.linear_solver;
+  o.cg_tolerance = s.cg_tolerance;
   return o;
 }
 

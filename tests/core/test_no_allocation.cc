@@ -41,7 +41,7 @@ namespace vtb {
 namespace {
 
 struct Case {
-  std::string kind, filter;
+  std::string kind, filter, linear_solver = "auto";
 };
 
 std::ostream& operator<<(std::ostream& os, const Case& c) {
@@ -62,6 +62,7 @@ total_force = [0.2, 0.1]
   IntegratorOptions o;
   o.kind = GetParam().kind;
   o.filter = GetParam().filter;
+  o.linear_solver = GetParam().linear_solver;
   o.dt = o.kind == "explicit" ? 1e-6 : 1e-3;
   o.strain_limit = 0.1;
   auto integ = make_integrator(model, o);
@@ -82,9 +83,11 @@ total_force = [0.2, 0.1]
 
 INSTANTIATE_TEST_SUITE_P(Integrators, NoAllocation,
                          ::testing::Values(Case{"explicit", ""}, Case{"filtered", "full"},
-                                           Case{"filtered", "neighbors"}, Case{"implicit-euler", ""}),
+                                           Case{"filtered", "neighbors"}, Case{"implicit-euler", "", "direct"},
+                                           Case{"implicit-euler", "", "cg"}),
                          [](const auto& pinfo) {
-                           std::string n = pinfo.param.kind + pinfo.param.filter;
+                           std::string n = pinfo.param.kind + pinfo.param.filter +
+                                           (pinfo.param.kind == "implicit-euler" ? pinfo.param.linear_solver : "");
                            std::replace(n.begin(), n.end(), '-', '_');
                            return n;
                          });

@@ -48,6 +48,9 @@ struct IntegratorOptions {
   bool momentum_correction = true;
   double strain_limit = 0.0;
   double rtol = 1e-8, atol = 1e-12; ///< cvode
+  /// implicit-euler: auto (direct in 2D, cg in 3D) | direct (sparse LDL^T) | cg
+  std::string linear_solver = "auto";
+  double cg_tolerance = 1e-8; ///< implicit-euler with cg: |r| <= tol |b|
 };
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.

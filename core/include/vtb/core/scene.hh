@@ -76,6 +76,8 @@ struct SolverDesc {
   double strain_limit = 0.0;     ///< 0 = off (the default: it changes the physics)
   std::string springs = "lloyd"; ///< lloyd | van-gelder
   double rtol = 1e-8;
+  std::string linear_solver = "auto"; ///< implicit-euler: auto (direct in 2D, cg in 3D) | direct | cg
+  double cg_tolerance = 1e-8;
   double atol = 1e-12;
   int degree = 1;
   int refinements = 0;
