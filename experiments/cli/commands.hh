@@ -21,5 +21,6 @@ Action add_view(CLI::App& app);
 Action add_study(CLI::App& app);
 Action add_paper_data(CLI::App& app);
 Action add_solvers(CLI::App& app);
+Action add_bench(CLI::App& app);
 
 } // namespace vtb::cli

@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   vtb::cli::Action study = vtb::cli::add_study(app);
   vtb::cli::Action paper_data = vtb::cli::add_paper_data(app);
   vtb::cli::Action solver_list = vtb::cli::add_solvers(app);
+  vtb::cli::Action bench = vtb::cli::add_bench(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -37,6 +38,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("study")) return study();
     if (app.got_subcommand("paper-data")) return paper_data();
     if (app.got_subcommand("solvers")) return solver_list();
+    if (app.got_subcommand("bench")) return bench();
   } catch (const vtb::InputError& e) {
     std::cerr << "vtb: error: " << e.what() << "\n";
     return 1;

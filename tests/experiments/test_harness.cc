@@ -4,7 +4,9 @@
 #include "support/small_models.hh"
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/solver_registry.hh"
+#include "vtb/harness/bench_scale.hh"
 #include "vtb/harness/compare.hh"
+#include "vtb/harness/csv_table.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
@@ -323,6 +325,28 @@ dt = 2e-3
   while (std::getline(ie_series, line)) ++points;
   EXPECT_EQ(points, 1 + 3) << "header and the three stable implicit-Euler runs";
   EXPECT_TRUE(std::filesystem::exists(dir / "data/pareto.dat"));
+}
+
+TEST(BenchScale, FitsTheExponentOfEachCostAgainstNodes) {
+  // A ladder whose costs are exact powers of the node count (step ~ n^1.5, precompute ~ n,
+  // heap ~ n^1.25) must give those exponents back (a least-squares line through exact points,
+  // to round-off), per dimension and solver.
+  const test::FreshDir dir;
+  std::ofstream f(dir / "scaling.csv");
+  f << "family,dim,nodes,springs,solver,precompute_ms,step_median_us,heap_mb\n";
+  for (double n : {100.0, 400.0, 1600.0})
+    for (const char* solver : {"filtered-full", "implicit-euler"})
+      f << "box,3," << n << ",0," << solver << ',' << 2 * n << ',' << std::pow(n, 1.5) << ',' << std::pow(n, 1.25)
+        << '\n';
+  f.close();
+  const harness::CsvTable fit = harness::CsvTable::parse(harness::scaling_fit(dir.path()), "scaling_fit.csv");
+  ASSERT_EQ(fit.rows(), 2u);
+  for (std::size_t r = 0; r < fit.rows(); ++r) {
+    EXPECT_NEAR(fit.number(r, "step_exponent"), 1.5, 1e-3); // printed to 4 digits
+    EXPECT_NEAR(fit.number(r, "precompute_exponent"), 1.0, 1e-3);
+    EXPECT_NEAR(fit.number(r, "heap_exponent"), 1.25, 1e-3);
+    EXPECT_EQ(fit.number(r, "nodes_max"), 1600.0);
+  }
 }
 
 } // namespace

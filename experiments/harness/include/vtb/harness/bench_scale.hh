@@ -1,0 +1,20 @@
+#pragma once
+/// \file
+/// `vtb bench scale`: step time, precompute and memory of the spring solvers over a 2D and a
+/// 3D mesh ladder (the reproduction's scaling.csv), and the fitted exponent of each cost
+/// against the node count (scaling_fit.csv).
+
+#include <filesystem>
+#include <iosfwd>
+
+namespace vtb::harness {
+
+/// Writes OUT/scaling.csv and OUT/scaling_fit.csv (family, dim, solver, nodes_min, nodes_max,
+/// step_exponent, precompute_exponent, heap_exponent: least-squares slopes of log cost against
+/// log nodes) and prints the fit as a table to `table`.
+void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* progress, std::ostream& table);
+
+/// The fit of scaling.csv in `dir`, as scaling_fit.csv's text.
+std::string scaling_fit(const std::filesystem::path& dir);
+
+} // namespace vtb::harness

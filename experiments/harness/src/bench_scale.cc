@@ -1,0 +1,56 @@
+#include "vtb/harness/bench_scale.hh"
+
+#include "reproduce_parts.hh"
+#include "vtb/harness/csv_table.hh"
+#include "vtb/harness/paper_data.hh"
+#include "vtb/meshes/atomic_file.hh"
+
+#include <algorithm>
+#include <iomanip>
+#include <map>
+#include <ostream>
+#include <sstream>
+#include <tuple>
+
+namespace vtb::harness {
+
+std::string scaling_fit(const std::filesystem::path& dir) {
+  const CsvTable t = CsvTable::read(dir / "scaling.csv");
+  struct Series {
+    std::vector<double> nodes, step, pre, heap;
+  };
+  std::map<std::tuple<std::string, std::string, std::string>, Series> series;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    Series& s = series[{t.text(r, "family"), t.text(r, "dim"), t.text(r, "solver")}];
+    s.nodes.push_back(t.number(r, "nodes"));
+    s.step.push_back(t.number(r, "step_median_us"));
+    s.pre.push_back(t.number(r, "precompute_ms"));
+    s.heap.push_back(t.number(r, "heap_mb"));
+  }
+  std::ostringstream os;
+  os << std::setprecision(4)
+     << "family,dim,solver,nodes_min,nodes_max,step_exponent,precompute_exponent,heap_exponent\n";
+  for (const auto& [key, s] : series) {
+    const auto [lo, hi] = std::minmax_element(s.nodes.begin(), s.nodes.end());
+    os << std::get<0>(key) << ',' << std::get<1>(key) << ',' << std::get<2>(key) << ',' << *lo << ',' << *hi << ','
+       << paper::loglog_slope(s.nodes, s.step) << ',' << paper::loglog_slope(s.nodes, s.pre) << ','
+       << paper::loglog_slope(s.nodes, s.heap) << '\n';
+  }
+  return os.str();
+}
+
+void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* progress, std::ostream& table) {
+  parts::write_scaling(out, quick, progress);
+  const std::string fit = scaling_fit(out);
+  write_files_atomically(out, {{"scaling_fit.csv", fit}});
+  const CsvTable t = CsvTable::read(out / "scaling.csv");
+  table << std::left << std::setw(8) << "dim" << std::setw(8) << "nodes" << std::setw(18) << "solver" << std::right
+        << std::setw(14) << "step (us)" << std::setw(16) << "precompute (ms)" << std::setw(12) << "heap (MB)\n";
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    table << std::left << std::setw(8) << t.text(r, "dim") << std::setw(8) << t.text(r, "nodes") << std::setw(18)
+          << t.text(r, "solver") << std::right << std::setw(14) << t.text(r, "step_median_us") << std::setw(16)
+          << t.text(r, "precompute_ms") << std::setw(11) << t.text(r, "heap_mb") << "\n";
+  table << "\nfitted exponents (cost ~ nodes^p), scaling_fit.csv:\n" << fit;
+}
+
+} // namespace vtb::harness
