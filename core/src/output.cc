@@ -38,6 +38,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["failure_time"] = r.failure_time;
   }
   j["max_strain"] = r.max_strain;
+  j["max_rotation"] = r.max_rotation;
   if (r.solver != solvers::kFem) j["max_spring_strain"] = r.max_spring_strain;
   if (r.solver != solvers::kFem) {
     j["courant_dt_estimate"] = r.courant_dt;

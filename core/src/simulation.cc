@@ -50,6 +50,8 @@ void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>
   rep.max_spring_strain = std::max(rep.max_spring_strain, max_strain(model.net, s.u));
   const double small = max_small_strain(model.mesh, s.u);
   if (!(small <= rep.max_strain)) rep.max_strain = small; // propagates NaN
+  const double rotation = max_rotation(model.mesh, s.u);
+  if (!(rotation <= rep.max_rotation)) rep.max_rotation = rotation;
 }
 
 namespace {

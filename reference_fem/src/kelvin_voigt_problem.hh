@@ -25,6 +25,7 @@
 // constrained rows and columns eliminated (a positive diagonal left), factorised once.
 // Per-dof data (support point, component, support) is held for every dof this process sees
 // (the dofs of its own cells; all dofs in a serial run); nodal outputs are summed over ranks.
+#include "vtb/core/cell_fields.hh"
 #include "vtb/core/solver_names.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/atomic_file.hh"
@@ -105,6 +106,7 @@ public:
           interpolate_samples(out, times);
         });
     rep.max_strain = m_max_strain;
+    rep.max_rotation = m_max_rotation;
     for (const auto& [phase, seconds] : m_timer.get_summary_data(dealii::TimerOutput::total_wall_time)) {
       std::string key = "phase_" + phase + "_seconds";
       std::replace(key.begin(), key.end(), ' ', '_');
@@ -414,7 +416,12 @@ private:
     std::vector<Vec<dim>> r(m_model.supports.size());
     for (std::size_t s = 0; s < r.size(); ++s) r[s] = Eigen::Map<const Vec<dim>>(reac.data() + s * dim);
     out.reaction.push_back(r);
-    if (record_field) out.field.push_back(Eigen::Map<const Nodal<dim>>(field.data(), dim, m_model.num_nodes()));
+    const Eigen::Map<const Nodal<dim>> nodal(field.data(), dim, m_model.num_nodes());
+    if (record_field) out.field.push_back(nodal);
+    // Rotation from the field at the scene's nodes on the scene's cells (the P1 interpolant:
+    // the same measure as the spring solvers; every rank holds the summed field).
+    const double rotation = max_rotation(m_model.mesh, Nodal<dim>(nodal));
+    if (!(rotation <= m_max_rotation)) m_max_rotation = rotation;
     m_ghosted = m_u;
     m_max_strain = std::max(m_max_strain, m_backend.max(max_principal_strain(m_mapping, m_fe, m_dofs, m_ghosted)));
     if (m_opt.frames_dir.empty()) return;
@@ -472,7 +479,7 @@ private:
   typename Backend::Solver m_solver;
   Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
   Vector m_ghosted, m_frame_prev, m_frame_last, m_frame_mix;
-  double m_max_strain = 0;
+  double m_max_strain = 0, m_max_rotation = 0;
   std::ostringstream m_timer_stream;
   dealii::TimerOutput m_timer;
 };

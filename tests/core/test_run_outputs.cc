@@ -5,6 +5,7 @@
 #include "vtb/core/output.hh"
 #include "vtb/core/simulation.hh"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -110,6 +111,30 @@ TEST(RunOutputs, MaxStrainIsTheFemsDefinitionForEverySolver) {
   const auto j = nlohmann::json::parse(summary_json(r, "plate"));
   EXPECT_GT(j["max_strain"].get<double>(), 0.0);
   EXPECT_GT(j["max_spring_strain"].get<double>(), 0.0);
+}
+
+TEST(RunOutputs, MaxRotationIsTheCellsPolarAngle) {
+  // A rigid rotation by theta (u = (R - I) X) has F = R on every cell: max_rotation = theta
+  // to round-off, in 2D and 3D, while a pure stretch (F symmetric) has none; a stretch after
+  // the rotation (F = R S) still gives theta (the polar decomposition separates them).
+  const double theta = 0.3;
+  const Mesh2 m = generate_rectangle({0.2, 0.05}, {8, 2});
+  const Eigen::Matrix2d R = Eigen::Rotation2Dd(theta).toRotationMatrix();
+  const Eigen::Matrix2d S = (Eigen::Matrix2d() << 1.02, 0.01, 0.01, 0.99).finished();
+  Nodal<2> u = (R - Eigen::Matrix2d::Identity()) * m.points;
+  EXPECT_NEAR(max_rotation<2>(m, u), theta, 1e-12);
+  u = (R * S - Eigen::Matrix2d::Identity()) * m.points;
+  EXPECT_NEAR(max_rotation<2>(m, u), theta, 1e-12);
+  u = (S - Eigen::Matrix2d::Identity()) * m.points;
+  EXPECT_NEAR(max_rotation<2>(m, u), 0.0, 1e-12);
+  const Mesh3 b = generate_box({0.1, 0.03, 0.03}, {3, 2, 2});
+  const Eigen::Matrix3d R3 = Eigen::AngleAxisd(theta, Eigen::Vector3d(1, 2, 2).normalized()).toRotationMatrix();
+  const Nodal<3> u3 = (R3 - Eigen::Matrix3d::Identity()) * b.points;
+  EXPECT_NEAR(max_rotation<3>(b, u3), theta, 1e-12);
+  // The regime note: silent inside the limits, names the rotation beyond them.
+  EXPECT_EQ(small_strain_regime_note(0.05, 0.005), "");
+  EXPECT_NE(small_strain_regime_note(0.3, 0.005).find("max rotation 0.3 rad"), std::string::npos);
+  EXPECT_NE(small_strain_regime_note(0.01, 0.02).find("max strain 0.02"), std::string::npos);
 }
 
 } // namespace

@@ -1,4 +1,5 @@
 #include "vtb/harness/compare.hh"
+#include "vtb/core/cell_fields.hh"
 #include "vtb/core/solver_registry.hh"
 
 #include "vtb/harness/solvers.hh"
@@ -126,6 +127,12 @@ std::string format_compare(const CompareResult& r) {
     os << line;
     if (!p.stable) os << "  " << row.solver << ": unstable (" << p.failure << " at t = " << p.failure_time << " s)\n";
   }
+  // The regime, from the reference's run (the linear FEM is the one it concerns).
+  for (const auto& row : r.rows)
+    if (row.solver == r.reference)
+      if (const std::string note = small_strain_regime_note(row.report.max_rotation, row.report.max_strain);
+          !note.empty())
+        os << "note: " << note << "\n";
   if (!r.decomposition.empty()) {
     os << "error decomposition (max over time of the relative L2 displacement error):\n";
     for (const auto& x : r.decomposition) {

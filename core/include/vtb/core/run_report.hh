@@ -41,7 +41,8 @@ struct RunReport {
   bool stable = true;
   std::string failure;      ///< why the run was stopped, empty when stable
   double failure_time = -1; ///< simulated time of the failure
-  double max_strain = 0; ///< max over samples of the largest principal small strain (max_small_strain; the FEM's too)
+  double max_strain = 0;   ///< max over samples of the largest principal small strain (max_small_strain; the FEM's too)
+  double max_rotation = 0; ///< max over samples of the largest cell rotation, radians (max_rotation; the FEM's too)
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
   std::string calibration;
