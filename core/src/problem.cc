@@ -69,6 +69,7 @@ Selection<dim> resolve(const Mesh<dim>& mesh, double longest, const RegionDesc& 
         Box<dim>{as_vec<dim>(r.box->first, r.label + ".box", file), as_vec<dim>(r.box->second, r.label + ".box", file)};
   spec.group = r.group;
   if (r.point) spec.point = as_vec<dim>(*r.point, r.label + ".point", file);
+  if (r.disc) spec.disc = Disc<dim>{as_vec<dim>(r.disc->first, r.label + ".disc.center", file), r.disc->second};
   Selection<dim> s = select(mesh, spec, what);
   if (s.nodes.empty()) throw InputError(what + ": the region selects no node of mesh " + mesh.source);
   if (spec.point) snap_distance(mesh, longest, *spec.point, s.nodes.front(), r.label, file);

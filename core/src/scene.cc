@@ -13,8 +13,8 @@ using detail::non_negative;
 using detail::positive;
 using detail::TableReader;
 
-/// Reads the region keys (box | group | point) of a fix, load, drive entry.
-RegionDesc read_region(const TableReader& r, std::string label) {
+/// Reads the region keys (box | group | point; disc for a load) of a fix, load, drive entry.
+RegionDesc read_region(const TableReader& r, std::string label, bool loads = false) {
   RegionDesc d;
   d.label = std::move(label);
   int count = 0;
@@ -48,7 +48,15 @@ RegionDesc read_region(const TableReader& r, std::string label) {
     ++count;
     d.point = r.vector("point", 2, 3);
   }
-  if (count != 1) r.fail("", "needs exactly one of box, group, point (has " + std::to_string(count) + ")");
+  if (loads && r.has("disc")) {
+    ++count;
+    const toml::table* t = r.table("disc");
+    const TableReader dr(*t, r.path() + ".disc", r.file(), {"center", "radius"});
+    d.disc = std::make_pair(dr.vector("center", 2, 3), dr.number("radius", std::nullopt, positive));
+  }
+  if (count != 1)
+    r.fail("", "needs exactly one of box, group, point" + std::string(loads ? ", disc" : "") + " (has " +
+                   std::to_string(count) + ")");
   return d;
 }
 
@@ -130,9 +138,9 @@ void read_regions(const TableReader& top, const std::string& name, Scene& s) {
   const auto loads = top.tables("load");
   for (std::size_t i = 0; i < loads.size(); ++i) {
     const TableReader r(*loads[i], "[[load]] #" + std::to_string(i + 1), name,
-                        {"box", "group", "point", "name", "total_force", "start", "ramp"});
+                        {"box", "group", "point", "disc", "name", "total_force", "start", "ramp"});
     LoadDesc l;
-    l.region = read_region(r, label(r, "load", i));
+    l.region = read_region(r, label(r, "load", i), true);
     l.total_force = r.vector("total_force", 2, 3);
     l.start = r.number("start", 0.0, non_negative);
     l.ramp = r.number("ramp", 0.0, non_negative);

@@ -1,5 +1,7 @@
 #include "vtb/meshes/region.hh"
 
+#include <sstream>
+
 #include "vtb/meshes/input_error.hh"
 
 #include <algorithm>
@@ -53,6 +55,26 @@ template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec
     s.facets = it->second.facets;
   } else if (spec.point) {
     s.nodes = {nearest_node(mesh, *spec.point)};
+  } else if (spec.disc) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const auto& f : boundary_facets(mesh)) {
+      Eigen::Matrix<double, dim, 1> c = Eigen::Matrix<double, dim, 1>::Zero();
+      for (int v : f) c += mesh.points.col(v) / dim;
+      const double d = (c - spec.disc->center).norm();
+      nearest = std::min(nearest, d);
+      if (d <= spec.disc->radius) {
+        s.facets.push_back(f);
+        s.nodes.insert(s.nodes.end(), f.begin(), f.end());
+      }
+    }
+    if (s.facets.empty()) {
+      std::ostringstream os;
+      os << what << ": disc of radius " << spec.disc->radius << " m holds no boundary facet centre of mesh "
+         << mesh.source << " (the nearest is " << nearest << " m from the centre); enlarge the radius";
+      throw InputError(os.str());
+    }
+    std::sort(s.nodes.begin(), s.nodes.end());
+    s.nodes.erase(std::unique(s.nodes.begin(), s.nodes.end()), s.nodes.end());
   }
   return s;
 }

@@ -135,6 +135,13 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"total_force = [1.0, 0.0]",
                 "total_force = [1.0, 0.0]\n[[load]]\npoint = [0.1, 0.3]\ntotal_force = [0.0, 1.0]",
                 "load[1].point is 0.25 m from the mesh"},
+        // A patch load must hold a facet, and is for loads only.
+        BadCase{"group = \"right\"", "disc = { center = [0.2, 0.025], radius = 0.001 }",
+                "load[0]: disc of radius 0.001 m holds no boundary facet centre"},
+        BadCase{"group = \"right\"", "disc = { center = [0.2, 0.025], radius = -1.0 }", "[[load]] #1.disc.radius"},
+        BadCase{"group = \"right\"", "disc = { centre = [0.2, 0.025], radius = 0.01 }",
+                "disc.centre: unknown key; did you mean 'center'?"},
+        BadCase{"group = \"left\"", "disc = { center = [0.0, 0.025], radius = 0.03 }", "[[fix]] #1"},
         BadCase{"divisions = [4, 2]", "divisions = [4, 2], mesher = \"cgal\", nodes = 100",
                 "[mesh].generate.divisions: is for mesher = \"structured\"; a CGAL mesh takes nodes"},
         BadCase{"divisions = [4, 2]", "divisions = [4, 2], nodes = 100",
@@ -226,6 +233,44 @@ TEST(Scene, TractionIsLumpedByBoundaryLengthAndPointLoadIsNodal) {
   const Model<2> p = test::model_from(with("group = \"right\"", "point = [0.2, 0.05]"));
   ASSERT_EQ(p.loads[0].nodes.size(), 1u);
   EXPECT_NEAR(p.loads[0].force(0, 0), 1.0, 1e-14);
+}
+
+TEST(Scene, ADiscLoadIsAUniformTractionOnThePatchWithTheTotalForceAndItsMoment) {
+  // A disc on the top edge of a 16 x 4 plate (segments of 0.0125 m) around x = 0.1 with radius
+  // 0.02 holds the segments whose centres lie within 0.02 m: the four centred at 0.08125,
+  // 0.09375, 0.10625 and 0.11875 (0.01875 and 0.00625 m away). A uniform traction lumped exactly on
+  // linear facets gives nodal forces that sum to the total (to round-off) and whose moment
+  // about the patch's centre (the facets' length-weighted centroid) is zero: the resultant
+  // acts at the patch centre.
+  const Model<2> m = test::model_from(test::plate_scene(16, 4, R"(
+[[fix]]
+group = "left"
+[[load]]
+name = "tool"
+disc = { center = [0.1, 0.05], radius = 0.02 }
+total_force = [0.3, -1.0]
+)"));
+  ASSERT_EQ(m.loads.size(), 1u);
+  const Load<2>& l = m.loads[0];
+  ASSERT_FALSE(l.facets.empty());
+  double length = 0;
+  Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+  for (const auto& f : l.facets) {
+    const double len = (m.mesh.points.col(f[1]) - m.mesh.points.col(f[0])).norm();
+    length += len;
+    centre += len * 0.5 * (m.mesh.points.col(f[0]) + m.mesh.points.col(f[1]));
+    EXPECT_NEAR(m.mesh.points(1, f[0]), 0.05, 1e-12) << "a facet of the top edge";
+  }
+  centre /= length;
+  EXPECT_NEAR(length, 0.05, 1e-12); // four segments of 0.0125
+  const Eigen::Vector2d total = l.force.rowwise().sum();
+  EXPECT_NEAR((total - Eigen::Vector2d(0.3, -1.0)).norm(), 0.0, 1e-14);
+  double moment = 0;
+  for (std::size_t k = 0; k < l.nodes.size(); ++k) {
+    const Eigen::Vector2d r = m.mesh.points.col(l.nodes[k]) - centre;
+    moment += r.x() * l.force(1, static_cast<Eigen::Index>(k)) - r.y() * l.force(0, static_cast<Eigen::Index>(k));
+  }
+  EXPECT_NEAR(moment, 0.0, 1e-15);
 }
 
 TEST(Scene, RampAndStepProfiles) {

@@ -396,5 +396,38 @@ start = 0.05
   }
 }
 
+TEST(KelvinVoigtFem, ADiscLoadIsATractionOnItsPatchThatTheClampBalances) {
+  // The patch load reaches the FEM as the same boundary facets the springs load: statically
+  // the clamp's reaction is minus the total force (to the direct solver's round-off), and
+  // with P2 and a refinement (tractions integrated on the refined facets of the patch) too.
+  const Case c = make(R"(
+[scene]
+duration = 1.0
+output_interval = 1.0
+[mesh]
+generate = { shape = "rectangle", size = [0.2, 0.05], divisions = [16, 4] }
+[material]
+young_modulus = 5.0e4
+poisson_ratio = 0.3
+density = 1000.0
+thickness = 0.001
+[[fix]]
+group = "left"
+[[load]]
+disc = { center = [0.1, 0.05], radius = 0.02 }
+total_force = [0.003, -0.01]
+)");
+  for (const int degree : {1, 2}) {
+    fem::FemOptions o;
+    o.static_solve = true;
+    o.degree = degree;
+    o.refinements = degree - 1;
+    Trajectory<2> tr;
+    fem::simulate<2>(c.model, c.scene.material, o, tr, true);
+    EXPECT_NEAR(tr.reaction.back()[0].x(), -0.003, 1e-12) << "degree " << degree;
+    EXPECT_NEAR(tr.reaction.back()[0].y(), 0.01, 1e-12) << "degree " << degree;
+  }
+}
+
 } // namespace
 } // namespace vtb

@@ -6,7 +6,8 @@
 
 namespace vtb::harness {
 
-template <int dim> ErrorMetrics compare(const Trajectory<dim>& a, const Trajectory<dim>& ref) {
+template <int dim>
+ErrorMetrics compare(const Trajectory<dim>& a, const Trajectory<dim>& ref, const std::vector<char>* away) {
   ErrorMetrics m;
   const std::size_t n = std::min(a.t.size(), ref.t.size());
   m.compared = n;
@@ -25,6 +26,20 @@ template <int dim> ErrorMetrics compare(const Trajectory<dim>& a, const Trajecto
       const double e = ratio((a.field[k] - ref.field[k]).norm(), scale);
       m.displacement_max = std::max(m.displacement_max, e);
       if (k + 1 == n) m.displacement_final = e;
+    }
+    if (away) {
+      auto masked = [&](const Nodal<dim>& f) {
+        double s = 0;
+        for (Eigen::Index i = 0; i < f.cols(); ++i)
+          if ((*away)[static_cast<std::size_t>(i)]) s += f.col(i).squaredNorm();
+        return std::sqrt(s);
+      };
+      double away_scale = 0;
+      for (const auto& f : ref.field) away_scale = std::max(away_scale, masked(f));
+      m.displacement_away_max = 0;
+      for (std::size_t k = 0; k < n; ++k)
+        m.displacement_away_max =
+            std::max(m.displacement_away_max, ratio(masked(a.field[k] - ref.field[k]), away_scale));
     }
   } else {
     m.displacement_max = m.displacement_final = nan;
@@ -59,7 +74,24 @@ template <int dim> ErrorMetrics compare(const Trajectory<dim>& a, const Trajecto
   return m;
 }
 
-template ErrorMetrics compare<2>(const Trajectory<2>&, const Trajectory<2>&);
-template ErrorMetrics compare<3>(const Trajectory<3>&, const Trajectory<3>&);
+template <int dim> std::vector<char> away_from_loads(const Model<dim>& model) {
+  double longest = 0;
+  for (const double l : model.net.rest_length) longest = std::max(longest, l);
+  std::vector<int> loaded;
+  for (const auto& l : model.loads) loaded.insert(loaded.end(), l.nodes.begin(), l.nodes.end());
+  std::vector<char> away(static_cast<std::size_t>(model.num_nodes()), 1);
+  for (int i = 0; i < model.num_nodes(); ++i)
+    for (int j : loaded)
+      if ((model.mesh.points.col(i) - model.mesh.points.col(j)).norm() <= 2 * longest) {
+        away[static_cast<std::size_t>(i)] = 0;
+        break;
+      }
+  return away;
+}
+
+template ErrorMetrics compare<2>(const Trajectory<2>&, const Trajectory<2>&, const std::vector<char>*);
+template ErrorMetrics compare<3>(const Trajectory<3>&, const Trajectory<3>&, const std::vector<char>*);
+template std::vector<char> away_from_loads<2>(const Model<2>&);
+template std::vector<char> away_from_loads<3>(const Model<3>&);
 
 } // namespace vtb::harness

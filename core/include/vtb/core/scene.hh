@@ -21,7 +21,8 @@ struct RegionDesc {
   std::optional<std::pair<Eigen::VectorXd, Eigen::VectorXd>> box; ///< [min, max]
   std::string group;
   std::optional<Eigen::VectorXd> point;
-  std::string label; ///< "fix[0]", "load[1]", ... or the entry's `name`
+  std::optional<std::pair<Eigen::VectorXd, double>> disc; ///< loads only: {center, radius}
+  std::string label;                                      ///< "fix[0]", "load[1]", ... or the entry's `name`
 };
 
 struct FixDesc {

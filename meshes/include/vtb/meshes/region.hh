@@ -14,11 +14,20 @@ template <int dim> struct Box {
   Eigen::Matrix<double, dim, 1> max;
 };
 
-/// What a region of a scene names: a box, a mesh group or a point (its nearest node).
+/// A patch of the boundary: the boundary facets whose centroid lies within `radius` of
+/// `center` (a tool tip pressing on the surface).
+template <int dim> struct Disc {
+  Eigen::Matrix<double, dim, 1> center;
+  double radius = 0;
+};
+
+/// What a region of a scene names: a box, a mesh group, a point (its nearest node) or a disc
+/// (a patch of boundary facets).
 template <int dim> struct RegionSpec {
   std::optional<Box<dim>> box;
   std::string group;
   std::optional<Eigen::Matrix<double, dim, 1>> point;
+  std::optional<Disc<dim>> disc;
 };
 
 /// A selection: its nodes (sorted), and the boundary facets it covers (for tractions).
