@@ -55,11 +55,13 @@ template <int dim>
 FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
     : Integrator<dim>(o.dt), m_model(model), m_full(o.filter == solvers::kFilterFull),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
-  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors)
-    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors or full");
+  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors && o.filter != solvers::kFilterTensor)
+    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full or tensor");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
-  if (m_full) {
+  if (o.filter == solvers::kFilterTensor) {
+    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+  } else if (m_full) {
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
@@ -89,7 +91,9 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_acc.col(a) = m_force.col(i) / net.mass[i];
   }
   // dv = dt W a.
-  if (m_full) {
+  if (m_tensor) {
+    m_tensor->apply(s.u, m_force, dt, m_dv);
+  } else if (m_full) {
     // W a = H^-1 M a = H^-1 F_node.
     for (Eigen::Index r = 0; r < nf; ++r)
       m_rhs.col(r) = m_force.col(free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])]);

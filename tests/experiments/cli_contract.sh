@@ -15,7 +15,11 @@ check() { # name, condition
 "$vtb" run --help >/dev/null; check "vtb run --help" '[ $? -eq 0 ]'
 "$vtb" mesh --help >/dev/null; check "vtb mesh --help" '[ $? -eq 0 ]'
 "$vtb" solvers > "$work/solvers.txt"; rc=$?
-check "vtb solvers lists the registry (7 entries, with their keys)" '[ $rc -eq 0 ] && [ $(grep -c "\[solver\] keys:" "$work/solvers.txt") -eq 7 ] && grep -q "^implicit-euler " "$work/solvers.txt"'
+# One entry per solver name of solver_names.hh (the k* constants that are not filters).
+entries=$(grep -c '^inline constexpr const char\* k[A-Za-z]* = ' "$src/core/include/vtb/core/solver_names.hh")
+filters=$(grep -c '^inline constexpr const char\* kFilter[A-Z][a-z]* = ' "$src/core/include/vtb/core/solver_names.hh")
+expected=$((entries - filters))
+check "vtb solvers lists the registry ($expected entries, with their keys)" '[ $rc -eq 0 ] && [ $(grep -c "\[solver\] keys:" "$work/solvers.txt") -eq $expected ] && grep -q "^implicit-euler " "$work/solvers.txt" && grep -q "^filtered-tensor " "$work/solvers.txt"'
 
 sed 's/young_modulus/youngs_modulus/' "$src/experiments/scenes/plate_step.toml" > "$work/typo.toml"
 "$vtb" run "$work/typo.toml" --out "$work/out_typo" 2> "$work/err"; rc=$?

@@ -27,6 +27,7 @@
 #include "vtb/core/integrator.hh"
 #include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
+#include "vtb/core/warped_filter.hh"
 
 #include <Eigen/SparseCore>
 
@@ -54,6 +55,7 @@ private:
 
   const Model<dim>& m_model;
   bool m_full;
+  std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H

@@ -8,6 +8,7 @@ inline constexpr const char* kExplicit = "explicit";
 inline constexpr const char* kFiltered = "filtered"; ///< the scene's [solver].filter
 inline constexpr const char* kFilteredFull = "filtered-full";
 inline constexpr const char* kFilteredNeighbors = "filtered-neighbors";
+inline constexpr const char* kFilteredTensor = "filtered-tensor";
 inline constexpr const char* kImplicitEuler = "implicit-euler";
 inline constexpr const char* kCvode = "cvode";
 inline constexpr const char* kFem = "fem";
@@ -15,5 +16,6 @@ inline constexpr const char* kFem = "fem";
 /// The filters of `filtered` ([solver].filter).
 inline constexpr const char* kFilterFull = "full";
 inline constexpr const char* kFilterNeighbors = "neighbors";
+inline constexpr const char* kFilterTensor = "tensor";
 
 } // namespace vtb::solvers

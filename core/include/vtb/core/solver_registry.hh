@@ -40,6 +40,8 @@ inline constexpr Entry kEntries[] = {
      "dt, momentum_correction, strain_limit", false, true, true, false},
     {kFilteredNeighbors, "the filtered scheme truncated to mesh neighbours (the paper's)", kFiltered, kFilterNeighbors,
      "dt, momentum_correction, strain_limit", false, true, true, false},
+    {kFilteredTensor, "the filtered scheme with the rest Jacobian's blocks and stiffness warping (no lag)", kFiltered,
+     kFilterTensor, "dt, momentum_correction, strain_limit", false, true, true, false},
     {kImplicitEuler,
      "linearised backward Euler with the spring Jacobian (sparse LDL^T, or warm-started block-Jacobi CG)",
      kImplicitEuler, "", "dt, strain_limit, linear_solver, cg_tolerance", true, true, true, true},
