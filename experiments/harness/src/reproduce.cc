@@ -290,6 +290,8 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
      << kStabilityCriterion
      << ").\n- `decomposition.csv`: the error decomposition.\n- `creep.csv`: the creep strip's tip against the "
         "Kelvin-Voigt law.\n- `scaling.csv`: step time, precompute and heap over a 2D and a 3D mesh ladder.\n"
+        "- `fidelity.csv`: the springs' own error against P1 FEM on the same mesh (both linear and static) per "
+        "case and calibration (docs/fidelity.md).\n"
         "- `haptics_*.csv`: a real-time servo session with a physics stall (periods, force trace, summary).\n"
         "- `meta.csv`: quick or not, the machine.\n\n"
      << "Reading: the paper's frame rates were one step per frame on a 450 MHz Pentium III. The truncated "
@@ -314,6 +316,7 @@ std::string run_reproduce(const ReproduceOptions& o) {
   write_stability(o);
   parts::write_creep(o.out, o.scenes_dir, o.progress);
   parts::write_scaling(o.out, o.quick, o.progress);
+  parts::write_fidelity(o.out, o.scenes_dir, o.progress);
   parts::write_haptics(o.out, o.scenes_dir, 1.5, o.progress);
   const std::string md = report_markdown(o, timing, duration);
   write_text(o.out / "report.md", md);

@@ -1,0 +1,127 @@
+// fidelity.csv: the spring network's own (calibration) error against P1 FEM on the same mesh,
+// in the linear regime: both static and linear, so the difference is the springs alone.
+#include "reproduce_parts.hh"
+
+#include "vtb/core/force_jacobian.hh"
+#include "vtb/core/model.hh"
+#include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/meshes/atomic_file.hh"
+
+#include <Eigen/SparseCholesky>
+
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+namespace vtb::harness::parts {
+namespace {
+
+/// The linear static displacement of the spring network under the loads at time t:
+/// K_ff u_f = f_f with K the stiffness (df/du at rest, stiffness signs) over the free nodes.
+template <int dim> Nodal<dim> linear_static(const Model<dim>& model, double t) {
+  const Nodal<dim> zero = Nodal<dim>::Zero(dim, model.num_nodes());
+  const Eigen::SparseMatrix<double> K = force_jacobians(model.net, zero, false).K;
+  const int nf = static_cast<int>(model.free_nodes.size());
+  std::vector<Eigen::Triplet<double>> kept;
+  for (int col = 0; col < K.outerSize(); ++col)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it) {
+      const int fi = model.free_index[static_cast<std::size_t>(it.row() / dim)];
+      const int fj = model.free_index[static_cast<std::size_t>(it.col() / dim)];
+      if (fi >= 0 && fj >= 0) kept.emplace_back(dim * fi + it.row() % dim, dim * fj + it.col() % dim, -it.value());
+    }
+  Eigen::SparseMatrix<double> Kff(dim * nf, dim * nf);
+  Kff.setFromTriplets(kept.begin(), kept.end());
+  Nodal<dim> f(dim, model.num_nodes());
+  model.external_forces(t, f);
+  Eigen::VectorXd rhs(dim * nf);
+  for (int i = 0; i < nf; ++i) rhs.segment<dim>(dim * i) = f.col(model.free_nodes[static_cast<std::size_t>(i)]);
+  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
+  const Eigen::VectorXd uf = ldlt.solve(rhs);
+  Nodal<dim> u = zero;
+  for (int i = 0; i < nf; ++i) u.col(model.free_nodes[static_cast<std::size_t>(i)]) = uf.segment<dim>(dim * i);
+  return u;
+}
+
+struct Case {
+  const char* name;
+  std::string scene; ///< TOML text; mesh paths absolute
+};
+
+std::string strip(const char* name, const char* force) {
+  return std::string("[scene]\nname = \"") + name +
+         "\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\ngenerate = { shape = \"rectangle\", size = [0.2, "
+         "0.02], divisions = [40, 4] }\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = 0.3333333333333333\n"
+         "density = 1000.0\nthickness = 0.001\n[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = " +
+         force + "\n";
+}
+
+std::string from_file(const std::filesystem::path& scenes_dir, const char* file) {
+  std::ifstream f(scenes_dir / file);
+  std::stringstream s;
+  s << f.rdbuf();
+  std::string text = s.str();
+  // The scene's mesh path is relative to the scene folder: make it absolute.
+  const std::string key = "file = \"";
+  const auto at = text.find(key);
+  if (at != std::string::npos) text.insert(at + key.size(), (scenes_dir.string() + "/"));
+  return text;
+}
+
+std::string slab(const std::filesystem::path& meshes_dir) {
+  return "[scene]\nname = \"slab-cantilever\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\nfile = \"" +
+         (meshes_dir / "slab_500.msh").string() +
+         "\"\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = 0.25\ndensity = 1000.0\n[[fix]]\ngroup = "
+         "\"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.0, 0.0, -0.001]\n";
+}
+
+/// One row per calibration: relative L2 error over all nodes, at the node of largest FEM
+/// displacement, and of the clamp reaction's norm (the FEM's, from its residual; the
+/// springs' statically equals the applied total).
+template <int dim>
+void rows(const char* name, const Scene& base, const Mesh<dim>& mesh, std::ostream& os, std::ostream* log) {
+  Scene fs = base;
+  fs.solver.static_solve = true;
+  fs.solver.degree = 1;
+  fs.solver.refinements = 0;
+  const Model<dim> fem_model = build_model<dim>(fs, mesh);
+  Trajectory<dim> fem;
+  fem::FemOptions fo = fem::options_from(fs.solver); // the harness's run_solver steps in time; here: static
+  fo.static_solve = true;
+  fem::simulate<dim>(fem_model, fs.material, fo, fem, true);
+  const Nodal<dim>& uf = fem.field.back();
+  Eigen::Index peak = 0;
+  uf.colwise().norm().maxCoeff(&peak);
+  for (const char* springs : {"lloyd", "van-gelder"}) {
+    Scene s = base;
+    s.solver.springs = springs;
+    const Model<dim> model = build_model<dim>(s, mesh);
+    const Nodal<dim> us = linear_static(model, model.duration);
+    const double all = (us - uf).norm() / uf.norm();
+    const double at_peak = (us.col(peak) - uf.col(peak)).norm() / uf.col(peak).norm();
+    const double stiffness = uf.norm() / us.norm(); // > 1: springs too stiff
+    if (log) *log << "[fidelity] " << name << " " << springs << ": " << all << "\n";
+    os << name << ',' << dim << ',' << mesh.num_nodes() << ',' << springs << ',' << std::setprecision(5) << all << ','
+       << at_peak << ',' << stiffness << '\n';
+  }
+}
+
+} // namespace
+
+void write_fidelity(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
+  const std::filesystem::path meshes_dir = scenes_dir / ".." / ".." / "meshes" / "data";
+  std::ostringstream os;
+  os << "case,dim,nodes,springs,displacement_error,peak_node_error,fem_over_springs_norm\n";
+  const std::vector<Case> cases = {{"strip-tension", strip("strip-tension", "[1.0e-4, 0.0]")},
+                                   {"strip-bending", strip("strip-bending", "[0.0, 1.0e-6]")},
+                                   {"plate517-one-force", from_file(scenes_dir, "plate517_step.toml")},
+                                   {"plate517-four-forces", from_file(scenes_dir, "plate517_four_forces.toml")},
+                                   {"slab-cantilever", slab(meshes_dir)}};
+  for (const auto& c : cases) {
+    const Scene scene = parse_scene(c.scene, std::string(c.name) + ".toml", scenes_dir);
+    std::visit([&](const auto& mesh) { rows(c.name, scene, mesh, os, log); }, load_mesh(scene));
+  }
+  write_files_atomically(out, {{"fidelity.csv", os.str()}});
+}
+
+} // namespace vtb::harness::parts
