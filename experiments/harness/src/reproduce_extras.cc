@@ -1,12 +1,9 @@
 #include "reproduce_parts.hh"
 #include "vtb/core/solver_names.hh"
 
-#include "vtb/core/force_jacobian.hh"
 #include "vtb/core/output.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/harness/solvers.hh"
-
-#include <Eigen/SparseCholesky>
 
 #include <chrono>
 #include <cmath>
@@ -29,31 +26,6 @@ std::string cpu_model() {
       return colon == std::string::npos ? line : line.substr(colon + 2);
     }
   return "unknown";
-}
-
-/// The linear static displacement of the spring network under the loads at time t:
-/// K_ff u_f = -f_f with K = df/du at rest over the free nodes.
-template <int dim> Nodal<dim> static_displacement(const Model<dim>& model, double t) {
-  const Nodal<dim> zero = Nodal<dim>::Zero(dim, model.num_nodes());
-  const Eigen::SparseMatrix<double> K = force_jacobians(model.net, zero, false).K;
-  const int nf = static_cast<int>(model.free_nodes.size());
-  std::vector<Eigen::Triplet<double>> kept;
-  for (int col = 0; col < K.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it) {
-      const int fi = model.free_index[it.row() / dim], fj = model.free_index[it.col() / dim];
-      if (fi >= 0 && fj >= 0) kept.emplace_back(dim * fi + it.row() % dim, dim * fj + it.col() % dim, -it.value());
-    }
-  Eigen::SparseMatrix<double> Kff(dim * nf, dim * nf);
-  Kff.setFromTriplets(kept.begin(), kept.end());
-  Nodal<dim> f(dim, model.num_nodes());
-  model.external_forces(t, f);
-  Eigen::VectorXd rhs(dim * nf);
-  for (int i = 0; i < nf; ++i) rhs.segment<dim>(dim * i) = f.col(model.free_nodes[i]);
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(Kff);
-  const Eigen::VectorXd uf = ldlt.solve(rhs);
-  Nodal<dim> u = zero;
-  for (int i = 0; i < nf; ++i) u.col(model.free_nodes[i]) = uf.segment<dim>(dim * i);
-  return u;
 }
 
 /// Heap bytes in use (glibc), to measure what an integrator holds.
@@ -121,7 +93,7 @@ void write_creep(const std::filesystem::path& out, const std::filesystem::path& 
   const Scene scene = read_scene(scenes_dir / "creep_strip.toml");
   const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
   const double tau = scene.material.retardation_time;
-  const double u_static = static_displacement(model, scene.duration).col(model.probes.at(0).second)(0);
+  const double u_static = linear_static(model, scene.duration).col(model.probes.at(0).second)(0);
   const std::vector<std::string> solvers = {solvers::kFilteredFull, solvers::kImplicitEuler, solvers::kCvode};
   std::vector<Trajectory<2>> runs(solvers.size());
   for (std::size_t k = 0; k < solvers.size(); ++k) run_solver(scene, model, solvers[k], 0, runs[k]);

@@ -15,7 +15,6 @@
 #include <sstream>
 
 namespace vtb::harness::parts {
-namespace {
 
 /// The linear static displacement of the spring network under the loads at time t:
 /// K_ff u_f = f_f with K the stiffness (df/du at rest, stiffness signs) over the free nodes.
@@ -42,6 +41,11 @@ template <int dim> Nodal<dim> linear_static(const Model<dim>& model, double t) {
   for (int i = 0; i < nf; ++i) u.col(model.free_nodes[static_cast<std::size_t>(i)]) = uf.segment<dim>(dim * i);
   return u;
 }
+
+template Nodal<2> linear_static<2>(const Model<2>&, double);
+template Nodal<3> linear_static<3>(const Model<3>&, double);
+
+namespace {
 
 struct Case {
   const char* name;

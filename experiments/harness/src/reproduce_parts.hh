@@ -3,10 +3,16 @@
 /// The reproduction's parts beyond the paper's own table (internal to the harness): each
 /// writes one CSV into the output folder, which the paper (scripts/build_paper.sh) plots.
 
+#include "vtb/core/model.hh"
+
 #include <filesystem>
 #include <iosfwd>
 
 namespace vtb::harness::parts {
+
+/// The linear static displacement of the spring network under the loads at time t:
+/// K_ff u_f = f_f, K the stiffness at rest over the free nodes (the small-load limit).
+template <int dim> Nodal<dim> linear_static(const Model<dim>& model, double t);
 
 /// meta.csv: key,value rows: quick, duration_s, cores, cpu (what the title page states).
 void write_meta(const std::filesystem::path& out, bool quick, double duration);
