@@ -258,6 +258,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   rep.free_nodes = static_cast<int>(model.free_nodes.size());
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
+  rep.calibration_seconds = model.net.calibration_seconds;
   rep.effective_poisson_ratio = dim == 2 ? 1.0 / 3.0 : 0.25;
   if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("[solver].rtol and atol must be > 0");
 

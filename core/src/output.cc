@@ -43,6 +43,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   if (r.solver != solvers::kFem) {
     j["courant_dt_estimate"] = r.courant_dt;
     j["calibration"] = r.calibration;
+    j["calibration_seconds"] = r.calibration_seconds;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }
   // Counts (cells, dofs, steps, iterations, degree...) print as integers, not 600.0; times,

@@ -77,6 +77,7 @@ template <int dim> RunReport report_header(const Model<dim>& model, const Integr
   rep.dt = o.dt;
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
+  rep.calibration_seconds = model.net.calibration_seconds;
   rep.effective_poisson_ratio = spring_poisson_ratio(dim);
   if (o.kind == solvers::kFiltered) {
     rep.filter = o.filter;

@@ -1,6 +1,9 @@
 #include "vtb/core/spring_network.hh"
 
 #include "vtb/core/calibration.hh"
+#include "vtb/core/fitted_springs.hh"
+
+#include <chrono>
 
 #include <algorithm>
 #include <numeric>
@@ -14,12 +17,16 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
   net.mass = lumped_masses(mesh, mat.density, mat.thickness);
   net.edge = unique_edges(mesh);
   net.calibration = std::string(calibration);
+  const auto start = std::chrono::steady_clock::now();
   if (calibration == "lloyd")
     net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
+  else if (calibration == "fitted")
+    net.stiffness = fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else
-    throw InputError("[solver].springs = \"" + std::string(calibration) + "\": must be lloyd or van-gelder");
+    throw InputError("[solver].springs = \"" + std::string(calibration) + "\": must be lloyd, van-gelder or fitted");
+  net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;
   const int ns = net.num_springs();

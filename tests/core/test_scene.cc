@@ -178,7 +178,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nfilter = \"partial\"",
                 "[solver].filter: = \"partial\": must be one of neighbors full"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nsprings = \"hooke\"",
-                "[solver].springs: = \"hooke\": must be one of lloyd van-gelder"},
+                "[solver].springs: = \"hooke\": must be one of lloyd van-gelder fitted"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nstrain_limit = -0.1",
                 "[solver].strain_limit: = -0.1: must be >= 0"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nmomentum_correction = 1",

@@ -46,6 +46,7 @@ struct RunReport {
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
   std::string calibration;
+  double calibration_seconds = 0; ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
   double effective_poisson_ratio = 0;
   std::string filter;
   bool momentum_correction = false;

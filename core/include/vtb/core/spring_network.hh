@@ -16,7 +16,8 @@ template <int dim> struct SpringNetwork {
   Eigen::VectorXd stiffness;            ///< k per spring, N/m
   Eigen::VectorXd damping;              ///< c = tau k per spring, N s/m
   double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
-  std::string calibration;              ///< "lloyd" | "van-gelder"
+  std::string calibration;              ///< "lloyd" | "van-gelder" | "fitted"
+  double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
 
   /// Adjacency in CSR form: the springs at node i are adj_spring[adj_ptr[i] .. adj_ptr[i+1]),
   /// leading to adj_node[...] (sorted by neighbour).

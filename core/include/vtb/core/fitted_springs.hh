@@ -1,0 +1,44 @@
+#pragma once
+/// \file
+/// `springs = "fitted"`: spring constants identified from the P1 FEM on the same mesh, for the
+/// whole network at once (docs/fidelity.md). Lloyd fits each element alone, which is exact only
+/// on equilateral triangles; here every spring is chosen so that the network's static answer
+/// to a set of training loads matches the FEM's. The training loads are f_m = K_fem phi_m with
+/// phi_m the lowest non-rigid modes of the free mesh (K_fem phi = lambda M phi): the FEM's exact
+/// answer to f_m is phi_m itself, and no scene's own load is used. With x = log(k / k_lloyd),
+///   min_x  1/2 sum_m || P (K_s(x)^+ f_m) - phi_m ||^2  +  mu/2 ||x||^2 ,  k >= floor k_lloyd,
+/// P removing rigid motions, K_s the network's stiffness at rest; solved by Levenberg-Marquardt
+/// with a matrix-free CG on the normal equations (each product: one batched solve with the
+/// factor of K_s), so that memory stays linear in the mesh.
+
+#include "vtb/meshes/mesh.hh"
+
+#include <Eigen/Core>
+
+#include <string>
+
+namespace vtb {
+
+struct FitOptions {
+  int modes = 0;          ///< training modes; 0: 16 in 2D, 24 in 3D
+  double pull = 1e-2;     ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
+  double floor = 0.01;    ///< k >= floor * k_prior (the prior: Lloyd, at least 1 % of van Gelder, or van Gelder)
+  int max_iterations = 40; ///< Levenberg-Marquardt iterations
+  double tolerance = 5e-3; ///< stop when an accepted step lowers the objective by less than this (relative)
+  Eigen::VectorXd start;   ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior
+};
+
+struct FitReport {
+  int modes = 0, iterations = 0, cg_iterations = 0;
+  double lloyd_residual = 0;  ///< sqrt(sum_m ||P u_m - phi_m||^2 / modes) with Lloyd's springs
+  std::string prior;          ///< the start and the pull's centre: "lloyd" or "van-gelder", whichever fits the modes better
+  double fitted_residual = 0; ///< the same with the fitted springs
+};
+
+/// The fitted spring constants, per edge of unique_edges(mesh) (plane stress with thickness
+/// in 2D). Deterministic: the same mesh and material give the same constants bit for bit.
+template <int dim>
+Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness,
+                                 const FitOptions& options = {}, FitReport* report = nullptr);
+
+} // namespace vtb

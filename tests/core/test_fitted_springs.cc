@@ -1,0 +1,174 @@
+// springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
+// static cases that the fit never saw (its training loads are the free mesh's modes).
+#include "vtb/core/calibration.hh"
+#include "vtb/core/fitted_springs.hh"
+#include "vtb/core/force_jacobian.hh"
+#include "vtb/core/spring_network.hh"
+#include "vtb/meshes/generate.hh"
+#include "vtb/meshes/msh_io.hh"
+
+#include <Eigen/SparseCholesky>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+
+namespace vtb {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+template <int dim> SpMat fem_matrix(const Mesh<dim>& mesh, double E, double nu, double t) {
+  std::vector<Eigen::Triplet<double>> trip;
+  for (const auto& c : mesh.cells) {
+    const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, t);
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
+                              Ke(a * dim + i, b * dim + j));
+  }
+  SpMat K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
+  K.setFromTriplets(trip.begin(), trip.end());
+  return K;
+}
+
+template <int dim> SpMat spring_matrix(const Mesh<dim>& mesh, const Eigen::VectorXd& k) {
+  MaterialDesc mat;
+  SpringNetwork<dim> net = build_network(mesh, mat, "van-gelder");
+  net.stiffness = k;
+  net.damping.setZero();
+  const Nodal<dim> zero = Nodal<dim>::Zero(dim, mesh.num_nodes());
+  return -force_jacobians<dim>(net, zero, false).K;
+}
+
+/// Linear static answer of K u = f with the nodes where `fixed` is true clamped.
+Eigen::VectorXd clamped_solve(const SpMat& K, const Eigen::VectorXd& f, const std::vector<bool>& fixed, int dim) {
+  std::vector<int> index(fixed.size(), -1);
+  int nf = 0;
+  for (std::size_t v = 0; v < fixed.size(); ++v)
+    if (!fixed[v]) index[v] = nf++;
+  std::vector<Eigen::Triplet<double>> kept;
+  for (int c = 0; c < K.outerSize(); ++c)
+    for (SpMat::InnerIterator it(K, c); it; ++it) {
+      const int r = index[static_cast<std::size_t>(it.row() / dim)], q = index[static_cast<std::size_t>(it.col() / dim)];
+      if (r >= 0 && q >= 0) kept.emplace_back(dim * r + it.row() % dim, dim * q + it.col() % dim, it.value());
+    }
+  SpMat Kff(dim * nf, dim * nf);
+  Kff.setFromTriplets(kept.begin(), kept.end());
+  Eigen::VectorXd rhs(dim * nf), u = Eigen::VectorXd::Zero(f.size());
+  for (std::size_t v = 0; v < fixed.size(); ++v)
+    if (index[v] >= 0) rhs.segment(dim * index[v], dim) = f.segment(dim * static_cast<Eigen::Index>(v), dim);
+  const Eigen::VectorXd uf = Eigen::SimplicialLDLT<SpMat>(Kff).solve(rhs);
+  for (std::size_t v = 0; v < fixed.size(); ++v)
+    if (index[v] >= 0) u.segment(dim * static_cast<Eigen::Index>(v), dim) = uf.segment(dim * index[v], dim);
+  return u;
+}
+
+/// A cantilever clamped where coordinate `axis` is least, with a load spread over the nodes
+/// where it is largest: the relative L2 error of the springs' linear static answer against the
+/// P1 FEM's, over all nodes.
+template <int dim>
+double cantilever_error(const Mesh<dim>& mesh, const Eigen::VectorXd& k, double E, double nu, double t,
+                        const Vec<dim>& force, int axis = 0) {
+  const double low = mesh.points.row(axis).minCoeff(), high = mesh.points.row(axis).maxCoeff();
+  std::vector<bool> fixed(static_cast<std::size_t>(mesh.num_nodes()));
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(dim * mesh.num_nodes());
+  for (int v = 0; v < mesh.num_nodes(); ++v) {
+    fixed[static_cast<std::size_t>(v)] = mesh.points(axis, v) < low + 1e-9;
+    if (mesh.points(axis, v) > high - 1e-9) f.segment<dim>(dim * v) = force;
+  }
+  const Eigen::VectorXd ufem = clamped_solve(fem_matrix(mesh, E, nu, t), f, fixed, dim);
+  const Eigen::VectorXd us = clamped_solve(spring_matrix(mesh, k), f, fixed, dim);
+  return (us - ufem).norm() / ufem.norm();
+}
+
+/// A patch of equilateral triangles (a triangular lattice cut to a parallelogram).
+Mesh2 equilateral_patch(int nx, int ny) {
+  Mesh2 m;
+  m.points.resize(2, (nx + 1) * (ny + 1));
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) m.points.col(j * (nx + 1) + i) << i + 0.5 * j, j * std::sqrt(3.0) / 2;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      const int a = j * (nx + 1) + i, b = a + 1, c = a + nx + 1, d = c + 1;
+      m.cells.push_back({a, b, c});
+      m.cells.push_back({b, d, c});
+    }
+  return m;
+}
+
+TEST(FittedSprings, FindTheExactNetworkWhereOneExists) {
+  // Equilateral triangles at nu = 1/3: the spring element equals the P1 element, so a network
+  // with K_springs = K_fem exists (Lloyd's). Started from springs scaled by random factors in
+  // [0.5, 2] and with no pull toward Lloyd, the fit must find an exact network: the residual
+  // on its training modes and a held-out cantilever agree with the FEM to the LM/CG tolerance.
+  const Mesh2 m = equilateral_patch(6, 4);
+  const double E = 1.0e4, nu = 1.0 / 3.0, t = 0.01;
+  FitOptions o;
+  o.pull = 0;
+  o.tolerance = 1e-12;
+  o.max_iterations = 60;
+  const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, t);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> factor(std::log(0.5), std::log(2.0));
+  o.start = lloyd;
+  for (Eigen::Index s = 0; s < lloyd.size(); ++s) o.start[s] *= std::exp(factor(rng));
+  EXPECT_GT(cantilever_error<2>(m, o.start, E, nu, t, {1, 0}, 1), 0.05) << "the start is far from the FEM";
+  FitReport rep;
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, t, o, &rep);
+  EXPECT_LT(rep.lloyd_residual, 1e-10);
+  EXPECT_LT(rep.fitted_residual, 1e-6) << rep.iterations << " " << rep.cg_iterations;
+  EXPECT_LT(cantilever_error<2>(m, k, E, nu, t, {1, 0}, 1), 1e-5);
+  EXPECT_LT(cantilever_error<2>(m, k, E, nu, t, {0, 1}, 1), 1e-5);
+}
+
+TEST(FittedSprings, BringTheUnionJackStripWithinFivePercentOfTheFem) {
+  // On the union-jack lattice no network is exact and Lloyd is 1.3x too stiff (lattice theory,
+  // E_eff / E = 1.305). The fit never sees these loads (its training loads are the free
+  // strip's modes); the goal for a fitted network at nu = 1/3 is 5 % over all nodes.
+  const Mesh2 m = generate_rectangle({0.2, 0.02}, {40, 4});
+  const double E = 5.0e4, nu = 1.0 / 3.0, t = 0.001;
+  FitReport rep;
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, t, {}, &rep);
+  const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, t);
+  EXPECT_LT(rep.fitted_residual, 0.5 * rep.lloyd_residual);
+  for (const Vec<2>& force : {Vec<2>(1e-4, 0), Vec<2>(0, 1e-6)}) {
+    const double fitted = cantilever_error<2>(m, k, E, nu, t, force);
+    const double before = cantilever_error<2>(m, lloyd, E, nu, t, force);
+    EXPECT_LT(fitted, 0.05) << "load " << force.transpose() << ", lloyd " << before;
+    EXPECT_LT(fitted, 0.5 * before);
+  }
+  EXPECT_GE(k.minCoeff(), 0.0);
+}
+
+TEST(FittedSprings, BringAnUnstructured3DSlabWithinFivePercentOfTheFem) {
+  // 3D at nu = 1/4 (the Cauchy value of a central-force lattice) on the canonical CGAL Mesh_3
+  // slab (458 nodes): Lloyd's per-element fit is off by 18 % or more on the clamped slab; the
+  // fitted network, which never saw a clamp or these loads, is held to the 5 % goal.
+  const auto mesh = read_msh(std::filesystem::path(VTB_SOURCE_DIR) / "meshes/data/slab_500.msh");
+  const Mesh3& m = std::get<Mesh3>(mesh);
+  const double E = 5.0e4, nu = 0.25;
+  FitReport rep;
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, 1.0, {}, &rep);
+  const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, 1.0);
+  EXPECT_LT(rep.fitted_residual, 0.5 * rep.lloyd_residual);
+  for (const Vec<3>& force : {Vec<3>(1e-3, 0, 0), Vec<3>(0, 0, -1e-5), Vec<3>(0, 1e-5, 0)}) {
+    const double fitted = cantilever_error<3>(m, k, E, nu, 1.0, force);
+    const double before = cantilever_error<3>(m, lloyd, E, nu, 1.0, force);
+    EXPECT_LT(fitted, 0.05) << "load " << force.transpose() << ", lloyd " << before;
+    EXPECT_LT(fitted, 0.5 * before) << "load " << force.transpose();
+  }
+}
+
+TEST(FittedSprings, AreDeterministic) {
+  const Mesh2 m = generate_rectangle({0.1, 0.02}, {10, 2});
+  const Eigen::VectorXd a = fitted_stiffness(m, 1.0e4, 0.3, 0.01);
+  const Eigen::VectorXd b = fitted_stiffness(m, 1.0e4, 0.3, 0.01);
+  EXPECT_EQ(a, b);
+}
+
+} // namespace
+} // namespace vtb
