@@ -133,7 +133,8 @@ private:
 /// iteration with Rayleigh-Ritz: X <- Pi_M K^+ M X, Pi_M the M-orthogonal projector off the
 /// rigid modes (K^+ through the pinned solve: the pins add only rigid motions, which Pi_M
 /// removes). Columns M-orthonormal, ascending.
-MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass, const MatrixXd& R, int count) {
+MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass, const MatrixXd& R, int count,
+                      VectorXd& eigenvalues) {
   const Eigen::Index N = K.rows();
   const int block = count + std::max(8, count / 2);
   const MatrixXd RtMR = R.transpose() * mass.asDiagonal() * R;
@@ -159,6 +160,7 @@ MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass
     previous = lambda;
     if (converged) break;
   }
+  eigenvalues = previous;
   return X.leftCols(count);
 }
 
@@ -274,7 +276,8 @@ template <int dim> VectorXd normal_cg(const Fit<dim>& fit, double shift, const V
 }
 
 
-template <int dim> Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes) {
+template <int dim>
+Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, double weighting) {
   const int n = mesh.num_nodes(), N = dim * n;
   Training tr;
   const Triplets fem = fem_triplets(mesh, E, nu, thickness);
@@ -288,9 +291,11 @@ template <int dim> Training training_set(const Mesh<dim>& mesh, double E, double
   for (int v = 0; v < n; ++v) mass.template segment<dim>(dim * v).setConstant(m_nodes[v]);
   const MatrixXd R = rigid_modes(mesh);
   tr.Q = Eigen::HouseholderQR<MatrixXd>(R).householderQ() * MatrixXd::Identity(N, R.cols());
-  tr.T = lowest_modes(K, fem_solver, mass, R, modes);
+  VectorXd lambda;
+  tr.T = lowest_modes(K, fem_solver, mass, R, modes, lambda);
   tr.T -= tr.Q * (tr.Q.transpose() * tr.T);
   tr.T.colwise().normalize();
+  for (int m = 0; m < modes; ++m) tr.T.col(m) *= std::pow(lambda[0] / lambda[m], weighting);
   tr.F = K * tr.T;
   return tr;
 }
@@ -344,7 +349,7 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
     dir.col(s) = (mesh.points.col(edges[static_cast<std::size_t>(s)][1]) -
                   mesh.points.col(edges[static_cast<std::size_t>(s)][0]))
                      .normalized();
-  const Training tr = training_set(mesh, E, nu, thickness, modes);
+  const Training tr = training_set(mesh, E, nu, thickness, modes, options.weighting);
   PinnedSolver solver(N, tr.pins);
   // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
   // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
