@@ -92,6 +92,25 @@ TEST(PaperData, NumbersComeFromTheFixture) {
   EXPECT_GT(std::count(files.at("pareto.dat").begin(), files.at("pareto.dat").end(), '\n'), 1);
 }
 
+TEST(PaperData, FidelityTableComesFromTheFixture) {
+  // The worst fitted and Lloyd errors are the maxima of the CSV's column (in percent), and every
+  // case gets a row.
+  const auto files = data_files();
+  const std::string& numbers = files.at("numbers.tex");
+  const auto t = harness::CsvTable::read(kFixture / "fidelity.csv");
+  double fitted = 0, lloyd = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const double e = 100 * t.number(r, "displacement_error");
+    if (t.text(r, "springs") == "fitted") fitted = std::max(fitted, e);
+    if (t.text(r, "springs") == "lloyd") lloyd = std::max(lloyd, e);
+    EXPECT_NE(files.at("fidelity_rows.tex").find(t.text(r, "case") + " & "), std::string::npos);
+  }
+  EXPECT_NE(numbers.find("\\newcommand\\vtbFittedWorst{" + harness::tex_number(fitted, 2) + "}"), std::string::npos);
+  EXPECT_NE(numbers.find("\\newcommand\\vtbLloydWorst{" + harness::tex_number(lloyd, 2) + "}"), std::string::npos);
+  EXPECT_EQ(std::count(files.at("fidelity_rows.tex").begin(), files.at("fidelity_rows.tex").end(), '\n'),
+            static_cast<long>(t.rows() / 3));
+}
+
 TEST(PaperData, LogLogSlopeRecoversAPowerLaw) {
   // The fitted order (convergence) and exponent (scaling): y = 3 x^1.5 exactly, plus points
   // that a log axis cannot hold (x or y <= 0), which the fit skips.

@@ -108,6 +108,32 @@ void timing(const std::filesystem::path& dir, Out& out) {
             t.text(timing_row(t, 517, 1, solvers::kFilteredNeighbors), "stable") == "true" ? "stable" : "unstable");
 }
 
+void fidelity(const std::filesystem::path& dir, Out& out) {
+  const CsvTable t = CsvTable::read(dir / "fidelity.csv");
+  // One row per case: the displacement error (percent) of each calibration, in the CSV's order.
+  std::map<std::string, std::map<std::string, double>> error;
+  std::map<std::string, double> nodes;
+  std::vector<std::string> cases;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    const std::string& c = t.text(r, "case");
+    if (!nodes.count(c)) cases.push_back(c);
+    nodes[c] = t.number(r, "nodes");
+    error[c][t.text(r, "springs")] = 100 * t.number(r, "displacement_error");
+  }
+  std::ostringstream rows;
+  double lloyd_worst = 0, fitted_worst = 0;
+  for (const auto& c : cases) {
+    auto& e = error[c];
+    rows << tex_escape(c) << " & " << tex_number(nodes[c]) << " & " << tex_number(e["lloyd"], 2) << " & "
+         << tex_number(e["van-gelder"], 2) << " & " << tex_number(e["fitted"], 2) << " \\\\\n";
+    lloyd_worst = std::max(lloyd_worst, e["lloyd"]);
+    fitted_worst = std::max(fitted_worst, e["fitted"]);
+  }
+  out.files.emplace_back("fidelity_rows.tex", rows.str());
+  out.number("vtbLloydWorst", lloyd_worst, 2);
+  out.number("vtbFittedWorst", fitted_worst, 2);
+}
+
 void fig3(const std::filesystem::path& dir, Out& out) {
   // Three times per model, from the file names the reproduction writes (SOLVER_tT.csv).
   std::map<std::string, std::vector<std::pair<double, std::string>>> snaps;
@@ -176,6 +202,7 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
                                 : "Full reproduction: " + tex_escape(m["duration_s"]) + "~s of simulated time.");
   out.macro("vtbMachine", tex_escape(m["cpu"]) + ", " + tex_escape(m["cores"]) + " cores");
   paper::timing(dir, out);
+  paper::fidelity(dir, out);
   paper::fig3(dir, out);
   paper::accuracy(dir, out);
   paper::stability(dir, out);
