@@ -20,7 +20,8 @@ Action add_run(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("run", "Run one simulation of a scene and write probes.csv, reactions.csv, summary.json");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
-  cmd->add_option("--solver", o->solver, "Override [solver].kind: " + solvers::list(solvers::is_scene_kind));
+  cmd->add_option("--solver", o->solver,
+                  "Override [solver].kind (and filter): " + solvers::list() + " (vtb solvers describes each)");
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
