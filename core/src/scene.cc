@@ -189,7 +189,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
   if (const toml::table* t = top.table("solver")) {
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
-                         "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static"});
+                         "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static", "kinematics"});
     std::vector<std::string_view> kinds;
     for (const auto& e : solvers::kEntries)
       if (e.scene_kind) kinds.emplace_back(e.name);
@@ -209,6 +209,9 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
     s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});
     s.solver.static_solve = r.boolean("static", false);
+    s.solver.kinematics = r.string("kinematics", "linear", {"linear", "nonlinear"});
+    // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
+    if (s.solver.kinematics == "nonlinear" && !r.node("scheme")) s.solver.scheme = "backward-euler";
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }
 }

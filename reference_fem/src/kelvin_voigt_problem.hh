@@ -32,6 +32,7 @@
 
 #include "backends.hh"
 #include "grid.hh"
+#include "nonlinear.hh"
 #include "time_loop.hh"
 #include "time_scheme.hh"
 
@@ -138,10 +139,11 @@ private:
     dealii::DoFTools::extract_locally_relevant_dofs(m_dofs, m_relevant);
     dealii::DynamicSparsityPattern dsp(m_relevant);
     dealii::DoFTools::make_sparsity_pattern(m_dofs, dsp, dealii::AffineConstraints<double>(), true);
-    m_backend.reinit(dsp, m_owned, m_relevant, {&m_K, &m_M, &m_C, &m_A, &m_A0, &m_M0});
+    m_backend.reinit(dsp, m_owned, m_relevant, {&m_K, &m_M, &m_C, &m_A, &m_A0, &m_M0, &m_T});
     for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta, &m_da, &m_dv})
       m_backend.reinit(*v, m_owned);
     m_backend.reinit_ghosted(m_ghosted, m_owned, m_relevant);
+    m_backend.reinit_ghosted(m_ghosted_v, m_owned, m_relevant);
 
     const auto n = m_dofs.n_dofs();
     m_point.assign(n, dealii::Point<dim>());
@@ -356,6 +358,7 @@ private:
 
   /// One step to t_new: u+ from A u+ = b with the prescribed values lifted, then v+ and a+.
   void step(double t_new) {
+    if (m_opt.nonlinear) return step_nonlinear(t_new);
     load_vector(m_scheme.load_time(t_new), m_rhs);
     m_scheme.add_history(m_M, m_C, m_K, m_u, m_v, m_a, m_da, m_dv, m_tmp, m_rhs);
     m_ubar = m_u;
@@ -387,6 +390,100 @@ private:
     m_u = m_ubar;
   }
 
+  /// The nonlinear solid's internal force f_int(u, v) into f and, with `tangent`, its tangent
+  /// plus mass_weight M into m_T (nonlinear.hh).
+  void nonlinear_force(const Vector& u, const Vector& v, Vector& f, double rate, double mass_weight, bool tangent) {
+    m_ghosted = u;
+    m_ghosted_v = v;
+    f = 0;
+    if (tangent) m_T = 0;
+    assemble_nonlinear<dim>(m_mapping, m_fe, m_dofs, m_mat, m_opt.degree, m_ghosted, m_ghosted_v, m_constraints,
+                            NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate, mass_weight});
+  }
+
+  /// Newton on the residual of the step, from m_ubar (prescribed values in place):
+  ///   backward Euler: M (v+ - v) / dt + gamma M v+ + f_int(u+, v+) - f = 0, v+ = (u+ - u) / dt;
+  ///   static: f_int(u+, 0) - load_scale f = 0.
+  /// Converged when the free dofs' residual is 1e-9 of its first value (or of the load), or the
+  /// update 1e-10 of the displacement; false when neither within 25 iterations, or non-finite.
+  bool newton(double load_scale) {
+    const bool dynamic = !m_opt.static_solve;
+    const double dt = m_opt.dt, rate = dynamic ? 1 / dt : 0.0;
+    const double mass_weight = dynamic ? 1 / (dt * dt) + m_mat.mass_damping / dt : 0.0;
+    double first = -1;
+    for (int it = 0; it < 25; ++it) {
+      m_dv = m_ubar;
+      m_dv -= m_u;
+      m_dv *= rate;
+      nonlinear_force(m_ubar, m_dv, m_rhs, rate, mass_weight, true);
+      m_rhs.add(-load_scale, m_f);
+      if (dynamic) {
+        m_tmp = m_dv;
+        m_tmp -= m_v;
+        m_tmp *= 1 / dt;
+        m_tmp.add(m_mat.mass_damping, m_dv);
+        m_M.vmult_add(m_rhs, m_tmp);
+      }
+      zero_prescribed(m_rhs);
+      const double r = m_rhs.l2_norm();
+      if (!std::isfinite(r)) return false;
+      if (first < 0) first = std::max(r, load_scale * m_f.l2_norm());
+      if (r <= 1e-9 * first) return true;
+      m_newton.factor(m_T);
+      m_newton.solve(m_delta, m_rhs);
+      m_ubar -= m_delta;
+      // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin
+      // cantilever, cond ~ 1e9): an update of 1e-10 of the displacement has converged too.
+      if (m_delta.l2_norm() <= 1e-10 * m_ubar.l2_norm()) return true;
+    }
+    return false;
+  }
+
+  /// The nonlinear step: backward Euler with Newton, or the static solve by load continuation
+  /// (the loads and prescribed values scaled from 0 to 1 in increments that grow after a
+  /// converged solve and halve after a failed one).
+  void step_nonlinear(double t_new) {
+    load_vector(t_new, m_f);
+    m_ubar = m_u;
+    for (const auto d : m_owned)
+      if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
+    m_ubar.compress(dealii::VectorOperation::insert);
+    if (m_opt.static_solve) {
+      const Vector target = m_ubar;
+      Vector accepted = m_u;
+      double s = 0, ds = 0.125;
+      while (s < 1) {
+        const double s1 = std::min(1.0, s + ds);
+        m_ubar = accepted;
+        for (const auto d : m_owned)
+          if (m_support_of[d] >= 0) m_ubar[d] = s1 * target[d];
+        m_ubar.compress(dealii::VectorOperation::insert);
+        if (newton(s1)) {
+          s = s1;
+          accepted = m_ubar;
+          ds = std::min(0.5, 1.5 * ds);
+        } else if ((ds /= 2) < 1e-4) {
+          throw std::runtime_error("fem (nonlinear, static): Newton did not converge at load factor " +
+                                   std::to_string(s1));
+        }
+      }
+      m_ubar = accepted;
+      m_u = m_ubar;
+      return;
+    }
+    if (!newton(1.0))
+      throw std::runtime_error("fem (nonlinear): Newton did not converge in the step to t = " + std::to_string(t_new));
+    for (const auto d : m_owned) {
+      double v = m_v[d], a = m_a[d];
+      m_scheme.update(m_ubar[d], m_u[d], 0.0, 0.0, v, a);
+      m_v[d] = v;
+      m_a[d] = a;
+    }
+    m_a.compress(dealii::VectorOperation::insert);
+    m_v.compress(dealii::VectorOperation::insert);
+    m_u = m_ubar;
+  }
+
   /// Probes, reactions (from the residual R = M a + C v + K u - f at the constrained dofs: the
   /// force each support exerts on the body) and the nodal field, summed over the ranks (each
   /// owns its dofs); the largest principal strain at the cell centres, max over the ranks.
@@ -401,8 +498,17 @@ private:
       pu.push_back(Eigen::Map<const Vec<dim>>(field.data() + static_cast<std::size_t>(node) * dim));
     out.probe_u.push_back(pu);
     load_vector(t, m_f);
-    m_K.vmult(m_rhs, m_u);
-    if (!m_opt.static_solve) {
+    if (m_opt.nonlinear) {
+      nonlinear_force(m_u, m_v, m_rhs, 0.0, 0.0, false);
+      if (!m_opt.static_solve) {
+        m_tmp = m_a;
+        m_tmp.add(m_mat.mass_damping, m_v);
+        m_M.vmult_add(m_rhs, m_tmp);
+      }
+    } else {
+      m_K.vmult(m_rhs, m_u);
+    }
+    if (!m_opt.nonlinear && !m_opt.static_solve) {
       m_C.vmult(m_tmp, m_v);
       m_rhs += m_tmp;
       m_M.vmult(m_tmp, m_a);
@@ -475,10 +581,10 @@ private:
   std::vector<int> m_support_of;               ///< per dof: support index or -1
   std::vector<dof_t> m_node;                   ///< [node * dim + component], kUnseen if not seen here
   dealii::AffineConstraints<double> m_constraints;
-  Matrix m_K, m_M, m_C, m_A, m_A0, m_M0;
-  typename Backend::Solver m_solver;
+  Matrix m_K, m_M, m_C, m_A, m_A0, m_M0, m_T; ///< m_T: the nonlinear tangent
+  typename Backend::Solver m_solver, m_newton;
   Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
-  Vector m_ghosted, m_frame_prev, m_frame_last, m_frame_mix;
+  Vector m_ghosted, m_ghosted_v, m_frame_prev, m_frame_last, m_frame_mix;
   double m_max_strain = 0, m_max_rotation = 0;
   std::ostringstream m_timer_stream;
   dealii::TimerOutput m_timer;

@@ -48,7 +48,7 @@ inline constexpr Entry kEntries[] = {
     {kCvode, "SUNDIALS CVODE (BDF, Newton, KLU) on the same ODE, adaptive steps", kCvode, "", "rtol, atol", true, true,
      false, false},
     {kFem, "deal.II Kelvin-Voigt finite elements on the same mesh (the continuum reference)", kFem, "",
-     "dt, degree, refinements, time_scheme", true, false, true, false},
+     "dt, degree, refinements, scheme, static, kinematics", true, false, true, false},
 };
 
 /// Filters for names() and list().

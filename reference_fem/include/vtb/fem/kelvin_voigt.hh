@@ -20,12 +20,16 @@ struct FemOptions {
   /// acceleration, order 2, no damping) | backward-euler (order 1)
   std::string scheme = "generalized-alpha";
   bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
+  /// Geometrically exact (total-Lagrangian St. Venant-Kirchhoff with the Kelvin-Voigt rate
+  /// term, Newton per step) instead of linear; with backward Euler or the static solve only.
+  bool nonlinear = false;
   double dt = 1e-3;
   std::filesystem::path frames_dir; ///< if set: frames/frame_NNNN.vtu per sample (deal.II DataOut)
 };
 
 FemOptions options_from(const SolverDesc& solver);
-/// Throws InputError unless the degree is 1 or 2 and dt > 0.
+/// Throws InputError unless the degree is 1 or 2, dt > 0, and nonlinear kinematics come with
+/// backward Euler or the static solve.
 void check_options(const FemOptions& options);
 
 /// Simulates the scene's problem with the FEM and records, at every sample time, the probe
