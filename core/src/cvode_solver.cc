@@ -259,6 +259,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
   rep.calibration_seconds = model.net.calibration_seconds;
+  rep.calibration_cached = model.net.calibration_cached;
   rep.effective_poisson_ratio = dim == 2 ? 1.0 / 3.0 : 0.25;
   if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("[solver].rtol and atol must be > 0");
 

@@ -44,6 +44,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["courant_dt_estimate"] = r.courant_dt;
     j["calibration"] = r.calibration;
     j["calibration_seconds"] = r.calibration_seconds;
+    if (r.calibration == "fitted") j["calibration_cached"] = r.calibration_cached;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }
   // Counts (cells, dofs, steps, iterations, degree...) print as integers, not 600.0; times,

@@ -78,6 +78,7 @@ template <int dim> RunReport report_header(const Model<dim>& model, const Integr
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
   rep.calibration_seconds = model.net.calibration_seconds;
+  rep.calibration_cached = model.net.calibration_cached;
   rep.effective_poisson_ratio = spring_poisson_ratio(dim);
   if (o.kind == solvers::kFiltered) {
     rep.filter = o.filter;

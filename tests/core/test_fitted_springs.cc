@@ -1,6 +1,8 @@
 // springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
 // static cases that the fit never saw (its training loads are the free mesh's modes).
+#include "support/fresh_dir.hh"
 #include "vtb/core/calibration.hh"
+#include "vtb/core/fitted_cache.hh"
 #include "vtb/core/fitted_springs.hh"
 #include "vtb/core/force_jacobian.hh"
 #include "vtb/core/spring_network.hh"
@@ -11,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 
@@ -161,6 +164,34 @@ TEST(FittedSprings, BringAnUnstructured3DSlabWithinFivePercentOfTheFem) {
     EXPECT_LT(fitted, 0.05) << "load " << force.transpose() << ", lloyd " << before;
     EXPECT_LT(fitted, 0.5 * before) << "load " << force.transpose();
   }
+}
+
+TEST(FittedSprings, AreCachedPerMeshAndMaterial) {
+  // The first fit writes the cache, a second call on the same mesh and material reads the same
+  // constants back; another material misses; a damaged file is refitted and replaced; an
+  // empty VTB_CACHE_DIR turns the cache off.
+  const test::FreshDir dir;
+  ::setenv("VTB_CACHE_DIR", dir.path().c_str(), 1);
+  const Mesh2 m = generate_rectangle({0.1, 0.02}, {10, 2});
+  bool hit = true;
+  const Eigen::VectorXd a = cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit);
+  EXPECT_FALSE(hit);
+  EXPECT_EQ(a, fitted_stiffness(m, 1.0e4, 0.3, 0.01));
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
+  EXPECT_TRUE(hit);
+  cached_fitted_stiffness(m, 2.0e4, 0.3, 0.01, &hit);
+  EXPECT_FALSE(hit) << "another material";
+  for (const auto& f : std::filesystem::directory_iterator(dir.path()))
+    std::filesystem::resize_file(f.path(), 20);
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
+  EXPECT_FALSE(hit) << "a damaged file is refitted";
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
+  EXPECT_TRUE(hit) << "and replaced";
+  ::setenv("VTB_CACHE_DIR", "", 1);
+  EXPECT_TRUE(fit_cache_dir().empty());
+  cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit);
+  EXPECT_FALSE(hit);
+  ::unsetenv("VTB_CACHE_DIR");
 }
 
 TEST(FittedSprings, AreDeterministic) {

@@ -124,7 +124,8 @@ void rows(const char* name, const Scene& base, const Mesh<dim>& mesh, std::ostre
     const double stiffness = uf.norm() / us.norm(); // > 1: springs too stiff
     if (log) *log << "[fidelity] " << name << " " << springs << ": " << all << "\n";
     os << name << ',' << dim << ',' << mesh.num_nodes() << ',' << springs << ',' << std::setprecision(5) << all << ','
-       << at_peak << ',' << stiffness << ',' << model.net.calibration_seconds << '\n';
+       << at_peak << ',' << stiffness << ',' << model.net.calibration_seconds << ','
+       << (model.net.calibration_cached ? "true" : "false") << '\n';
   }
 }
 
@@ -133,7 +134,7 @@ void rows(const char* name, const Scene& base, const Mesh<dim>& mesh, std::ostre
 void write_fidelity(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
   const std::filesystem::path meshes_dir = scenes_dir / ".." / ".." / "meshes" / "data";
   std::ostringstream os;
-  os << "case,dim,nodes,springs,displacement_error,peak_node_error,fem_over_springs_norm,calibration_seconds\n";
+  os << "case,dim,nodes,springs,displacement_error,peak_node_error,fem_over_springs_norm,calibration_seconds,calibration_cached\n";
   const std::vector<Case> cases = {{"cook", cook()},
                                    {"strip-tension", strip("strip-tension", "[1.0e-4, 0.0]")},
                                    {"strip-bending", strip("strip-bending", "[0.0, 1.0e-6]")},

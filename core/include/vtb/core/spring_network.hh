@@ -18,6 +18,7 @@ template <int dim> struct SpringNetwork {
   double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
   std::string calibration;              ///< "lloyd" | "van-gelder" | "fitted"
   double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
+  bool calibration_cached = false;      ///< "fitted": the constants came from the fit cache (fitted_cache.hh)
 
   /// Adjacency in CSR form: the springs at node i are adj_spring[adj_ptr[i] .. adj_ptr[i+1]),
   /// leading to adj_node[...] (sorted by neighbour).
