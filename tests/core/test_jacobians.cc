@@ -13,8 +13,10 @@
 #include "vtb/core/cvode_solver.hh"
 #include "vtb/core/force_jacobian.hh"
 #include "vtb/core/implicit_euler.hh"
+#include "vtb/core/warped_filter.hh"
 
 #include <Eigen/Dense>
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <random>
@@ -134,6 +136,77 @@ TEST(ForceJacobians, MatchForceDifferences2D) {
 }
 TEST(ForceJacobians, MatchForceDifferences3D) {
   check_force_jacobians(model_of<3>(kBox3));
+}
+
+/// The tensor filter's H (warped_filter.hh) at rest: H(0) = M (1 + dt gamma) + dt D_0 + dt^2 K_0
+/// on the free dofs with K_0 = -df/du and D_0 = -df/dv at rest by central differences of
+/// add_internal_forces, and H(1) - H(0) = per spring (dt c + dt^2 k)(I - n n^T) with the signs
+/// of a stiffness (the transverse cover).
+template <int dim> void check_tensor_filter(const Model<dim>& m) {
+  const double dt = 0.01, h = 1e-6 * m.net.rest_length.minCoeff();
+  const int nf = static_cast<int>(m.free_nodes.size()), n = dim * m.num_nodes();
+  const Nodal<dim> zero = Nodal<dim>::Zero(dim, m.num_nodes());
+  Eigen::MatrixXd K(n, n), D(n, n);
+  for (int c = 0; c < n; ++c) {
+    Nodal<dim> p = zero, q = zero;
+    p.data()[c] += h;
+    q.data()[c] -= h;
+    K.col(c) = -(forces(m, p, zero) - forces(m, q, zero)) / (2 * h);
+    D.col(c) = -(forces(m, zero, p) - forces(m, zero, q)) / (2 * h);
+  }
+  Eigen::MatrixXd expected0(dim * nf, dim * nf), transverse = Eigen::MatrixXd::Zero(dim * nf, dim * nf);
+  for (int a = 0; a < nf; ++a)
+    for (int b = 0; b < nf; ++b)
+      for (int p = 0; p < dim; ++p)
+        for (int q = 0; q < dim; ++q) {
+          const int r = dim * m.free_nodes[static_cast<std::size_t>(a)] + p;
+          const int c = dim * m.free_nodes[static_cast<std::size_t>(b)] + q;
+          // D_0 holds -gamma m on its diagonal (mass damping): M (1 + dt gamma) = M + dt gamma M.
+          expected0(dim * a + p, dim * b + q) = dt * D(r, c) + dt * dt * K(r, c) + (r == c ? m.net.mass[r / dim] : 0.0);
+        }
+  for (int s = 0; s < m.net.num_springs(); ++s) {
+    const auto [i, j] = m.net.edge[static_cast<std::size_t>(s)];
+    const Vec<dim> nv = (m.net.rest.col(j) - m.net.rest.col(i)).normalized();
+    const Mat<dim> B = (dt * m.net.damping[s] + dt * dt * m.net.stiffness[s]) *
+                       (Mat<dim>::Identity() - nv * nv.transpose());
+    const int a = m.free_index[static_cast<std::size_t>(i)], b = m.free_index[static_cast<std::size_t>(j)];
+    if (a >= 0) transverse.template block<dim, dim>(dim * a, dim * a) += B;
+    if (b >= 0) transverse.template block<dim, dim>(dim * b, dim * b) += B;
+    if (a >= 0 && b >= 0) {
+      transverse.template block<dim, dim>(dim * a, dim * b) -= B;
+      transverse.template block<dim, dim>(dim * b, dim * a) -= B;
+    }
+  }
+  const Eigen::MatrixXd H0(tensor_filter_matrix(m, dt, 0.0)), H1(tensor_filter_matrix(m, dt, 1.0));
+  EXPECT_LT((H0 - expected0).cwiseAbs().maxCoeff(), kTol * H0.cwiseAbs().maxCoeff());
+  EXPECT_LT((H1 - H0 - transverse).cwiseAbs().maxCoeff(), 1e-12 * H1.cwiseAbs().maxCoeff());
+  EXPECT_GT(transverse.cwiseAbs().maxCoeff(), 1e-3 * H0.cwiseAbs().maxCoeff());
+}
+
+TEST(TensorFilter, MatrixIsTheRestJacobianByDifferencesPlusItsTransverseCover2D) {
+  check_tensor_filter(model_of<2>(kPlate2));
+}
+TEST(TensorFilter, MatrixIsTheRestJacobianByDifferencesPlusItsTransverseCover3D) {
+  check_tensor_filter(model_of<3>(kBox3));
+}
+
+TEST(TensorFilter, RigidRotationLeavesNoMismatch) {
+  // Warping takes a rigid rotation out exactly: every node's rotation is the body's, and every
+  // spring's direction is its rest direction turned by it (mismatch at round-off), while a
+  // shear of 5 % turns springs apart from their nodes' rotations (mismatch of that order).
+  const Model<2> m = model_of<2>(kPlate2);
+  WarpedFilter<2> filter(m, 0.01);
+  const double angle = 0.7;
+  const Mat<2> R = Eigen::Rotation2Dd(angle).toRotationMatrix();
+  const Nodal<2> u = R * m.net.rest - m.net.rest;
+  filter.rotations(u);
+  for (const auto& Ri : filter.rotation()) EXPECT_LT((Ri - R).norm(), 1e-12);
+  EXPECT_LT(filter.direction_mismatch(u), 1e-12);
+  Nodal<2> shear = Nodal<2>::Zero(2, m.num_nodes());
+  shear.row(0) = 0.05 * m.net.rest.row(1);
+  filter.rotations(shear);
+  EXPECT_GT(filter.direction_mismatch(shear), 0.01);
+  EXPECT_LT(filter.direction_mismatch(shear), 0.05);
 }
 
 template <int dim> Eigen::VectorXd pack(const Model<dim>& m, const State<dim>& s) {
