@@ -75,6 +75,24 @@ Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh
   return V * B.transpose() * elasticity<dim>(E, nu) * B;
 }
 
+template <int dim>
+Eigen::SparseMatrix<double> fem_stiffness_matrix(const Mesh<dim>& mesh, double E, double nu, double thickness) {
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(mesh.cells.size() * (dim + 1) * (dim + 1) * dim * dim);
+  for (const auto& c : mesh.cells) {
+    const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, thickness);
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
+                              Ke(a * dim + i, b * dim + j));
+  }
+  Eigen::SparseMatrix<double> K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
+  K.setFromTriplets(trip.begin(), trip.end());
+  return K;
+}
+
 template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, double E, double thickness) {
   const auto edges = unique_edges(mesh);
   Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
@@ -151,7 +169,8 @@ template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double
   template Eigen::VectorXd lumped_masses<D>(const Mesh<D>&, double, double);                                           \
   template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D>&, double, double);                                    \
   template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D>&, double, double, double);                                 \
-  template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);
+  template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);     \
+  template Eigen::SparseMatrix<double> fem_stiffness_matrix<D>(const Mesh<D>&, double, double, double);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -19,22 +19,6 @@ using Eigen::MatrixXd;
 using Eigen::VectorXd;
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
-/// The global P1 stiffness matrix (node-major dofs), both triangles stored.
-template <int dim> Triplets fem_triplets(const Mesh<dim>& mesh, double E, double nu, double t) {
-  Triplets trip;
-  trip.reserve(mesh.cells.size() * (dim + 1) * (dim + 1) * dim * dim);
-  for (const auto& c : mesh.cells) {
-    const MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, t);
-    for (int a = 0; a <= dim; ++a)
-      for (int b = 0; b <= dim; ++b)
-        for (int i = 0; i < dim; ++i)
-          for (int j = 0; j < dim; ++j)
-            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
-                              Ke(a * dim + i, b * dim + j));
-  }
-  return trip;
-}
-
 /// Rigid motions of the mesh: dim translations and the rotations about the centroid.
 template <int dim> MatrixXd rigid_modes(const Mesh<dim>& mesh) {
   const int n = mesh.num_nodes();
@@ -97,14 +81,15 @@ public:
     for (auto& r : m_reduced)
       if (r == 0) r = m_size++;
   }
-  /// Factorises the matrix of the triplets (full indices; pinned rows and columns dropped).
-  void factorize(const Triplets& full) {
+  /// Factorises the matrix (full indices; pinned rows and columns dropped).
+  void factorize(const SpMat& full) {
     Triplets kept;
-    kept.reserve(full.size());
-    for (const auto& t : full) {
-      const int r = m_reduced[static_cast<std::size_t>(t.row())], c = m_reduced[static_cast<std::size_t>(t.col())];
-      if (r >= 0 && c >= 0) kept.emplace_back(r, c, t.value());
-    }
+    kept.reserve(static_cast<std::size_t>(full.nonZeros()));
+    for (int col = 0; col < full.outerSize(); ++col)
+      for (SpMat::InnerIterator it(full, col); it; ++it) {
+        const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
+        if (r >= 0 && c >= 0) kept.emplace_back(r, c, it.value());
+      }
     SpMat A(m_size, m_size);
     A.setFromTriplets(kept.begin(), kept.end());
     if (!m_analysed) m_ldlt.analyzePattern(A), m_analysed = true;
@@ -203,7 +188,8 @@ public:
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
     spring_triplets<dim>(m_edges, m_dir, m_k, m_trip);
-    m_solver.factorize(m_trip);
+    m_ks.setFromTriplets(m_trip.begin(), m_trip.end());
+    m_solver.factorize(m_ks);
     m_U = m_solver.solve(m_F);
     m_res = project(m_U) - m_T;
     m_H = gather(m_U);
@@ -242,7 +228,8 @@ private:
       const auto [i, j] = m_edges[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < U.cols(); ++m)
-        out(se, m) = m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i));
+        out(se, m) =
+            m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i));
     }
     return out;
   }
@@ -254,12 +241,14 @@ private:
   PinnedSolver& m_solver;
   VectorXd m_k;
   Triplets m_trip;
+  SpMat m_ks{m_F.rows(), m_F.rows()};
   MatrixXd m_U, m_res, m_H;
 };
 
 /// Conjugate gradients on (J^T J + shift I) d = b, from d = 0, to a relative residual of 1e-2
 /// (an inexact Gauss-Newton step) or `max_iterations`.
-template <int dim> VectorXd normal_cg(const Fit<dim>& fit, double shift, const VectorXd& b, int max_iterations, int& used) {
+template <int dim>
+VectorXd normal_cg(const Fit<dim>& fit, double shift, const VectorXd& b, int max_iterations, int& used) {
   VectorXd d = VectorXd::Zero(b.size()), r = b, p = r;
   double rr = r.squaredNorm();
   const double stop = 1e-4 * rr;
@@ -275,17 +264,14 @@ template <int dim> VectorXd normal_cg(const Fit<dim>& fit, double shift, const V
   return d;
 }
 
-
 template <int dim>
 Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, double weighting) {
   const int n = mesh.num_nodes(), N = dim * n;
   Training tr;
-  const Triplets fem = fem_triplets(mesh, E, nu, thickness);
-  SpMat K(N, N);
-  K.setFromTriplets(fem.begin(), fem.end());
+  const SpMat K = fem_stiffness_matrix(mesh, E, nu, thickness);
   tr.pins = pinned_dofs(mesh);
   PinnedSolver fem_solver(N, tr.pins);
-  fem_solver.factorize(fem);
+  fem_solver.factorize(K);
   VectorXd mass(N);
   const VectorXd m_nodes = lumped_masses(mesh, 1.0, thickness);
   for (int v = 0; v < n; ++v) mass.template segment<dim>(dim * v).setConstant(m_nodes[v]);
@@ -365,7 +351,8 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   rep.prior = &prior == &vg ? "van-gelder" : "lloyd";
   Fit<dim> fit(edges, dir, prior, tr, solver);
   VectorXd x = zero;
-  if (options.start.size() == ns) x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
+  if (options.start.size() == ns)
+    x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
   fit.evaluate(x);
   x = levenberg_marquardt(fit, x, options, rep);
   rep.fitted_residual = std::sqrt(fit.residual().squaredNorm() / modes);

@@ -23,8 +23,8 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
   else if (calibration == "fitted")
-    net.stiffness = cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness,
-                                            &net.calibration_cached);
+    net.stiffness =
+        cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, &net.calibration_cached);
   else
     throw InputError("[solver].springs = \"" + std::string(calibration) + "\": must be lloyd, van-gelder or fitted");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -28,8 +28,8 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
     const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
     if (a < 0 || b < 0) return;
     const Mat<dim> I = Mat<dim>::Identity();
-    const Mat<dim> B = -sign * (dt * (D + transverse * (D.trace() * I - D)) +
-                                dt * dt * (K + transverse * (K.trace() * I - K)));
+    const Mat<dim> B =
+        -sign * (dt * (D + transverse * (D.trace() * I - D)) + dt * dt * (K + transverse * (K.trace() * I - K)));
     for (int p = 0; p < dim; ++p)
       for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, B(p, q));
   });
@@ -45,7 +45,8 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt)
       m_rest_dir(dim, model.net.num_springs()), m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1) {
   if (!m_h.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
   // H(beta) = H(0) + beta (H(1) - H(0)) entry by entry: both have one pattern.
-  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(model, dt, 0.0), H1 = tensor_filter_matrix(model, dt, 1.0);
+  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(model, dt, 0.0),
+                                    H1 = tensor_filter_matrix(model, dt, 1.0);
   m_base.assign(m_h.values(), m_h.values() + m_h.nonzeros());
   m_transverse.assign(m_base.size(), 0.0);
   for (int c = 0; c < H0.outerSize(); ++c)

@@ -20,7 +20,8 @@ void check_options(const FemOptions& options) {
   if (!(options.dt > 0)) throw InputError("[solver].dt must be > 0");
   if (options.nonlinear && !options.static_solve && options.scheme != "backward-euler")
     throw InputError("[solver].kinematics = \"nonlinear\" runs with scheme = \"backward-euler\" or static = true, not "
-                     "scheme = \"" + options.scheme + "\"");
+                     "scheme = \"" +
+                     options.scheme + "\"");
 }
 
 template <int dim>

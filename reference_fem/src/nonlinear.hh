@@ -45,8 +45,9 @@ template <int dim, class Vector, class Matrix> struct NonlinearTargets {
 /// u and v must see every dof of the locally owned cells (ghosted vectors under MPI).
 template <int dim, class GhostedVector, class Vector, class Matrix>
 void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESystem<dim>& fe,
-                        const dealii::DoFHandler<dim>& dofs, const MaterialDesc& mat, int degree, const GhostedVector& u,
-                        const GhostedVector& v, const dealii::AffineConstraints<double>& constraints,
+                        const dealii::DoFHandler<dim>& dofs, const MaterialDesc& mat, int degree,
+                        const GhostedVector& u, const GhostedVector& v,
+                        const dealii::AffineConstraints<double>& constraints,
                         NonlinearTargets<dim, Vector, Matrix> out) {
   const auto [lambda, mu] = lame<dim>(mat);
   const double tau = mat.retardation_time, thickness = dim == 2 ? mat.thickness : 1.0;
@@ -75,7 +76,8 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
       const double jxw = fev.JxW(q) * thickness;
       const dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>() + grad_u[q];
       const dealii::Tensor<2, dim> E = 0.5 * (dealii::transpose(F) * F - dealii::unit_symmetric_tensor<dim>());
-      const dealii::Tensor<2, dim> S = svk_stress<dim>(E + tau * sym<dim>(dealii::transpose(F) * grad_v[q]), lambda, mu);
+      const dealii::Tensor<2, dim> S =
+          svk_stress<dim>(E + tau * sym<dim>(dealii::transpose(F) * grad_v[q]), lambda, mu);
       const dealii::Tensor<2, dim> P = F * S;
       for (unsigned int i = 0; i < nd; ++i) {
         const dealii::Tensor<1, dim> gi = fev.shape_grad(i, q);
@@ -85,9 +87,8 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
           dealii::Tensor<2, dim> G;
           G[comp[j]] = fev.shape_grad(j, q);
           const dealii::Tensor<2, dim> FtG = dealii::transpose(F) * G;
-          const dealii::Tensor<2, dim> dS =
-              svk_stress<dim>(sym<dim>(FtG) + tau * sym<dim>(dealii::transpose(G) * grad_v[q] + out.rate * FtG), lambda,
-                              mu);
+          const dealii::Tensor<2, dim> dS = svk_stress<dim>(
+              sym<dim>(FtG) + tau * sym<dim>(dealii::transpose(G) * grad_v[q] + out.rate * FtG), lambda, mu);
           k(i, j) += ((G * S + F * dS) * gi)[comp[i]] * jxw;
           if (comp[i] == comp[j])
             k(i, j) += out.mass_weight * mat.density * fev.shape_value(i, q) * fev.shape_value(j, q) * jxw;

@@ -22,22 +22,6 @@ namespace {
 
 using SpMat = Eigen::SparseMatrix<double>;
 
-template <int dim> SpMat fem_matrix(const Mesh<dim>& mesh, double E, double nu, double t) {
-  std::vector<Eigen::Triplet<double>> trip;
-  for (const auto& c : mesh.cells) {
-    const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, t);
-    for (int a = 0; a <= dim; ++a)
-      for (int b = 0; b <= dim; ++b)
-        for (int i = 0; i < dim; ++i)
-          for (int j = 0; j < dim; ++j)
-            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
-                              Ke(a * dim + i, b * dim + j));
-  }
-  SpMat K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
-  K.setFromTriplets(trip.begin(), trip.end());
-  return K;
-}
-
 template <int dim> SpMat spring_matrix(const Mesh<dim>& mesh, const Eigen::VectorXd& k) {
   MaterialDesc mat;
   SpringNetwork<dim> net = build_network(mesh, mat, "van-gelder");
@@ -56,7 +40,8 @@ Eigen::VectorXd clamped_solve(const SpMat& K, const Eigen::VectorXd& f, const st
   std::vector<Eigen::Triplet<double>> kept;
   for (int c = 0; c < K.outerSize(); ++c)
     for (SpMat::InnerIterator it(K, c); it; ++it) {
-      const int r = index[static_cast<std::size_t>(it.row() / dim)], q = index[static_cast<std::size_t>(it.col() / dim)];
+      const int r = index[static_cast<std::size_t>(it.row() / dim)],
+                q = index[static_cast<std::size_t>(it.col() / dim)];
       if (r >= 0 && q >= 0) kept.emplace_back(dim * r + it.row() % dim, dim * q + it.col() % dim, it.value());
     }
   SpMat Kff(dim * nf, dim * nf);
@@ -83,7 +68,7 @@ double cantilever_error(const Mesh<dim>& mesh, const Eigen::VectorXd& k, double 
     fixed[static_cast<std::size_t>(v)] = mesh.points(axis, v) < low + 1e-9;
     if (mesh.points(axis, v) > high - 1e-9) f.segment<dim>(dim * v) = force;
   }
-  const Eigen::VectorXd ufem = clamped_solve(fem_matrix(mesh, E, nu, t), f, fixed, dim);
+  const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(mesh, E, nu, t), f, fixed, dim);
   const Eigen::VectorXd us = clamped_solve(spring_matrix(mesh, k), f, fixed, dim);
   return (us - ufem).norm() / ufem.norm();
 }
@@ -181,8 +166,7 @@ TEST(FittedSprings, AreCachedPerMeshAndMaterial) {
   EXPECT_TRUE(hit);
   cached_fitted_stiffness(m, 2.0e4, 0.3, 0.01, &hit);
   EXPECT_FALSE(hit) << "another material";
-  for (const auto& f : std::filesystem::directory_iterator(dir.path()))
-    std::filesystem::resize_file(f.path(), 20);
+  for (const auto& f : std::filesystem::directory_iterator(dir.path())) std::filesystem::resize_file(f.path(), 20);
   EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
   EXPECT_FALSE(hit) << "a damaged file is refitted";
   EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);

@@ -167,8 +167,8 @@ template <int dim> void check_tensor_filter(const Model<dim>& m) {
   for (int s = 0; s < m.net.num_springs(); ++s) {
     const auto [i, j] = m.net.edge[static_cast<std::size_t>(s)];
     const Vec<dim> nv = (m.net.rest.col(j) - m.net.rest.col(i)).normalized();
-    const Mat<dim> B = (dt * m.net.damping[s] + dt * dt * m.net.stiffness[s]) *
-                       (Mat<dim>::Identity() - nv * nv.transpose());
+    const Mat<dim> B =
+        (dt * m.net.damping[s] + dt * dt * m.net.stiffness[s]) * (Mat<dim>::Identity() - nv * nv.transpose());
     const int a = m.free_index[static_cast<std::size_t>(i)], b = m.free_index[static_cast<std::size_t>(j)];
     if (a >= 0) transverse.template block<dim, dim>(dim * a, dim * a) += B;
     if (b >= 0) transverse.template block<dim, dim>(dim * b, dim * b) += B;

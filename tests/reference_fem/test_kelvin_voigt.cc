@@ -160,7 +160,8 @@ retardation_time = 0.01
 group = "left"
 [[load]]
 group = "right"
-total_force = [0.0, )" + num(-P) + R"(]
+total_force = [0.0, )" +
+         num(-P) + R"(]
 [solver]
 kind = "fem"
 dt = 0.01

@@ -134,7 +134,8 @@ void rows(const char* name, const Scene& base, const Mesh<dim>& mesh, std::ostre
 void write_fidelity(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
   const std::filesystem::path meshes_dir = scenes_dir / ".." / ".." / "meshes" / "data";
   std::ostringstream os;
-  os << "case,dim,nodes,springs,displacement_error,peak_node_error,fem_over_springs_norm,calibration_seconds,calibration_cached\n";
+  os << "case,dim,nodes,springs,displacement_error,peak_node_error,fem_over_springs_norm,calibration_seconds,"
+        "calibration_cached\n";
   const std::vector<Case> cases = {{"cook", cook()},
                                    {"strip-tension", strip("strip-tension", "[1.0e-4, 0.0]")},
                                    {"strip-bending", strip("strip-bending", "[0.0, 1.0e-6]")},

@@ -37,8 +37,8 @@ void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* l
 /// structured grid) and per calibration (lloyd, van-gelder, fitted): the linear static spring
 /// solution against P1 FEM on the same mesh, relative L2 error over all nodes and at the node of
 /// largest displacement, ||u_fem|| / ||u_springs|| (above 1: the springs are too stiff) and the
-/// calibration's wall time (a cache read when calibration_cached is true: fitted_cache.hh). Both linear: the difference is the springs alone.
-/// The slab's mesh is the scenes' canonical one (scenes_dir/../../meshes/data).
+/// calibration's wall time (a cache read when calibration_cached is true: fitted_cache.hh). Both linear: the difference
+/// is the springs alone. The slab's mesh is the scenes' canonical one (scenes_dir/../../meshes/data).
 void write_fidelity(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
 
 } // namespace vtb::harness::parts

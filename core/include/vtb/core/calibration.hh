@@ -6,6 +6,8 @@
 #include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
 
+#include <Eigen/SparseCore>
+
 #include <string_view>
 
 namespace vtb {
@@ -39,5 +41,11 @@ constexpr double spring_poisson_ratio(int dim) {
 template <int dim>
 Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell, double young_modulus,
                                       double poisson_ratio, double thickness);
+
+/// The global linear FEM (P1) stiffness matrix of the mesh, dim n square, node-major dofs
+/// (node v, component i) -> dim v + i, both triangles stored; rigid motions in its null space.
+template <int dim>
+Eigen::SparseMatrix<double> fem_stiffness_matrix(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
+                                                 double thickness);
 
 } // namespace vtb

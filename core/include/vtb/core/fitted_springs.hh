@@ -21,9 +21,9 @@
 namespace vtb {
 
 struct FitOptions {
-  int modes = 0;          ///< training modes; 0: 16 in 2D, 24 in 3D
-  double pull = 1e-2;     ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
-  double floor = 0.01;    ///< k >= floor * k_prior (the prior: Lloyd, at least 1 % of van Gelder, or van Gelder)
+  int modes = 0;           ///< training modes; 0: 16 in 2D, 24 in 3D
+  double pull = 1e-2;      ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
+  double floor = 0.01;     ///< k >= floor * k_prior (the prior: Lloyd, at least 1 % of van Gelder, or van Gelder)
   int max_iterations = 40; ///< Levenberg-Marquardt iterations
   double tolerance = 5e-3; ///< stop when an accepted step lowers the objective by less than this (relative)
   /// Mode m's target and load are scaled by (lambda_1 / lambda_m)^weighting. At 1 (the
@@ -32,13 +32,14 @@ struct FitOptions {
   /// mode counts alike, and the higher modes, which a spring network represents worst, crowd
   /// out the low ones (the structured Cook membrane: 15 % instead of 7 %, docs/fidelity.md).
   double weighting = 1;
-  Eigen::VectorXd start;   ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior
+  Eigen::VectorXd
+      start; ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior
 };
 
 struct FitReport {
   int modes = 0, iterations = 0, cg_iterations = 0;
-  double lloyd_residual = 0;  ///< sqrt(sum_m ||P u_m - phi_m||^2 / modes) with Lloyd's springs
-  std::string prior;          ///< the start and the pull's centre: "lloyd" or "van-gelder", whichever fits the modes better
+  double lloyd_residual = 0; ///< sqrt(sum_m ||P u_m - phi_m||^2 / modes) with Lloyd's springs
+  std::string prior; ///< the start and the pull's centre: "lloyd" or "van-gelder", whichever fits the modes better
   double fitted_residual = 0; ///< the same with the fitted springs
 };
 

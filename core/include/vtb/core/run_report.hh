@@ -46,7 +46,7 @@ struct RunReport {
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
   std::string calibration;
-  double calibration_seconds = 0; ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
+  double calibration_seconds = 0;  ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
   bool calibration_cached = false; ///< "fitted": read from the fit cache instead of fitted
   double effective_poisson_ratio = 0;
   std::string filter;

@@ -52,12 +52,12 @@ private:
 
   const Model<dim>& m_model;
   OrderedLDLT m_h;
-  std::vector<Mat<dim>> m_rotation; ///< per node
-  Nodal<dim> m_rest_dir;            ///< per spring, unit
+  std::vector<Mat<dim>> m_rotation;         ///< per node
+  Nodal<dim> m_rest_dir;                    ///< per spring, unit
   std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
   double m_beta = 0;
   int m_refactorizations = 0;
-  Eigen::MatrixXd m_rhs;            ///< ordered dofs, one column
+  Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
 };
 
 /// H_t on the free dofs (row dim a + p: free node a, axis p), both triangles stored, with
