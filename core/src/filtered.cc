@@ -86,10 +86,13 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force, dt);
-  for (Eigen::Index a = 0; a < nf; ++a) {
-    const int i = free[static_cast<std::size_t>(a)];
-    m_acc.col(a) = m_force.col(i) / net.mass[i];
-  }
+  // The accelerations M^-1 F: what the neighbour filter multiplies and the momentum correction
+  // compares with; the full and tensor filters solve with F itself.
+  if ((!m_full && !m_tensor) || m_correct)
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      m_acc.col(a) = m_force.col(i) / net.mass[i];
+    }
   // dv = dt W a.
   if (m_tensor) {
     m_tensor->apply(s.u, m_force, dt, m_dv);
@@ -98,6 +101,15 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     for (Eigen::Index r = 0; r < nf; ++r)
       m_rhs.col(r) = m_force.col(free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])]);
     m_h->solve_in_place<dim>(m_rhs);
+    if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
+      for (Eigen::Index r = 0; r < nf; ++r) {
+        const int i = free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])];
+        s.v.col(i) += dt * m_rhs.col(r);
+        s.u.col(i) += dt * s.v.col(i);
+      }
+      finish_step(s);
+      return;
+    }
     for (Eigen::Index r = 0; r < nf; ++r) m_dv.col(m_free_of_row[static_cast<std::size_t>(r)]) = dt * m_rhs.col(r);
   } else {
     const int* ptr = m_sparse.outerIndexPtr();
@@ -115,7 +127,12 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     s.v.col(i) += m_dv.col(a);
     s.u.col(i) += dt * s.v.col(i);
   }
-  s.t += dt;
+  finish_step(s);
+}
+
+/// The step's end: the time, the supports' prescribed motion, the strain limit.
+template <int dim> void FilteredImplicit<dim>::finish_step(State<dim>& s) {
+  s.t += this->dt();
   m_model.apply_constraints(s.t, s.u, s.v);
   if (m_strain_limit > 0) limit_strain(s);
 }

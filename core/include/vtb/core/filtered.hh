@@ -50,6 +50,7 @@ public:
   std::string_view name() const override { return solvers::kFiltered; }
 
 private:
+  void finish_step(State<dim>& s);
   void correct_momentum(const State<dim>& s);
   void limit_strain(State<dim>& s) const;
 
