@@ -111,6 +111,22 @@ TEST(PaperData, FidelityTableComesFromTheFixture) {
             static_cast<long>(t.rows() / 3));
 }
 
+TEST(PaperData, TransientTableComesFromTheFixture) {
+  // One row per dt (three in the fixture), each starting with dt in ms and holding the tensor
+  // filter's tip error in percent as the CSV has it.
+  const auto files = data_files();
+  const std::string& rows = files.at("transient_rows.tex");
+  EXPECT_EQ(std::count(rows.begin(), rows.end(), '\n'), 3);
+  const auto t = harness::CsvTable::read(kFixture / "transient.csv");
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (t.text(r, "solver") == "filtered-tensor") {
+      const std::string row = harness::tex_number(1000 * t.number(r, "dt")) + " & ";
+      const auto at = rows.find(row);
+      ASSERT_NE(at, std::string::npos) << row;
+      EXPECT_NE(rows.find(" & " + harness::tex_number(100 * t.number(r, "tip_error"), 2) + " & ", at), std::string::npos);
+    }
+}
+
 TEST(PaperData, LogLogSlopeRecoversAPowerLaw) {
   // The fitted order (convergence) and exponent (scaling): y = 3 x^1.5 exactly, plus points
   // that a log axis cannot hold (x or y <= 0), which the fit skips.

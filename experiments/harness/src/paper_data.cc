@@ -134,6 +134,24 @@ void fidelity(const std::filesystem::path& dir, Out& out) {
   out.number("vtbFittedWorst", fitted_worst, 2);
 }
 
+void transient(const std::filesystem::path& dir, Out& out) {
+  const CsvTable t = CsvTable::read(dir / "transient.csv");
+  // One row per dt: the tip error (percent of the peak) and the step (us) of each solver.
+  std::map<double, std::map<std::string, std::pair<double, double>>> by_dt;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    by_dt[t.number(r, "dt")][t.text(r, "solver")] = {100 * t.number(r, "tip_error"), t.number(r, "step_median_us")};
+  std::ostringstream rows;
+  for (auto& [dt, s] : by_dt) {
+    rows << tex_number(1000 * dt);
+    for (const char* solver : {solvers::kFilteredFull, solvers::kFilteredTensor, solvers::kImplicitEuler})
+      rows << " & " << tex_number(s[solver].first, 2);
+    for (const char* solver : {solvers::kFilteredFull, solvers::kFilteredTensor, solvers::kImplicitEuler})
+      rows << " & " << tex_number(s[solver].second, 2);
+    rows << " \\\\\n";
+  }
+  out.files.emplace_back("transient_rows.tex", rows.str());
+}
+
 void fig3(const std::filesystem::path& dir, Out& out) {
   // Three times per model, from the file names the reproduction writes (SOLVER_tT.csv).
   std::map<std::string, std::vector<std::pair<double, std::string>>> snaps;
@@ -203,6 +221,7 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
   out.macro("vtbMachine", tex_escape(m["cpu"]) + ", " + tex_escape(m["cores"]) + " cores");
   paper::timing(dir, out);
   paper::fidelity(dir, out);
+  paper::transient(dir, out);
   paper::fig3(dir, out);
   paper::accuracy(dir, out);
   paper::stability(dir, out);

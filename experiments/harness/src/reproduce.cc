@@ -317,6 +317,7 @@ std::string run_reproduce(const ReproduceOptions& o) {
   parts::write_creep(o.out, o.scenes_dir, o.progress);
   parts::write_scaling(o.out, o.quick, o.progress);
   parts::write_fidelity(o.out, o.scenes_dir, o.progress);
+  parts::write_transient(o.out, o.scenes_dir, o.progress);
   parts::write_haptics(o.out, o.scenes_dir, 1.5, o.progress);
   const std::string md = report_markdown(o, timing, duration);
   write_text(o.out / "report.md", md);

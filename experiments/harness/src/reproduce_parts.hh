@@ -22,6 +22,12 @@ void write_meta(const std::filesystem::path& out, bool quick, double duration);
 /// spring network's linear static solve.
 void write_creep(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
 
+/// transient.csv: the cantilever_step scene (a strip under a step load across its axis) at
+/// dt = 1, 10 and 40 ms for filtered-full, filtered-tensor and implicit-euler: the tip
+/// history's largest error relative to its peak, against CVODE at the scene's rtol (1e-10),
+/// and the median step (the filters' lag, docs/fidelity.md).
+void write_transient(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
+
 /// haptics_periods.csv (each servo cycle's period) and haptics_trace.csv (t, handle and
 /// force of the first probe) of a real-time session of haptic_press.toml with the physics
 /// stalled at `stall_time`; haptics_summary.csv: misses, p99, fault and force-zero times.
