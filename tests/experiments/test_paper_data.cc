@@ -123,7 +123,8 @@ TEST(PaperData, TransientTableComesFromTheFixture) {
       const std::string row = harness::tex_number(1000 * t.number(r, "dt")) + " & ";
       const auto at = rows.find(row);
       ASSERT_NE(at, std::string::npos) << row;
-      EXPECT_NE(rows.find(" & " + harness::tex_number(100 * t.number(r, "tip_error"), 2) + " & ", at), std::string::npos);
+      EXPECT_NE(rows.find(" & " + harness::tex_number(100 * t.number(r, "tip_error"), 2) + " & ", at),
+                std::string::npos);
     }
 }
 

@@ -125,8 +125,8 @@ void write_transient(const std::filesystem::path& out, const std::filesystem::pa
       double e = 0;
       for (std::size_t k = 0; k < std::min(tr.t.size(), ref.t.size()); ++k)
         e = std::max(e, (tr.probe_u[k].at(0) - ref.probe_u[k].at(0)).norm());
-      os << dt << ',' << solver << ',' << (r.stable ? e / peak : std::nan("")) << ','
-         << 1e6 * r.step_seconds.median << ',' << (r.stable ? "true" : "false") << '\n';
+      os << dt << ',' << solver << ',' << (r.stable ? e / peak : std::nan("")) << ',' << 1e6 * r.step_seconds.median
+         << ',' << (r.stable ? "true" : "false") << '\n';
     }
   write_files_atomically(out, {{"transient.csv", os.str()}});
 }
