@@ -14,8 +14,9 @@
 namespace vtb {
 namespace {
 
-/// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max.
-template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div) {
+/// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max; with
+/// `clamped` false a free body pulled at one end (where the momentum correction acts).
+template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = true) {
   Scene s;
   s.file = "bench";
   s.duration = 1.0;
@@ -25,7 +26,7 @@ template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div)
   FixDesc fix;
   fix.region.group = "left";
   fix.region.label = "clamp";
-  s.fixes.push_back(fix);
+  if (clamped) s.fixes.push_back(fix);
   LoadDesc load;
   load.region.group = "right";
   load.region.label = "pull";
@@ -39,10 +40,12 @@ template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div)
 }
 
 template <int dim>
-void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter) {
+void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter,
+               bool correct = true) {
   IntegratorOptions o;
   o.kind = kind;
   o.filter = filter;
+  o.momentum_correction = correct;
   o.dt = kind == solvers::kExplicit ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
   auto integ = make_integrator(model, o);
   State<dim> s = initial_state(model);
@@ -70,6 +73,10 @@ const Model<2>& plate517() {
   static const Model<2> m = bench_model<2>(Eigen::Vector2i(46, 10));
   return m;
 }
+const Model<2>& free_plate517() {
+  static const Model<2> m = bench_model<2>(Eigen::Vector2i(46, 10), false);
+  return m;
+}
 const Model<3>& box275() {
   static const Model<3> m = bench_model<3>(Eigen::Vector3i(10, 4, 4));
   return m;
@@ -93,6 +100,17 @@ VTB_STEP_BENCH(plate517, solvers::kExplicit, "", explicit)
 VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(plate517, solvers::kImplicitEuler, "", implicit_euler)
+VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
+
+/// The torque correction's cost: the full filter's step on a free plate with and without it.
+void BM_step_free_plate517_filtered_full_corrected(benchmark::State& st) {
+  run_steps(st, free_plate517(), solvers::kFiltered, solvers::kFilterFull, true);
+}
+void BM_step_free_plate517_filtered_full_uncorrected(benchmark::State& st) {
+  run_steps(st, free_plate517(), solvers::kFiltered, solvers::kFilterFull, false);
+}
+BENCHMARK(BM_step_free_plate517_filtered_full_corrected)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_step_free_plate517_filtered_full_uncorrected)->Unit(benchmark::kMicrosecond);
 VTB_STEP_BENCH(box275, solvers::kExplicit, "", explicit)
 VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterFull, filtered_full)
