@@ -2,6 +2,7 @@
 
 #include "vtb/core/calibration.hh"
 #include "vtb/core/nodal.hh"
+#include "vtb/meshes/input_error.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
@@ -94,7 +95,9 @@ public:
     A.setFromTriplets(kept.begin(), kept.end());
     if (!m_analysed) m_ldlt.analyzePattern(A), m_analysed = true;
     m_ldlt.factorize(A);
-    if (m_ldlt.info() != Eigen::Success) throw std::runtime_error("springs = \"fitted\": a stiffness is singular");
+    if (m_ldlt.info() != Eigen::Success)
+      throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
+                       "pinned (is the mesh in one piece?)");
   }
   MatrixXd solve(const MatrixXd& rhs) const {
     MatrixXd reduced(m_size, rhs.cols());
@@ -329,7 +332,8 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   const auto edges = unique_edges(mesh);
   const auto ns = static_cast<Eigen::Index>(edges.size());
   if (N - (dim == 2 ? 3 : 6) < modes + 8)
-    throw std::invalid_argument("springs = \"fitted\": the mesh has too few nodes to fit (" + std::to_string(n) + ")");
+    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) + " nodes; the fit needs at least " +
+                     std::to_string((modes + 8 + (dim == 2 ? 3 : 6) + dim - 1) / dim));
   Nodal<dim> dir(dim, ns);
   for (Eigen::Index s = 0; s < ns; ++s)
     dir.col(s) = (mesh.points.col(edges[static_cast<std::size_t>(s)][1]) -

@@ -52,6 +52,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -106,6 +107,11 @@ public:
           dealii::TimerOutput::Scope s(m_timer, "output");
           interpolate_samples(out, times);
         });
+    if (!m_nonlinear_failure.empty()) {
+      rep.stable = false;
+      rep.failure = m_nonlinear_failure;
+      rep.failure_time = m_failure_time;
+    }
     rep.max_strain = m_max_strain;
     rep.max_rotation = m_max_rotation;
     for (const auto& [phase, seconds] : m_timer.get_summary_data(dealii::TimerOutput::total_wall_time)) {
@@ -463,16 +469,14 @@ private:
           accepted = m_ubar;
           ds = std::min(0.5, 1.5 * ds);
         } else if ((ds /= 2) < 1e-4) {
-          throw std::runtime_error("fem (nonlinear, static): Newton did not converge at load factor " +
-                                   std::to_string(s1));
+          return fail_nonlinear("Newton did not converge at load factor " + std::to_string(s1), t_new);
         }
       }
       m_ubar = accepted;
       m_u = m_ubar;
       return;
     }
-    if (!newton(1.0))
-      throw std::runtime_error("fem (nonlinear): Newton did not converge in the step to t = " + std::to_string(t_new));
+    if (!newton(1.0)) return fail_nonlinear("Newton did not converge in the step", t_new);
     for (const auto d : m_owned) {
       double v = m_v[d], a = m_a[d];
       m_scheme.update(m_ubar[d], m_u[d], 0.0, 0.0, v, a);
@@ -482,6 +486,14 @@ private:
     m_a.compress(dealii::VectorOperation::insert);
     m_v.compress(dealii::VectorOperation::insert);
     m_u = m_ubar;
+  }
+
+  /// Stops a nonlinear run as unstable (run() reports why and when): the state turns
+  /// non-finite, which the time loop's check catches.
+  void fail_nonlinear(const std::string& why, double t) {
+    m_nonlinear_failure = "fem (nonlinear): " + why;
+    m_failure_time = t;
+    m_u = std::numeric_limits<double>::quiet_NaN();
   }
 
   /// Probes, reactions (from the residual R = M a + C v + K u - f at the constrained dofs: the
@@ -586,6 +598,8 @@ private:
   Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
   Vector m_ghosted, m_ghosted_v, m_frame_prev, m_frame_last, m_frame_mix;
   double m_max_strain = 0, m_max_rotation = 0;
+  std::string m_nonlinear_failure; ///< why a nonlinear run stopped, empty while it runs
+  double m_failure_time = -1;
   std::ostringstream m_timer_stream;
   dealii::TimerOutput m_timer;
 };

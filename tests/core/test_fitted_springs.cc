@@ -7,6 +7,7 @@
 #include "vtb/core/force_jacobian.hh"
 #include "vtb/core/spring_network.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 
 #include <Eigen/SparseCholesky>
@@ -176,6 +177,18 @@ TEST(FittedSprings, AreCachedPerMeshAndMaterial) {
   cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit);
   EXPECT_FALSE(hit);
   ::unsetenv("VTB_CACHE_DIR");
+}
+
+TEST(FittedSprings, RefuseAMeshTooSmallToFitWithOneLine) {
+  // 6 nodes (12 dofs, 3 rigid) cannot hold 16 training modes and their Ritz guard: bad input
+  // naming the key, not an internal error.
+  try {
+    fitted_stiffness(generate_rectangle({0.1, 0.02}, {2, 1}), 1.0e4, 0.3, 0.01);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[solver].springs = \"fitted\": the mesh has 6 nodes"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(FittedSprings, AreDeterministic) {
