@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cmath>
 #include <iostream>
 
@@ -156,28 +158,9 @@ TEST(Cvode, TensorFilterTracksACantileverStepAsWellAsImplicitEuler) {
   // error is implicit Euler's first-order one. Goal (the fidelity issue): at most 1.5x
   // implicit Euler's at dt = 1, 10 and 40 ms. Measured (with the transverse cover of warped_filter.hh):
   // 0.32/0.43, 2.8/4.1, 17.3/14.1 %; the full filter 16, 57, 92 %.
-  Model<2> model = test::model_from(R"(
-[scene]
-name = "cantilever-step"
-duration = 1.0
-output_interval = 0.04
-[mesh]
-generate = { shape = "rectangle", size = [0.2, 0.02], divisions = [20, 2] }
-[material]
-young_modulus = 5.0e4
-poisson_ratio = 0.3333
-density = 1000.0
-thickness = 0.001
-retardation_time = 0.01
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.0, -0.0002]
-[[probe]]
-name = "tip"
-point = [0.2, 0.01]
-)");
+  // The reproduction's transient.csv runs the same scene.
+  const Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/cantilever_step.toml");
+  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
   Trajectory<2> ref;
   ASSERT_TRUE(simulate_cvode(model, CvodeOptions{1e-10, 1e-15}, ref, true).stable);
   auto tip_error = [&](const std::string& kind, const std::string& filter, double dt) {
