@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '2', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '3', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -33,7 +33,8 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double E, double nu,
   for (const auto& c : mesh.cells) f.add(c.data(), sizeof(int) * c.size());
   for (const double x : {E, nu, dim == 2 ? t : 1.0}) f.add(x);
   const FitOptions o;
-  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting})
+  for (const double x :
+       {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, double(o.cg_iterations)})
     f.add(x);
   return f.h;
 }

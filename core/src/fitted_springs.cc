@@ -304,7 +304,7 @@ template <int dim> VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const
   for (int it = 0; it < o.max_iterations; ++it) {
     const VectorXd gradient = fit.apply_transpose(fit.residual()) + mu * x;
     int used = 0;
-    const VectorXd trial = (x + normal_cg(fit, mu + lambda, -gradient, 200, used)).cwiseMax(lower);
+    const VectorXd trial = (x + normal_cg(fit, mu + lambda, -gradient, o.cg_iterations, used)).cwiseMax(lower);
     rep.cg_iterations += used;
     ++rep.iterations;
     const double trial_objective = fit.evaluate(trial) + 0.5 * mu * trial.squaredNorm();

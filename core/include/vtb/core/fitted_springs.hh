@@ -25,6 +25,10 @@ struct FitOptions {
   double pull = 1e-2;      ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
   double floor = 0.01;     ///< k >= floor * k_prior (the prior: Lloyd, at least 1 % of van Gelder, or van Gelder)
   int max_iterations = 40; ///< Levenberg-Marquardt iterations
+  /// CG iterations at most per Levenberg-Marquardt step (each: two batched solves). A
+  /// truncated inner solve costs no accuracy: on a 1,917-node slab 40 gave the residual of
+  /// 200 (7.44e-4 against 7.47e-4) in 26 s instead of 63 s.
+  int cg_iterations = 40;
   double tolerance = 5e-3; ///< stop when an accepted step lowers the objective by less than this (relative)
   /// Mode m's target and load are scaled by (lambda_1 / lambda_m)^weighting. At 1 (the
   /// default) the training loads are lambda_1 M phi_m, loads of one size shaped like each mode,
