@@ -34,6 +34,7 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
   c.solver = options.solver.value_or(interactive ? scene.solver.kind : solvers::kFiltered);
   c.filter = options.filter.value_or(scene.solver.filter);
   c.dt = options.dt.value_or(scene.solver.dt);
+  c.springs = scene.solver.springs;
   if (!interactive && !options.solver && note)
     *note = "the scene's solver \"" + scene.solver.kind + "\" is not interactive; running filtered";
   return c;

@@ -31,6 +31,7 @@ template <int dim> void LiveSim<dim>::rebuild() {
   if (!(m_controls.stiffness_scale > 0)) throw InputError("vtb view: the stiffness scale must be > 0");
   Scene s = m_scene;
   s.material.young_modulus *= m_controls.stiffness_scale;
+  s.solver.springs = m_controls.springs;
   auto model = std::make_unique<Model<dim>>(build_model<dim>(s, m_mesh));
   IntegratorOptions o = integrator_options(s.solver);
   o.kind = m_controls.solver;

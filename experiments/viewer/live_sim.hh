@@ -22,7 +22,10 @@ namespace vtb::viewer {
 inline std::vector<std::string> interactive_solvers() {
   return solvers::names(solvers::is_stepper);
 }
-inline constexpr std::array<const char*, 2> kFilters = {solvers::kFilterFull, solvers::kFilterNeighbors};
+inline constexpr std::array<const char*, 3> kFilters = {solvers::kFilterFull, solvers::kFilterNeighbors,
+                                                        solvers::kFilterTensor};
+/// The spring calibrations ([solver].springs); "fitted" fits once per mesh and material (cached).
+inline constexpr std::array<const char*, 3> kSprings = {"lloyd", "van-gelder", "fitted"};
 
 /// What the panel controls; applying it rebuilds the model and the integrator.
 struct SimControls {
@@ -30,6 +33,7 @@ struct SimControls {
   std::string filter = solvers::kFilterFull;
   double dt = 1e-3;
   double stiffness_scale = 1.0;
+  std::string springs = "lloyd"; ///< the calibration
 };
 
 /// A hand pull: the node is pulled toward `target` by a spring of stiffness k (N/m).

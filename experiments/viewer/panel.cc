@@ -33,6 +33,14 @@ template <int dim> void App<dim>::draw_solver_controls() {
       }
     ImGui::EndCombo();
   }
+  if (ImGui::BeginCombo("springs", m_edit.springs.c_str())) {
+    for (const char* k : kSprings)
+      if (ImGui::Selectable(k, m_edit.springs == k)) {
+        m_edit.springs = k;
+        changed = true;
+      }
+    ImGui::EndCombo();
+  }
   float log_dt = static_cast<float>(std::log10(m_edit.dt));
   if (ImGui::SliderFloat("log10 dt", &log_dt, -6.0f, -1.0f, "%.2f")) {
     m_edit.dt = std::pow(10.0, static_cast<double>(log_dt));

@@ -2,6 +2,7 @@
 // checked for content, not for pixels: the body is drawn where the scene puts it, a drag pulls
 // it toward the cursor and brings out the strain colours, and an unstable solver is reported
 // while the viewer carries on.
+#include "../../experiments/viewer/live_sim.hh"
 #include "../../experiments/viewer/viewer.hh"
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 
@@ -157,6 +159,31 @@ TEST(Viewer, ADragPullsThePlateTowardTheCursorAndShowsStrain) {
   // At rest the colour scale has nothing to show (uniform dark); pulled, warm colours appear.
   EXPECT_LT(count_if(rest, warm), 50);
   EXPECT_GT(count_if(pulled, warm), 500);
+}
+
+TEST(Viewer, ThePanelRunsTheTensorFilterOnFittedSprings) {
+  // The panel's choices rebuild the simulation: the lag-free tensor filter on springs fitted
+  // to the FEM. A pull then moves the plate and the run stays sound; the calibration is the
+  // one chosen, and a calibration name the panel does not offer is refused with the old kept.
+  const test::FreshDir cache; // the fit's cache, away from the user's
+  ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
+  const Scene scene = plate();
+  viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
+  viewer::SimControls c = sim.controls();
+  c.filter = solvers::kFilterTensor;
+  c.springs = "fitted";
+  sim.configure(c);
+  EXPECT_EQ(sim.model().net.calibration, "fitted");
+  const int tip = sim.model().probes.front().second;
+  sim.add_pull(tip, sim.position(tip) + Vec<2>(0.0, 0.01), true);
+  for (int k = 0; k < 20; ++k) sim.advance(0.01, 10.0);
+  EXPECT_TRUE(sim.failure().empty()) << sim.failure();
+  EXPECT_GT(sim.state().u.col(tip)(1), 1e-4);
+  viewer::SimControls bad = sim.controls();
+  bad.springs = "hooke";
+  EXPECT_THROW(sim.configure(bad), InputError);
+  EXPECT_EQ(sim.controls().springs, "fitted");
+  ::unsetenv("VTB_CACHE_DIR");
 }
 
 TEST(Viewer, AnUnstableSolverIsReportedAndTheViewerCarriesOn) {
