@@ -179,6 +179,8 @@ INSTANTIATE_TEST_SUITE_P(
                 "[solver].filter: = \"partial\": must be one of neighbors full"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nsprings = \"hooke\"",
                 "[solver].springs: = \"hooke\": must be one of lloyd van-gelder fitted"},
+        BadCase{"kind = \"filtered\"", "kind = \"fem\"\nkinematics = \"large\"",
+                "[solver].kinematics: = \"large\": must be one of linear nonlinear"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nstrain_limit = -0.1",
                 "[solver].strain_limit: = -0.1: must be >= 0"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nmomentum_correction = 1",
