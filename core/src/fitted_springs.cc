@@ -332,7 +332,8 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   const auto edges = unique_edges(mesh);
   const auto ns = static_cast<Eigen::Index>(edges.size());
   if (N - (dim == 2 ? 3 : 6) < modes + 8)
-    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) + " nodes; the fit needs at least " +
+    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) +
+                     " nodes; the fit needs at least " +
                      std::to_string((modes + 8 + (dim == 2 ? 3 : 6) + dim - 1) / dim));
   Nodal<dim> dir(dim, ns);
   for (Eigen::Index s = 0; s < ns; ++s)
