@@ -250,17 +250,7 @@ template <int dim>
 RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Trajectory<dim>& traj, bool record_field,
                          const Eigen::MatrixXd& applied) {
   using clock = std::chrono::steady_clock;
-  RunReport rep;
-  rep.solver = solvers::kCvode;
-  rep.dim = dim;
-  rep.nodes = model.num_nodes();
-  rep.springs = model.net.num_springs();
-  rep.free_nodes = static_cast<int>(model.free_nodes.size());
-  rep.duration = model.duration;
-  rep.calibration = model.net.calibration;
-  rep.calibration_seconds = model.net.calibration_seconds;
-  rep.calibration_cached = model.net.calibration_cached;
-  rep.effective_poisson_ratio = dim == 2 ? 1.0 / 3.0 : 0.25;
+  RunReport rep = spring_report(model, solvers::kCvode);
   if (!(o.rtol > 0) || !(o.atol > 0)) throw InputError("[solver].rtol and atol must be > 0");
 
   const auto t0 = clock::now();

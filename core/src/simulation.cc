@@ -68,18 +68,8 @@ std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
 /// What a spring run reports before it starts: sizes, the step, the calibration, the filter's
 /// options, and the explicit scheme's predicted limit.
 template <int dim> RunReport report_header(const Model<dim>& model, const IntegratorOptions& o) {
-  RunReport rep;
-  rep.solver = o.kind;
-  rep.dim = dim;
-  rep.nodes = model.num_nodes();
-  rep.springs = model.net.num_springs();
-  rep.free_nodes = static_cast<int>(model.free_nodes.size());
+  RunReport rep = spring_report(model, o.kind);
   rep.dt = o.dt;
-  rep.duration = model.duration;
-  rep.calibration = model.net.calibration;
-  rep.calibration_seconds = model.net.calibration_seconds;
-  rep.calibration_cached = model.net.calibration_cached;
-  rep.effective_poisson_ratio = spring_poisson_ratio(dim);
   if (o.kind == solvers::kFiltered) {
     rep.filter = o.filter;
     rep.momentum_correction = o.momentum_correction && !model.has_constraints();

@@ -3,6 +3,7 @@
 /// What the spring solvers simulate: the scene's Problem and the spring network made from it.
 
 #include "vtb/core/problem.hh"
+#include "vtb/core/run_report.hh"
 #include "vtb/core/spring_network.hh"
 
 namespace vtb {
@@ -11,6 +12,11 @@ template <int dim> struct Model : Problem<dim> { SpringNetwork<dim> net; };
 
 /// The problem (build_problem) and its spring network ([solver].springs calibration).
 template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
+
+/// What every spring solver reports alike (the integrators and CVODE): the solver's name, the
+/// sizes, the duration and the calibration (its name, wall time, whether it came from the
+/// cache, and the Poisson ratio the lattice implies).
+template <int dim> RunReport spring_report(const Model<dim>& model, const std::string& solver);
 
 /// Loads the scene's mesh, builds the model in the mesh's dimension and returns f(model); f
 /// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)
