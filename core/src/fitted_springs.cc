@@ -1,7 +1,9 @@
 #include "vtb/core/fitted_springs.hh"
 
 #include "vtb/core/calibration.hh"
+#include "vtb/core/force_jacobian.hh"
 #include "vtb/core/nodal.hh"
+#include "vtb/core/spring_network.hh"
 #include "vtb/meshes/input_error.hh"
 
 #include <Eigen/Dense>
@@ -10,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
-#include <stdexcept>
 
 namespace vtb {
 namespace {
@@ -152,23 +153,14 @@ MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass
   return X.leftCols(count);
 }
 
-/// The network's stiffness at rest, sum_s k_s g_s g_s^T with g_s = n_s at j and -n_s at i.
-template <int dim>
-void spring_triplets(const std::vector<std::array<int, 2>>& edges, const Nodal<dim>& dir, const VectorXd& k,
-                     Triplets& trip) {
+/// The network's stiffness at rest, sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i), through
+/// the shared Jacobian assembly (force_jacobian.hh; stiffness signs).
+template <int dim> void rest_stiffness_triplets(const SpringNetwork<dim>& net, const Nodal<dim>& rest, Triplets& trip) {
   trip.clear();
-  for (std::size_t s = 0; s < edges.size(); ++s) {
-    const auto [i, j] = edges[s];
-    const Mat<dim> B = k[static_cast<Eigen::Index>(s)] * dir.col(static_cast<Eigen::Index>(s)) *
-                       dir.col(static_cast<Eigen::Index>(s)).transpose();
+  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
     for (int p = 0; p < dim; ++p)
-      for (int q = 0; q < dim; ++q) {
-        trip.emplace_back(dim * i + p, dim * i + q, B(p, q));
-        trip.emplace_back(dim * j + p, dim * j + q, B(p, q));
-        trip.emplace_back(dim * i + p, dim * j + q, -B(p, q));
-        trip.emplace_back(dim * j + p, dim * i + q, -B(p, q));
-      }
-  }
+      for (int q = 0; q < dim; ++q) trip.emplace_back(dim * i + p, dim * j + q, -sign * K(p, q));
+  });
 }
 
 /// The training set: M-orthonormal lowest non-rigid modes of the free mesh, projected off the
@@ -183,14 +175,18 @@ struct Training {
 /// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
 template <int dim> class Fit {
 public:
-  Fit(const std::vector<std::array<int, 2>>& edges, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr,
+  /// `net`: the mesh's network (its stiffness is set at each evaluate); `dir`: its springs'
+  /// unit rest directions.
+  Fit(const SpringNetwork<dim>& net, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr,
       PinnedSolver& solver)
-      : m_edges(edges), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver) {}
+      : m_net(net), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver),
+        m_rest(Nodal<dim>::Zero(dim, net.num_nodes())) {}
 
   /// Factorises K_s at x and solves the training loads; returns 1/2 ||residual||^2.
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
-    spring_triplets<dim>(m_edges, m_dir, m_k, m_trip);
+    m_net.stiffness = m_k;
+    rest_stiffness_triplets(m_net, m_rest, m_trip);
     m_ks.setFromTriplets(m_trip.begin(), m_trip.end());
     m_solver.factorize(m_ks);
     m_U = m_solver.solve(m_F);
@@ -200,13 +196,12 @@ public:
     return 0.5 * m_res.squaredNorm();
   }
   const MatrixXd& residual() const { return m_res; }
-  const VectorXd& stiffness() const { return m_k; }
 
   /// J v: d residual / dx along v = -P K^+ G diag(h_m) v per mode.
   MatrixXd apply(const VectorXd& v) const {
     MatrixXd W = MatrixXd::Zero(m_F.rows(), m_F.cols());
-    for (std::size_t s = 0; s < m_edges.size(); ++s) {
-      const auto [i, j] = m_edges[s];
+    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
+      const auto [i, j] = m_net.edge[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < W.cols(); ++m) {
         const Vec<dim> g = (m_H(se, m) * v[se]) * m_dir.col(se);
@@ -226,9 +221,9 @@ private:
   MatrixXd project(const MatrixXd& U) const { return U - m_Q * (m_Q.transpose() * U); }
   /// G^T U: per spring and column, n_s . (u_j - u_i).
   MatrixXd gather(const MatrixXd& U) const {
-    MatrixXd out(static_cast<Eigen::Index>(m_edges.size()), U.cols());
-    for (std::size_t s = 0; s < m_edges.size(); ++s) {
-      const auto [i, j] = m_edges[s];
+    MatrixXd out(static_cast<Eigen::Index>(m_net.edge.size()), U.cols());
+    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
+      const auto [i, j] = m_net.edge[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < U.cols(); ++m)
         out(se, m) =
@@ -237,11 +232,12 @@ private:
     return out;
   }
 
-  const std::vector<std::array<int, 2>>& m_edges;
+  SpringNetwork<dim> m_net;
   const Nodal<dim>& m_dir;
   const VectorXd& m_k0;
   const MatrixXd &m_Q, &m_T, &m_F;
   PinnedSolver& m_solver;
+  const Nodal<dim> m_rest; ///< zero displacement
   VectorXd m_k;
   Triplets m_trip;
   SpMat m_ks{m_F.rows(), m_F.rows()};
@@ -329,7 +325,9 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
                                  const FitOptions& options, FitReport* report) {
   const int n = mesh.num_nodes(), N = dim * n;
   const int modes = options.modes > 0 ? options.modes : (dim == 2 ? 16 : 24);
-  const auto edges = unique_edges(mesh);
+  // The network (van Gelder's constants, no dashpots): its edges, and the assembly's input.
+  const SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
+  const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());
   if (N - (dim == 2 ? 3 : 6) < modes + 8)
     throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) +
@@ -345,16 +343,16 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
   // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
   // Lloyd's per-element fit can leave near-mechanisms that van Gelder does not.
-  const VectorXd vg = van_gelder_stiffness(mesh, E, thickness);
+  const VectorXd& vg = net.stiffness;
   const VectorXd lloyd = lloyd_stiffness(mesh, E, nu, thickness).cwiseMax(0.01 * vg);
   const VectorXd zero = VectorXd::Zero(ns);
   FitReport rep;
   rep.modes = modes;
-  rep.lloyd_residual = std::sqrt(2 * Fit<dim>(edges, dir, lloyd, tr, solver).evaluate(zero) / modes);
-  const double vg_residual = std::sqrt(2 * Fit<dim>(edges, dir, vg, tr, solver).evaluate(zero) / modes);
+  rep.lloyd_residual = std::sqrt(2 * Fit<dim>(net, dir, lloyd, tr, solver).evaluate(zero) / modes);
+  const double vg_residual = std::sqrt(2 * Fit<dim>(net, dir, vg, tr, solver).evaluate(zero) / modes);
   const VectorXd& prior = vg_residual < rep.lloyd_residual ? vg : lloyd;
   rep.prior = &prior == &vg ? "van-gelder" : "lloyd";
-  Fit<dim> fit(edges, dir, prior, tr, solver);
+  Fit<dim> fit(net, dir, prior, tr, solver);
   VectorXd x = zero;
   if (options.start.size() == ns)
     x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
