@@ -40,13 +40,15 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
 
 template <int dim>
 WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt)
-    : m_model(model), m_h(tensor_filter_matrix(model, dt, 0.0)),
-      m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
+    : WarpedFilter(model, dt, tensor_filter_matrix(model, dt, 0.0)) {}
+
+template <int dim>
+WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0)
+    : m_model(model), m_h(H0), m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
       m_rest_dir(dim, model.net.num_springs()), m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1) {
   if (!m_h.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
   // H(beta) = H(0) + beta (H(1) - H(0)) entry by entry: both have one pattern.
-  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(model, dt, 0.0),
-                                    H1 = tensor_filter_matrix(model, dt, 1.0);
+  const Eigen::SparseMatrix<double> H1 = tensor_filter_matrix(model, dt, 1.0);
   m_base.assign(m_h.values(), m_h.values() + m_h.nonzeros());
   m_transverse.assign(m_base.size(), 0.0);
   for (int c = 0; c < H0.outerSize(); ++c)
@@ -91,7 +93,6 @@ template <int dim> void WarpedFilter<dim>::cover(double mismatch) {
   double* v = m_h.values();
   for (std::size_t k = 0; k < m_base.size(); ++k) v[k] = m_base[k] + m_beta * m_transverse[k];
   m_h.factorize(); // H(beta) is H(0) plus positive semidefinite terms: positive definite
-  ++m_refactorizations;
 }
 
 template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {

@@ -42,11 +42,9 @@ public:
   /// The largest |n_s - R n0_s| over springs s = (i, j), R the normalised mean of R_i and R_j
   /// (rotations() first).
   double direction_mismatch(const Nodal<dim>& u) const;
-  /// The transverse weight beta now, and how often H was refactorised for it.
-  double transverse() const { return m_beta; }
-  int refactorizations() const { return m_refactorizations; }
 
 private:
+  WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0);
   /// Sets beta for this mismatch (refactorising H when it changes).
   void cover(double mismatch);
 
@@ -56,7 +54,6 @@ private:
   Nodal<dim> m_rest_dir;                    ///< per spring, unit
   std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
   double m_beta = 0;
-  int m_refactorizations = 0;
   Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
 };
 
