@@ -397,14 +397,14 @@ private:
   }
 
   /// The nonlinear solid's internal force f_int(u, v) into f and, with `tangent`, its tangent
-  /// plus mass_weight M into m_T (nonlinear.hh).
-  void nonlinear_force(const Vector& u, const Vector& v, Vector& f, double rate, double mass_weight, bool tangent) {
+  /// into m_T (nonlinear.hh; constrained rows and columns eliminated).
+  void nonlinear_force(const Vector& u, const Vector& v, Vector& f, double rate, bool tangent) {
     m_ghosted = u;
     m_ghosted_v = v;
     f = 0;
     if (tangent) m_T = 0;
     assemble_nonlinear<dim>(m_mapping, m_fe, m_dofs, m_mat, m_opt.degree, m_ghosted, m_ghosted_v, m_constraints,
-                            NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate, mass_weight});
+                            NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate});
   }
 
   /// Newton on the residual of the step, from m_ubar (prescribed values in place):
@@ -421,7 +421,8 @@ private:
       m_dv = m_ubar;
       m_dv -= m_u;
       m_dv *= rate;
-      nonlinear_force(m_ubar, m_dv, m_rhs, rate, mass_weight, true);
+      nonlinear_force(m_ubar, m_dv, m_rhs, rate, true);
+      if (dynamic) m_T.add(mass_weight, m_M0); // the consistent mass, prescribed rows eliminated
       m_rhs.add(-load_scale, m_f);
       if (dynamic) {
         m_tmp = m_dv;
@@ -511,7 +512,7 @@ private:
     out.probe_u.push_back(pu);
     load_vector(t, m_f);
     if (m_opt.nonlinear) {
-      nonlinear_force(m_u, m_v, m_rhs, 0.0, 0.0, false);
+      nonlinear_force(m_u, m_v, m_rhs, 0.0, false);
       if (!m_opt.static_solve) {
         m_tmp = m_a;
         m_tmp.add(m_mat.mass_damping, m_v);

@@ -33,13 +33,12 @@ template <int dim> dealii::Tensor<2, dim> sym(const dealii::Tensor<2, dim>& A) {
 }
 
 /// What assemble_nonlinear adds: the internal force vector f_int(u, v) (no constraints: every
-/// dof, for the reactions) and/or the tangent d f_int / du + mass_weight M, with the
-/// constrained rows and columns eliminated (a positive diagonal left, as A0 has).
+/// dof, for the reactions) and/or the tangent d f_int / du, with the constrained rows and
+/// columns eliminated (a positive diagonal left, as A0 has).
 template <int dim, class Vector, class Matrix> struct NonlinearTargets {
   Vector* force = nullptr;
   Matrix* tangent = nullptr;
-  double rate = 0;        ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
-  double mass_weight = 0; ///< coefficient of the consistent mass in the tangent
+  double rate = 0; ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
 };
 
 /// u and v must see every dof of the locally owned cells (ghosted vectors under MPI).
@@ -54,8 +53,7 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
   // Degree 2p integrates the tangent's polynomial parts; the stress is of higher degree in u,
   // so one more point order keeps the quadrature error below the discretisation's.
   const dealii::QGaussSimplex<dim> quad(static_cast<unsigned int>(degree + 2));
-  dealii::FEValues<dim> fev(mapping, fe, quad,
-                            dealii::update_values | dealii::update_gradients | dealii::update_JxW_values);
+  dealii::FEValues<dim> fev(mapping, fe, quad, dealii::update_gradients | dealii::update_JxW_values);
   const dealii::FEValuesExtractors::Vector disp(0);
   const unsigned int nd = fe.n_dofs_per_cell();
   dealii::FullMatrix<double> k(nd, nd);
@@ -90,8 +88,6 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
           const dealii::Tensor<2, dim> dS = svk_stress<dim>(
               sym<dim>(FtG) + tau * sym<dim>(dealii::transpose(G) * grad_v[q] + out.rate * FtG), lambda, mu);
           k(i, j) += ((G * S + F * dS) * gi)[comp[i]] * jxw;
-          if (comp[i] == comp[j])
-            k(i, j) += out.mass_weight * mat.density * fev.shape_value(i, q) * fev.shape_value(j, q) * jxw;
         }
       }
     }
