@@ -3,9 +3,8 @@
 #include "vtb/core/calibration.hh"
 #include "vtb/core/fitted_cache.hh"
 
-#include <chrono>
-
 #include <algorithm>
+#include <chrono>
 #include <numeric>
 
 namespace vtb {
