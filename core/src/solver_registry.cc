@@ -20,6 +20,12 @@ const Entry& find(std::string_view name, std::string_view where) {
   throw InputError(msg + " (known: " + list() + ")");
 }
 
+void select(std::string_view name, std::string_view where, std::string& kind, std::string& filter) {
+  const Entry& e = find(name, where);
+  kind = e.kind;
+  if (*e.filter) filter = e.filter;
+}
+
 std::vector<std::string> names(bool (*keep)(const Entry&)) {
   std::vector<std::string> v;
   for (const Entry& e : kEntries)

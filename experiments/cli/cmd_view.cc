@@ -23,7 +23,9 @@ Action add_view(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Render N frames (1/60 s of simulated time each), then exit");
   cmd->add_option("--screenshot", o->screenshot, "With --frames: write the last frame to this PNG");
   cmd->add_option("--drag", o->drag, "Hold a pull from the first frame: X0,Y0:X1,Y1 in scene coordinates");
-  cmd->add_option("--solver", o->solver, "Start with this solver: " + solvers::list(solvers::is_stepper));
+  // The steppers, and the filtered scheme's names that fix its filter.
+  const auto startable = [](const solvers::Entry& e) { return e.interactive || *e.filter != '\0'; };
+  cmd->add_option("--solver", o->solver, "Start with this solver: " + solvers::list(+startable));
   cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors");
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
   cmd->add_flag("--device", o->device,

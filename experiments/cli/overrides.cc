@@ -10,11 +10,8 @@ namespace vtb::cli {
 
 Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;
-  if (ov.solver) { // any registry name: a kind, or a kind with its filter (filtered-tensor)
-    const solvers::Entry& e = solvers::find(*ov.solver, "--solver");
-    scene.solver.kind = e.kind;
-    if (*e.filter) scene.solver.filter = e.filter;
-  }
+  // Any registry name: a kind, or a kind with its filter (filtered-tensor).
+  if (ov.solver) solvers::select(*ov.solver, "--solver", scene.solver.kind, scene.solver.filter);
   if (ov.dt) {
     if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
     scene.solver.dt = *ov.dt;

@@ -1,5 +1,6 @@
 #include "app.hh"
 #include "vtb/core/solver_names.hh"
+#include "vtb/core/solver_registry.hh"
 
 #include "colormap.hh"
 
@@ -31,8 +32,12 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
   const auto names = interactive_solvers();
   const bool interactive = std::find(names.begin(), names.end(), scene.solver.kind) != names.end();
   SimControls c;
-  c.solver = options.solver.value_or(interactive ? scene.solver.kind : solvers::kFiltered);
-  c.filter = options.filter.value_or(scene.solver.filter);
+  c.solver = interactive ? scene.solver.kind : solvers::kFiltered;
+  c.filter = scene.solver.filter;
+  // --solver takes any registry name (filtered-tensor: filtered with the tensor filter); an
+  // explicit --filter wins over the one a name implies.
+  if (options.solver) solvers::select(*options.solver, "--solver", c.solver, c.filter);
+  if (options.filter) c.filter = *options.filter;
   c.dt = options.dt.value_or(scene.solver.dt);
   c.springs = scene.solver.springs;
   if (!interactive && !options.solver && note)

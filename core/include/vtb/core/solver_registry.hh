@@ -66,6 +66,11 @@ inline bool is_spring(const Entry& e) {
 /// the message, e.g. "--solvers").
 const Entry& find(std::string_view name, std::string_view where = "solver");
 
+/// A registry name as a [solver].kind and filter: the entry's kind, and its filter when it fixes
+/// one (filtered-tensor: kind filtered, filter tensor); `filter` is left as it is otherwise.
+/// InputError as find() for an unknown name.
+void select(std::string_view name, std::string_view where, std::string& kind, std::string& filter);
+
 /// The names of the entries that satisfy `keep` (all by default), in table order.
 std::vector<std::string> names(bool (*keep)(const Entry&) = nullptr);
 
