@@ -53,14 +53,19 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model
 
 template <int dim>
 FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
-    : Integrator<dim>(o.dt), m_model(model), m_full(o.filter == solvers::kFilterFull),
+    : Integrator<dim>(o.dt), m_model(model),
+      m_full(o.filter == solvers::kFilterFull || o.filter == solvers::kFilterMultigrid),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
-  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors && o.filter != solvers::kFilterTensor)
-    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full or tensor");
+  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors && o.filter != solvers::kFilterTensor &&
+      o.filter != solvers::kFilterMultigrid)
+    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full, tensor or multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (o.filter == solvers::kFilterTensor) {
     m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+  } else if (o.filter == solvers::kFilterMultigrid) {
+    m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
+    m_rhs.resize(dim, nf);
   } else if (m_full) {
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
@@ -96,6 +101,11 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   // dv = dt W a.
   if (m_tensor) {
     m_tensor->apply(s.u, m_force, dt, m_dv);
+  } else if (m_mg) {
+    // H^-1 F_node by one V-cycle, in the free nodes' order.
+    for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);
+    m_mg->apply(m_rhs, m_dv);
+    m_dv *= dt;
   } else if (m_full) {
     // W a = H^-1 M a = H^-1 F_node.
     for (Eigen::Index r = 0; r < nf; ++r)

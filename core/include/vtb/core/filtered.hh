@@ -23,8 +23,15 @@
 /// (docs/method.md derives and measures it). `full` applies the whole W = H^-1 M without
 /// forming it: H is constant, so it is factorised once (sparse LDL^T) and each step does
 /// two triangular solves; it is unconditionally stable for the linear problem.
+///
+/// `multigrid` is `full` with H^-1 replaced by one fixed symmetric V-cycle B (multigrid.hh),
+/// for meshes whose factor of H is too large (3D, thousands of nodes). 0 < B <= H^-1, so
+/// B^-1 = H + Delta with Delta >= 0: the step is `full`'s with the extra mass Delta, stable
+/// at any dt for the linear problem as `full` is (docs/method.md; the tests compute the
+/// linearised step's spectral radius).
 
 #include "vtb/core/integrator.hh"
+#include "vtb/core/multigrid.hh"
 #include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
 #include "vtb/core/warped_filter.hh"
@@ -60,6 +67,7 @@ private:
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
+  std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
   std::vector<int> m_free_of_row;                        ///< full: factor row -> free index
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node

@@ -9,6 +9,7 @@ inline constexpr const char* kFiltered = "filtered"; ///< the scene's [solver].f
 inline constexpr const char* kFilteredFull = "filtered-full";
 inline constexpr const char* kFilteredNeighbors = "filtered-neighbors";
 inline constexpr const char* kFilteredTensor = "filtered-tensor";
+inline constexpr const char* kFilteredMultigrid = "filtered-multigrid";
 inline constexpr const char* kImplicitEuler = "implicit-euler";
 inline constexpr const char* kCvode = "cvode";
 inline constexpr const char* kFem = "fem";
@@ -17,5 +18,6 @@ inline constexpr const char* kFem = "fem";
 inline constexpr const char* kFilterFull = "full";
 inline constexpr const char* kFilterNeighbors = "neighbors";
 inline constexpr const char* kFilterTensor = "tensor";
+inline constexpr const char* kFilterMultigrid = "multigrid"; ///< full, H^-1 by one V-cycle
 
 } // namespace vtb::solvers

@@ -42,6 +42,8 @@ inline constexpr Entry kEntries[] = {
      "dt, momentum_correction, strain_limit", false, true, true, false},
     {kFilteredTensor, "the filtered scheme with the rest Jacobian's blocks and stiffness warping (no lag)", kFiltered,
      kFilterTensor, "dt, momentum_correction, strain_limit", false, true, true, false},
+    {kFilteredMultigrid, "the full filter with H^-1 applied by one symmetric multigrid V-cycle (large 3D meshes)",
+     kFiltered, kFilterMultigrid, "dt, momentum_correction, strain_limit", false, true, true, false},
     {kImplicitEuler,
      "linearised backward Euler with the spring Jacobian (sparse LDL^T, or warm-started block-Jacobi CG)",
      kImplicitEuler, "", "dt, strain_limit, linear_solver, cg_tolerance", true, true, true, true},
