@@ -1,5 +1,6 @@
 #include "vtb/core/implicit_euler_cg.hh"
 
+#include "vtb/core/filtered.hh"
 #include "vtb/core/force_jacobian.hh"
 
 #include <Eigen/LU>
@@ -10,7 +11,7 @@
 namespace vtb {
 
 template <int dim>
-ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double tolerance)
+ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double tolerance, bool multigrid)
     : Integrator<dim>(dt), m_model(model), m_tolerance(tolerance) {
   if (!(tolerance > 0 && tolerance < 1)) throw InputError("[solver].cg_tolerance must be in (0, 1)");
   const int n = model.num_nodes();
@@ -20,6 +21,12 @@ ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double
   m_block.assign(static_cast<std::size_t>(model.net.num_springs()), Mat<dim>::Zero());
   m_inv_diag.assign(static_cast<std::size_t>(n), Mat<dim>::Zero());
   for (auto* v : {&m_force, &m_b, &m_x, &m_r, &m_z, &m_p, &m_ap}) *v = Nodal<dim>::Zero(dim, n);
+  if (multigrid) {
+    m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, dt));
+    const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
+    m_free_r = Nodal<dim>::Zero(dim, nf);
+    m_free_z = Nodal<dim>::Zero(dim, nf);
+  }
 }
 
 /// B_s per spring, the right-hand side dt (f + f_ext + dt K v) and the block-Jacobi inverse.
@@ -61,7 +68,14 @@ template <int dim> void ImplicitEulerCG<dim>::apply(const Nodal<dim>& x, Nodal<d
     if (m_model.constrained[static_cast<std::size_t>(i)]) y.col(i).setZero();
 }
 
-template <int dim> void ImplicitEulerCG<dim>::precondition(const Nodal<dim>& r, Nodal<dim>& z) const {
+template <int dim> void ImplicitEulerCG<dim>::precondition(const Nodal<dim>& r, Nodal<dim>& z) {
+  if (m_mg) { // constrained nodes keep z = 0 (r is 0 there too)
+    const auto& free = m_model.free_nodes;
+    for (std::size_t a = 0; a < free.size(); ++a) m_free_r.col(static_cast<Eigen::Index>(a)) = r.col(free[a]);
+    m_mg->apply(m_free_r, m_free_z);
+    for (std::size_t a = 0; a < free.size(); ++a) z.col(free[a]) = m_free_z.col(static_cast<Eigen::Index>(a));
+    return;
+  }
   for (Eigen::Index i = 0; i < r.cols(); ++i) z.col(i) = m_inv_diag[static_cast<std::size_t>(i)] * r.col(i);
 }
 

@@ -24,9 +24,17 @@ std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const 
   if (o.kind == solvers::kImplicitEuler) {
     // auto: the factor's fill grows like n log n in 2D but n^(4/3) in 3D (nested dissection),
     // so the refactorised LDL^T wins in 2D (517 nodes: 0.30 ms against CG's 1.46 ms) and CG
-    // in 3D (458 nodes: 1.15 ms against 1.62 ms; 9,864 nodes: 105 ms against 2.7 s).
-    if (o.linear_solver != "auto" && o.linear_solver != "direct" && o.linear_solver != "cg")
-      throw InputError("[solver].linear_solver = \"" + o.linear_solver + "\": must be auto, direct or cg");
+    // in 3D (458 nodes: 1.15 ms against 1.62 ms; 9,864 nodes: 105 ms against 2.7 s). From
+    // 4,000 free nodes in 3D the CG is preconditioned by the multigrid V-cycle: 1.8x to 2.9x
+    // faster at 10k nodes, but up to 2.3x slower on structured boxes of 1,225 nodes
+    // (bench scale; docs/performance.md).
+    if (o.linear_solver != "auto" && o.linear_solver != "direct" && o.linear_solver != "cg" &&
+        o.linear_solver != "cg-multigrid")
+      throw InputError("[solver].linear_solver = \"" + o.linear_solver +
+                       "\": must be auto, direct, cg or cg-multigrid");
+    const bool large = model.free_nodes.size() >= 4000;
+    if (o.linear_solver == "cg-multigrid" || (o.linear_solver == "auto" && dim == 3 && large))
+      return std::make_unique<ImplicitEulerCG<dim>>(model, o.dt, o.cg_tolerance, true);
     if (o.linear_solver == "cg" || (o.linear_solver == "auto" && dim == 3))
       return std::make_unique<ImplicitEulerCG<dim>>(model, o.dt, o.cg_tolerance);
     return std::make_unique<ImplicitEuler<dim>>(model, o.dt);

@@ -203,7 +203,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.springs = r.string("springs", "lloyd", {"lloyd", "van-gelder", "fitted"});
     s.solver.rtol = r.number("rtol", 1e-8, positive);
     s.solver.atol = r.number("atol", 1e-12, positive);
-    s.solver.linear_solver = r.string("linear_solver", "auto", {"auto", "direct", "cg"});
+    s.solver.linear_solver = r.string("linear_solver", "auto", {"auto", "direct", "cg", "cg-multigrid"});
     s.solver.cg_tolerance = r.number("cg_tolerance", 1e-8, positive);
     if (s.solver.cg_tolerance >= 1) r.fail("cg_tolerance", "must be below 1");
     s.solver.degree = r.integer("degree", 1, 1, 2);

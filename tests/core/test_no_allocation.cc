@@ -84,7 +84,8 @@ total_force = [0.2, 0.1]
 INSTANTIATE_TEST_SUITE_P(Integrators, NoAllocation,
                          ::testing::Values(Case{"explicit", ""}, Case{"filtered", "full"},
                                            Case{"filtered", "neighbors"}, Case{"filtered", "tensor"},
-                                           Case{"implicit-euler", "", "direct"}, Case{"implicit-euler", "", "cg"}),
+                                           Case{"implicit-euler", "", "direct"}, Case{"implicit-euler", "", "cg"},
+                                           Case{"implicit-euler", "", "cg-multigrid"}),
                          [](const auto& pinfo) {
                            std::string n = pinfo.param.kind + pinfo.param.filter +
                                            (pinfo.param.kind == "implicit-euler" ? pinfo.param.linear_solver : "");

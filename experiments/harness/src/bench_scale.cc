@@ -44,12 +44,14 @@ void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* pro
   const std::string fit = scaling_fit(out);
   write_files_atomically(out, {{"scaling_fit.csv", fit}});
   const CsvTable t = CsvTable::read(out / "scaling.csv");
-  table << std::left << std::setw(8) << "dim" << std::setw(8) << "nodes" << std::setw(18) << "solver" << std::right
-        << std::setw(14) << "step (us)" << std::setw(16) << "precompute (ms)" << std::setw(12) << "heap (MB)\n";
+  table << std::left << std::setw(11) << "family" << std::setw(5) << "dim" << std::setw(8) << "nodes" << std::setw(18)
+        << "solver" << std::right << std::setw(14) << "step (us)" << std::setw(16) << "precompute (ms)" << std::setw(12)
+        << "heap (MB)" << std::setw(14) << "error vs fem\n";
   for (std::size_t r = 0; r < t.rows(); ++r)
-    table << std::left << std::setw(8) << t.text(r, "dim") << std::setw(8) << t.text(r, "nodes") << std::setw(18)
-          << t.text(r, "solver") << std::right << std::setw(14) << t.text(r, "step_median_us") << std::setw(16)
-          << t.text(r, "precompute_ms") << std::setw(11) << t.text(r, "heap_mb") << "\n";
+    table << std::left << std::setw(11) << t.text(r, "family") << std::setw(5) << t.text(r, "dim") << std::setw(8)
+          << t.text(r, "nodes") << std::setw(18) << t.text(r, "solver") << std::right << std::setw(14)
+          << t.text(r, "step_median_us") << std::setw(16) << t.text(r, "precompute_ms") << std::setw(12)
+          << t.text(r, "heap_mb") << std::setw(13) << t.text(r, "error_vs_fem") << "\n";
   table << "\nfitted exponents (cost ~ nodes^p), scaling_fit.csv:\n" << fit;
 }
 

@@ -204,7 +204,8 @@ void creep_scaling(const std::filesystem::path& dir, Out& out) {
   for (const int dim : {2, 3})
     for (const auto& [solver, tag] : std::vector<std::pair<std::string, std::string>>{
              {solvers::kFilteredFull, "Full"}, {solvers::kImplicitEuler, "IE"}}) {
-      const auto mine = [&](std::size_t r) { return s.number(r, "dim") == dim && s.text(r, "solver") == solver; };
+      const std::string family = dim == 2 ? "rectangle" : "box"; // the structured ladders
+      const auto mine = [&](std::size_t r) { return s.text(r, "family") == family && s.text(r, "solver") == solver; };
       const auto nodes = column(s, "nodes", mine), step = column(s, "step_median_us", mine),
                  pre = column(s, "precompute_ms", mine), heap = column(s, "heap_mb", mine);
       const std::string d = dim == 2 ? "Two" : "Three";

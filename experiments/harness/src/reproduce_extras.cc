@@ -6,11 +6,9 @@
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
 
-#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
-#include <malloc.h>
 #include <ostream>
 #include <sstream>
 #include <thread>
@@ -27,57 +25,6 @@ std::string cpu_model() {
       return colon == std::string::npos ? line : line.substr(colon + 2);
     }
   return "unknown";
-}
-
-/// Heap bytes in use (glibc), to measure what an integrator holds.
-std::size_t heap_in_use() {
-  return mallinfo2().uordblks;
-}
-
-template <int dim> std::string scaling_rows(const Scene& scene, const char* family, int steps) {
-  std::ostringstream os;
-  with_model(scene, [&](const auto& model) {
-    if constexpr (std::decay_t<decltype(model)>::dimension == dim) {
-      for (const char* solver : {solvers::kFilteredFull, solvers::kImplicitEuler}) {
-        IntegratorOptions io = integrator_options(scene.solver);
-        io.kind = solver == std::string(solvers::kImplicitEuler) ? solvers::kImplicitEuler : solvers::kFiltered;
-        io.filter = solvers::kFilterFull;
-        const std::size_t before = heap_in_use();
-        const auto a = std::chrono::steady_clock::now();
-        auto integ = make_integrator(model, io);
-        const double pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
-        const std::size_t bytes = heap_in_use() - before;
-        State<dim> s = initial_state(model);
-        std::vector<double> times;
-        times.reserve(static_cast<std::size_t>(steps));
-        for (int k = 0; k < steps; ++k) {
-          const auto b = std::chrono::steady_clock::now();
-          integ->step(s);
-          times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - b).count());
-        }
-        const StepStats st = step_stats(std::move(times));
-        os << family << ',' << dim << ',' << model.num_nodes() << ',' << model.net.num_springs() << ',' << solver << ','
-           << std::setprecision(6) << pre * 1e3 << ',' << st.median * 1e6 << ',' << bytes / 1.0e6 << '\n';
-      }
-    }
-  });
-  return os.str();
-}
-
-std::string scaling_scene(int dim, int n) {
-  std::ostringstream os;
-  os << "[scene]\nname = \"scaling\"\nduration = 1.0\noutput_interval = 0.01\n[mesh]\n";
-  if (dim == 2)
-    os << "generate = { shape = \"rectangle\", size = [0.2, 0.05], divisions = [" << 4 * n << ", " << n << "] }\n";
-  else
-    os << "generate = { shape = \"box\", size = [0.2, 0.05, 0.05], divisions = [" << 4 * n << ", " << n << ", " << n
-       << "] }\n";
-  os << "[material]\nyoung_modulus = 5.0e4\npoisson_ratio = " << (dim == 2 ? "0.3333" : "0.25")
-     << "\ndensity = 1000.0\n"
-     << (dim == 2 ? "thickness = 0.001\n" : "") << "retardation_time = 2.0\n"
-     << "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = "
-     << (dim == 2 ? "[0.1, 0.0]" : "[0.1, 0.0, 0.0]") << "\n[solver]\nkind = \"filtered\"\ndt = 0.01\n";
-  return os.str();
 }
 
 } // namespace
@@ -154,23 +101,6 @@ void write_haptics(const std::filesystem::path& out, const std::filesystem::path
   write_files_atomically(out, {{"haptics_periods.csv", periods.str()},
                                {"haptics_trace.csv", trace.str()},
                                {"haptics_summary.csv", summary.str()}});
-}
-
-void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* log) {
-  std::ostringstream os;
-  os << "family,dim,nodes,springs,solver,precompute_ms,step_median_us,heap_mb\n";
-  const std::vector<int> ladder2 = quick ? std::vector<int>{4, 8, 16, 32} : std::vector<int>{4, 8, 16, 32, 64};
-  const std::vector<int> ladder3 = quick ? std::vector<int>{2, 3, 4, 6} : std::vector<int>{2, 3, 4, 6, 8, 12};
-  const int steps = quick ? 20 : 50;
-  for (int n : ladder2) {
-    if (log) *log << "[scaling] rectangle " << 4 * n << " x " << n << "\n";
-    os << scaling_rows<2>(parse_scene(scaling_scene(2, n), "scaling-2d", "."), "rectangle", steps);
-  }
-  for (int n : ladder3) {
-    if (log) *log << "[scaling] box " << 4 * n << " x " << n << " x " << n << "\n";
-    os << scaling_rows<3>(parse_scene(scaling_scene(3, n), "scaling-3d", "."), "box", steps);
-  }
-  write_files_atomically(out, {{"scaling.csv", os.str()}});
 }
 
 } // namespace vtb::harness::parts

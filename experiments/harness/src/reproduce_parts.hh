@@ -34,8 +34,10 @@ void write_transient(const std::filesystem::path& out, const std::filesystem::pa
 void write_haptics(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, double stall_time,
                    std::ostream* log);
 
-/// scaling.csv: per mesh of a 2D rectangle and a 3D box ladder and per solver (filtered-full,
-/// implicit-euler): nodes, springs, precompute, median step and the integrator's heap bytes.
+/// scaling.csv: per mesh of a 2D rectangle, a 3D box and a CGAL slab ladder (about 2k and 10k
+/// nodes, and 50k unless quick) and per solver (filtered-full, filtered-multigrid,
+/// implicit-euler): nodes, springs, precompute, median step, the integrator's heap and the
+/// largest displacement error against the FEM on the same mesh.
 void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* log);
 
 /// fidelity.csv: per case (a strip in tension and in bending on a union-jack mesh, the paper's

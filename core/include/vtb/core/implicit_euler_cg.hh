@@ -8,17 +8,24 @@
 /// dim x dim diagonal blocks (block Jacobi); the iteration starts from the previous step's dv
 /// (warm start) and stops when |r| <= cg_tolerance |b| (default 1e-8: the direct solve's
 /// answer to that relative accuracy). Allocates nothing per step.
+///
+/// With `multigrid` the preconditioner is instead one symmetric V-cycle (multigrid.hh) of the
+/// isotropic part of A, the full filter's H = M (1 + dt gamma) + dt C_L + dt^2 K_L, applied to
+/// each coordinate: SPD, so CG stays CG, and it carries the long-range coupling block Jacobi
+/// lacks (the Voigt term dt C dominates M at haptic steps; docs/performance.md).
 
 #include "vtb/core/integrator.hh"
+#include "vtb/core/multigrid.hh"
 #include "vtb/core/solver_names.hh"
 
+#include <memory>
 #include <vector>
 
 namespace vtb {
 
 template <int dim> class ImplicitEulerCG final : public Integrator<dim> {
 public:
-  ImplicitEulerCG(const Model<dim>& model, double dt, double tolerance);
+  ImplicitEulerCG(const Model<dim>& model, double dt, double tolerance, bool multigrid = false);
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kImplicitEuler; }
   /// Iterations of the last step's solve (for the benchmarks and the docs).
@@ -27,7 +34,7 @@ public:
 private:
   void assemble(const State<dim>& s);
   void apply(const Nodal<dim>& x, Nodal<dim>& y) const; ///< y = A x on free nodes, 0 on constrained
-  void precondition(const Nodal<dim>& r, Nodal<dim>& z) const;
+  void precondition(const Nodal<dim>& r, Nodal<dim>& z);
   bool solve();
 
   const Model<dim>& m_model;
@@ -37,6 +44,8 @@ private:
   std::vector<Mat<dim>> m_block;                     ///< per spring: B_s
   std::vector<Mat<dim>> m_inv_diag;                  ///< per node: inverse of A's diagonal block (0 if constrained)
   Nodal<dim> m_force, m_b, m_x, m_r, m_z, m_p, m_ap; ///< per node
+  std::unique_ptr<SymmetricMultigrid<dim>> m_mg;     ///< multigrid: the preconditioner
+  Nodal<dim> m_free_r, m_free_z;                     ///< multigrid: r and z on the free nodes
 };
 
 } // namespace vtb

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
-/// `vtb bench scale`: step time, precompute and memory of the spring solvers over a 2D and a
-/// 3D mesh ladder (the reproduction's scaling.csv), and the fitted exponent of each cost
-/// against the node count (scaling_fit.csv).
+/// `vtb bench scale`: step time, precompute, memory and error against the FEM of the spring
+/// solvers (filtered-full, filtered-multigrid, implicit-euler) over a 2D rectangle, a 3D box
+/// and a CGAL slab ladder (the reproduction's scaling.csv), and the fitted exponent of each
+/// cost against the node count (scaling_fit.csv).
 
 #include <filesystem>
 #include <iosfwd>

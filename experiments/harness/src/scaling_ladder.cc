@@ -1,0 +1,129 @@
+// scaling.csv: the spring solvers over mesh ladders (structured 2D rectangles and 3D boxes for
+// the fitted exponents; CGAL Mesh_3 slabs of about 2k, 10k and 50k nodes, the meshes a user
+// brings), each with its precompute, median step, heap and error against the FEM.
+#include "reproduce_parts.hh"
+#include "vtb/core/solver_registry.hh"
+#include "vtb/meshes/atomic_file.hh"
+
+#include "vtb/harness/metrics.hh"
+#include "vtb/harness/solvers.hh"
+
+#include <chrono>
+#include <cmath>
+#include <iomanip>
+#include <malloc.h>
+#include <ostream>
+#include <sstream>
+
+namespace vtb::harness::parts {
+namespace {
+
+/// Heap bytes in use (glibc), to measure what an integrator holds.
+std::size_t heap_in_use() {
+  return mallinfo2().uordblks;
+}
+
+/// The solvers of the ladder: the filter by its factor and by its V-cycle, and the implicit
+/// Euler baseline (direct in 2D, CG in 3D).
+constexpr const char* kLadderSolvers[] = {solvers::kFilteredFull, solvers::kFilteredMultigrid, solvers::kImplicitEuler};
+
+/// Precompute, median step and heap of `solver` on `model`, timed over `steps` steps alone.
+template <int dim>
+void time_solver(const Scene& scene, const Model<dim>& model, const char* solver, int steps, double& pre,
+                 double& median, double& bytes) {
+  IntegratorOptions io = integrator_options(scene.solver);
+  solvers::select(solver, "scaling", io.kind, io.filter);
+  const std::size_t before = heap_in_use();
+  const auto a = std::chrono::steady_clock::now();
+  auto integ = make_integrator(model, io);
+  pre = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+  bytes = static_cast<double>(heap_in_use() - before);
+  State<dim> s = initial_state(model);
+  std::vector<double> times;
+  times.reserve(static_cast<std::size_t>(steps));
+  for (int k = 0; k < steps; ++k) {
+    const auto b = std::chrono::steady_clock::now();
+    integ->step(s);
+    times.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - b).count());
+  }
+  median = step_stats(std::move(times)).median;
+}
+
+template <int dim> std::string scaling_rows(const Scene& scene, const char* family) {
+  std::ostringstream os;
+  with_model(scene, [&](const auto& model) {
+    if constexpr (std::decay_t<decltype(model)>::dimension == dim) {
+      const int steps = static_cast<int>(std::lround(scene.duration / scene.solver.dt));
+      // The reference: deal.II's Kelvin-Voigt P1 on the same mesh, same dt (what compare's
+      // default reference is); the error is the largest relative L2 displacement error over
+      // the samples, springs' modelling error included.
+      Trajectory<dim> ref;
+      run_solver(scene, model, solvers::kFem, 0, ref);
+      for (const char* solver : kLadderSolvers) {
+        double pre = 0, median = 0, bytes = 0;
+        time_solver(scene, model, solver, steps, pre, median, bytes);
+        Trajectory<dim> tr;
+        const RunReport r = run_solver(scene, model, solver, 0, tr);
+        const double error = r.stable ? compare(tr, ref).displacement_max : std::nan("");
+        os << family << ',' << dim << ',' << model.num_nodes() << ',' << model.net.num_springs() << ',' << solver << ','
+           << std::setprecision(6) << pre * 1e3 << ',' << median * 1e6 << ',' << bytes / 1.0e6 << ',' << error << '\n';
+      }
+    }
+  });
+  return os.str();
+}
+
+/// A clamped bar under a step load at its free end, dt = 0.01 s, heavily damped (tau = 2 s):
+/// `mesh` is the [mesh] table's generate line.
+std::string scaling_scene(int dim, const std::string& mesh, int steps) {
+  std::ostringstream os;
+  os << "[scene]\nname = \"scaling\"\nduration = " << 0.01 * steps << "\noutput_interval = " << 0.001 * steps
+     << "\n[mesh]\ngenerate = " << mesh
+     << "\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = " << (dim == 2 ? "0.3333" : "0.25")
+     << "\ndensity = 1000.0\n"
+     << (dim == 2 ? "thickness = 0.001\n" : "") << "retardation_time = 2.0\n"
+     << "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = "
+     << (dim == 2 ? "[0.1, 0.0]" : "[0.1, 0.0, 0.0]") << "\n[solver]\nkind = \"filtered\"\ndt = 0.01\n";
+  return os.str();
+}
+
+std::string structured(int dim, int n) {
+  std::ostringstream os;
+  if (dim == 2)
+    os << "{ shape = \"rectangle\", size = [0.2, 0.05], divisions = [" << 4 * n << ", " << n << "] }";
+  else
+    os << "{ shape = \"box\", size = [0.2, 0.05, 0.05], divisions = [" << 4 * n << ", " << n << ", " << n << "] }";
+  return os.str();
+}
+
+} // namespace
+
+void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* log) {
+  std::ostringstream os;
+  os << "family,dim,nodes,springs,solver,precompute_ms,step_median_us,heap_mb,error_vs_fem\n";
+  const std::vector<int> ladder2 = quick ? std::vector<int>{4, 8, 16, 32} : std::vector<int>{4, 8, 16, 32, 64};
+  const std::vector<int> ladder3 = quick ? std::vector<int>{2, 3, 4, 6} : std::vector<int>{2, 3, 4, 6, 8, 12};
+  const std::vector<int> slabs = quick ? std::vector<int>{2000, 10000} : std::vector<int>{2000, 10000, 50000};
+  const int steps = quick ? 20 : 50;
+  for (int n : ladder2) {
+    if (log) *log << "[scaling] rectangle " << 4 * n << " x " << n << "\n";
+    os << scaling_rows<2>(parse_scene(scaling_scene(2, structured(2, n), steps), "scaling-2d", "."), "rectangle");
+  }
+  for (int n : ladder3) {
+    if (log) *log << "[scaling] box " << 4 * n << " x " << n << " x " << n << "\n";
+    os << scaling_rows<3>(parse_scene(scaling_scene(3, structured(3, n), steps), "scaling-3d", "."), "box");
+  }
+  for (int n : slabs) {
+    if (log) *log << "[scaling] CGAL slab of about " << n << " nodes\n";
+    const std::string mesh =
+        "{ shape = \"box\", size = [0.2, 0.05, 0.05], mesher = \"cgal\", nodes = " + std::to_string(n) + " }";
+    try {
+      os << scaling_rows<3>(parse_scene(scaling_scene(3, mesh, steps), "scaling-slab", "."), "cgal-slab");
+    } catch (const InputError& e) { // a build without CGAL's meshers
+      if (log) *log << "[scaling] skipped: " << e.what() << "\n";
+    }
+  }
+  write_files_atomically(out, {{"scaling.csv", os.str()}});
+}
+
+} // namespace vtb::harness::parts
