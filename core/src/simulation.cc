@@ -90,12 +90,19 @@ void fail(RunReport& rep, const std::string& why, const IntegratorOptions& o, do
 
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
-  using clock = std::chrono::steady_clock;
   if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+  return simulate_with<dim>(
+      model, o, [&] { return make_integrator(model, o); }, traj, record_field);
+}
+
+template <int dim>
+RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, const IntegratorFactory<dim>& make,
+                        Trajectory<dim>& traj, bool record_field) {
+  using clock = std::chrono::steady_clock;
   RunReport rep = report_header(model, o);
 
   const auto t0 = clock::now();
-  auto integrator = make_integrator(model, o);
+  auto integrator = make();
   rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
 
   State<dim> s = initial_state(model);
@@ -191,6 +198,10 @@ void write_frames(const Model<dim>& model, const Trajectory<dim>& traj, const st
 template void write_frames<2>(const Model<2>&, const Trajectory<2>&, const std::filesystem::path&);
 template void write_frames<3>(const Model<3>&, const Trajectory<3>&, const std::filesystem::path&);
 template RunReport simulate<2>(const Model<2>&, const IntegratorOptions&, Trajectory<2>&, bool);
+template RunReport simulate_with<2>(const Model<2>&, const IntegratorOptions&, const IntegratorFactory<2>&,
+                                    Trajectory<2>&, bool);
+template RunReport simulate_with<3>(const Model<3>&, const IntegratorOptions&, const IntegratorFactory<3>&,
+                                    Trajectory<3>&, bool);
 template RunReport simulate<3>(const Model<3>&, const IntegratorOptions&, Trajectory<3>&, bool);
 template void record_sample<2>(const Model<2>&, const State<2>&, Trajectory<2>&, bool, RunReport&);
 template void record_sample<3>(const Model<3>&, const State<3>&, Trajectory<3>&, bool, RunReport&);

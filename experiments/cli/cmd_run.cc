@@ -4,6 +4,7 @@
 
 #include "vtb/core/simulation.hh"
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/harness/bullet.hh"
 
 #include <iostream>
 #include <memory>
@@ -35,8 +36,9 @@ Action add_run(CLI::App& app) {
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const Scene run = with_overrides(scene, ov);
-    const RunReport r =
-        run.solver.kind == solvers::kFem ? fem::run_scene(run, out, o->frames) : run_scene(run, out, o->frames);
+    const RunReport r = run.solver.kind == solvers::kFem      ? fem::run_scene(run, out, o->frames)
+                        : run.solver.kind == solvers::kBullet ? harness::run_bullet_scene(run, out, o->frames)
+                                                              : run_scene(run, out, o->frames);
     std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
               << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "

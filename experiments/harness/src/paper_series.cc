@@ -133,7 +133,11 @@ void accuracy(const std::filesystem::path& dir, Out& out) {
     return a.text(r, "stable") == "true" && std::isfinite(a.number(r, "error_vs_fem")) &&
            a.number(r, "error_vs_fem") > 0;
   };
-  for (const std::string& s : distinct(a, "solver")) {
+  // Every solver the figure draws has its series, empty if the run had none (a reproduction
+  // made before Bullet was a peer has no bullet rows).
+  std::vector<std::string> names = distinct(a, "solver");
+  if (std::find(names.begin(), names.end(), solvers::kBullet) == names.end()) names.push_back(solvers::kBullet);
+  for (const std::string& s : names) {
     const auto mine = [&](std::size_t r) { return a.text(r, "solver") == s && ok(r); };
     std::vector<double> cost = column(a, "wall_seconds", mine), err = column(a, "error_vs_fem", mine);
     for (double& c : cost) c /= duration;

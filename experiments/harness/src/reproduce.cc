@@ -214,7 +214,8 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
         << fmt(rep.step_seconds.median * 1e6, 6) << '\n';
     if (log) *log << "  " << solver << " dt " << fmt(rep.dt) << (ok ? "" : " (unstable)") << "\n";
   };
-  for (const char* s : {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler, solvers::kFem})
+  for (const char* s :
+       {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler, solvers::kBullet, solvers::kFem})
     for (double dt : ladder) row(s, scene, dt, 0);
   for (double rtol : o.quick ? std::vector<double>{1e-3, 1e-6} : std::vector<double>{1e-2, 1e-4, 1e-6, 1e-8}) {
     Scene sc = scene;

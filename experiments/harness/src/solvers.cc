@@ -1,5 +1,6 @@
 #include "vtb/harness/solvers.hh"
 #include "vtb/core/solver_registry.hh"
+#include "vtb/harness/bullet.hh"
 
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/fem/kelvin_voigt.hh"
@@ -14,6 +15,7 @@ RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::str
                      Trajectory<dim>& out) {
   const solvers::Entry& entry = solvers::find(solver);
   const double step = dt > 0 ? dt : scene.solver.dt;
+  if (solver == solvers::kBullet) return run_bullet(scene, model, step, out); // a peer library
   if (!entry.springs) { // the continuum reference (reference_fem), the registry's one non-spring entry
     fem::FemOptions o = fem::options_from(scene.solver);
     o.dt = step;

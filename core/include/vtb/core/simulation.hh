@@ -7,6 +7,8 @@
 #include "vtb/core/run_report.hh"
 
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <span>
 
 namespace vtb {
@@ -20,6 +22,15 @@ inline constexpr double kRunawayStrain = 10.0;
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& options, Trajectory<dim>& out,
                    bool record_field = false);
+
+/// Makes the integrator a run steps with (its time is the run's precompute).
+template <int dim> using IntegratorFactory = std::function<std::unique_ptr<Integrator<dim>>()>;
+
+/// simulate()'s time loop with an integrator that `make` builds: how a peer library's stepper
+/// (the harness's Bullet solver) is run, sampled and watched like the spring integrators.
+template <int dim>
+RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& options, const IntegratorFactory<dim>& make,
+                        Trajectory<dim>& out, bool record_field = false);
 
 /// Support reactions at a state: minus the internal and external forces at its nodes.
 template <int dim>

@@ -13,6 +13,7 @@ inline constexpr const char* kFilteredMultigrid = "filtered-multigrid";
 inline constexpr const char* kImplicitEuler = "implicit-euler";
 inline constexpr const char* kCvode = "cvode";
 inline constexpr const char* kFem = "fem";
+inline constexpr const char* kBullet = "bullet"; ///< a peer library (the harness runs it)
 
 /// The filters of `filtered` ([solver].filter).
 inline constexpr const char* kFilterFull = "full";

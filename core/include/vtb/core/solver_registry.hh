@@ -49,6 +49,11 @@ inline constexpr Entry kEntries[] = {
      kImplicitEuler, "", "dt, strain_limit, linear_solver, cg_tolerance", true, true, true, true},
     {kCvode, "SUNDIALS CVODE (BDF, Newton, KLU) on the same ODE, adaptive steps", kCvode, "", "rtol, atol", true, true,
      false, false},
+    {kBullet,
+     "Bullet 3.24's deformable world: uniform springs and dashpots on the mesh edges, explicit elastic and implicit "
+     "damping forces, "
+     "k fitted to the FEM's static energy (a peer)",
+     kBullet, "", "dt", false, true, true, false},
     {kFem, "deal.II Kelvin-Voigt finite elements on the same mesh (the continuum reference)", kFem, "",
      "dt, degree, refinements, scheme, static, kinematics", true, false, true, false},
 };
