@@ -8,6 +8,9 @@
 #include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
 #include "vtb/meshes/generate.hh"
+#ifdef VTB_HAVE_CGAL_MESHERS
+#include "vtb/meshes/cgal_generate.hh"
+#endif
 
 #include <benchmark/benchmark.h>
 
@@ -16,7 +19,8 @@ namespace {
 
 /// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max; with
 /// `clamped` false a free body pulled at one end (where the momentum correction acts).
-template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = true) {
+template <int dim>
+Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = true, const Mesh<dim>* mesh = nullptr) {
   Scene s;
   s.file = "bench";
   s.duration = 1.0;
@@ -33,6 +37,7 @@ template <int dim> Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div,
   load.total_force = Eigen::VectorXd::Zero(dim);
   load.total_force[0] = 0.5;
   s.loads.push_back(load);
+  if (mesh) return build_model<dim>(s, *mesh);
   if constexpr (dim == 2)
     return build_model<2>(s, generate_rectangle({0.2, 0.05}, div));
   else
@@ -118,6 +123,19 @@ VTB_STEP_BENCH(box275, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(box1701, solvers::kImplicitEuler, "", implicit_euler)
+
+#ifdef VTB_HAVE_CGAL_MESHERS
+/// The performance issue's 10k-node case: a CGAL Mesh_3 slab 0.2 x 0.05 x 0.02 of about 10,000
+/// nodes (9,864), clamped at one end and pulled at the other.
+const Model<3>& slab10k() {
+  static const Mesh3 mesh = mesh_solid("slab", 10000);
+  static const Model<3> m = bench_model<3>(Eigen::Vector3i::Zero(), true, &mesh);
+  return m;
+}
+VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterMultigrid, filtered_multigrid)
+VTB_STEP_BENCH(slab10k, solvers::kImplicitEuler, "", implicit_euler)
+#endif
 
 // The filtered step's kernels alone, on the 517-node plate and the 1701-node box: the spring
 // forces (a mid-run state), the solve with H's factor for all coordinates at once (nodal

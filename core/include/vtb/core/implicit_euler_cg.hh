@@ -5,8 +5,8 @@
 /// and Witkin 1998 used CG). The system A dv = b, A = M (1 + dt gamma) + sum over springs of
 /// B_s = dt^2 K_s + dt D_s (the shared Jacobian assembly, compressed springs clamped so A is
 /// SPD), is applied spring by spring without assembling a matrix; the preconditioner is A's
-/// dim x dim diagonal blocks (block Jacobi); the iteration starts from the previous step's dv
-/// (warm start) and stops when |r| <= cg_tolerance |b| (default 1e-8: the direct solve's
+/// dim x dim diagonal blocks (block Jacobi); the iteration starts from the last two steps' dv
+/// extrapolated linearly (warm start) and stops when |r| <= cg_tolerance |b| (default 1e-8: the direct solve's
 /// answer to that relative accuracy). Allocates nothing per step.
 ///
 /// With `multigrid` the preconditioner is instead one symmetric V-cycle (multigrid.hh) of the
@@ -44,6 +44,7 @@ private:
   std::vector<Mat<dim>> m_block;                     ///< per spring: B_s
   std::vector<Mat<dim>> m_inv_diag;                  ///< per node: inverse of A's diagonal block (0 if constrained)
   Nodal<dim> m_force, m_b, m_x, m_r, m_z, m_p, m_ap; ///< per node
+  Nodal<dim> m_prev;                                 ///< the step before last's dv
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;     ///< multigrid: the preconditioner
   Nodal<dim> m_free_r, m_free_z;                     ///< multigrid: r and z on the free nodes
 };
