@@ -222,6 +222,17 @@ void creep_scaling(const std::filesystem::path& dir, Out& out) {
         out.number("vtbMaxStep" + tag + d, step.back());
       }
     }
+  // The CGAL slab ladder (3D at haptic rate): one row per mesh and solver.
+  std::ostringstream slab;
+  for (std::size_t r = 0; r < s.rows(); ++r) {
+    if (s.text(r, "family") != "cgal-slab") continue;
+    const double heap = s.number(r, "heap_mb");
+    slab << tex_number(s.number(r, "nodes")) << " & \\texttt{" << tex_escape(s.text(r, "solver")) << "} & "
+         << tex_number(s.number(r, "step_median_us") / 1e3) << " & " << tex_number(s.number(r, "precompute_ms")) << " & "
+         << (std::isfinite(heap) ? tex_number(heap) : std::string("--")) << " & "
+         << tex_number(100 * s.number(r, "error_vs_fem")) << " \\\\\n";
+  }
+  out.files.emplace_back("slab_rows.tex", slab.str());
 }
 
 void haptics(const std::filesystem::path& dir, Out& out) {
