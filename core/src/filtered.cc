@@ -71,7 +71,11 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
     m_free_of_row.resize(static_cast<std::size_t>(nf));
-    for (int a = 0; a < static_cast<int>(nf); ++a) m_free_of_row[static_cast<std::size_t>(factor.ordered(a))] = a;
+    m_node_of_row.resize(static_cast<std::size_t>(nf));
+    for (int a = 0; a < static_cast<int>(nf); ++a) {
+      m_free_of_row[static_cast<std::size_t>(factor.ordered(a))] = a;
+      m_node_of_row[static_cast<std::size_t>(factor.ordered(a))] = model.free_nodes[static_cast<std::size_t>(a)];
+    }
     m_rhs.resize(dim, nf);
   } else {
     m_sparse = filter_matrix_neighbors(model, o.dt);
@@ -109,11 +113,11 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   } else if (m_full) {
     // W a = H^-1 M a = H^-1 F_node.
     for (Eigen::Index r = 0; r < nf; ++r)
-      m_rhs.col(r) = m_force.col(free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])]);
+      m_rhs.col(r) = m_force.col(m_node_of_row[static_cast<std::size_t>(r)]);
     m_h->solve_in_place<dim>(m_rhs);
     if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
       for (Eigen::Index r = 0; r < nf; ++r) {
-        const int i = free[static_cast<std::size_t>(m_free_of_row[static_cast<std::size_t>(r)])];
+        const int i = m_node_of_row[static_cast<std::size_t>(r)];
         s.v.col(i) += dt * m_rhs.col(r);
         s.u.col(i) += dt * s.v.col(i);
       }

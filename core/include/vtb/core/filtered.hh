@@ -69,6 +69,7 @@ private:
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
   std::vector<int> m_free_of_row;                        ///< full: factor row -> free index
+  std::vector<int> m_node_of_row;                        ///< full: factor row -> node
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node
   Nodal<dim> m_acc, m_dv;                                ///< per free node
