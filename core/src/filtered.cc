@@ -112,9 +112,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_dv *= dt;
   } else if (m_full) {
     // W a = H^-1 M a = H^-1 F_node.
-    for (Eigen::Index r = 0; r < nf; ++r)
-      m_rhs.col(r) = m_force.col(m_node_of_row[static_cast<std::size_t>(r)]);
-    m_h->solve_in_place<dim>(m_rhs);
+    m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
     if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
       for (Eigen::Index r = 0; r < nf; ++r) {
         const int i = m_node_of_row[static_cast<std::size_t>(r)];

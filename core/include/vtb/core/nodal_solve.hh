@@ -21,14 +21,19 @@ public:
   explicit NodalSolve(const OrderedLDLT& factor);
 
   /// x <- A^-1 x for each of the dim rows of x (columns in the factor's ordering).
-  template <int dim> void solve_in_place(Nodal<dim>& x) const {
+  template <int dim> void solve_in_place(Nodal<dim>& x) const { solve_gathered<dim>(x, nullptr, x); }
+
+  /// x <- A^-1 b with b's column source[r] as the factor's row r (the forward sweep gathers
+  /// it, so that no separate pass reorders b); source = nullptr: b's columns in factor order.
+  template <int dim> void solve_gathered(const Nodal<dim>& b, const int* source, Nodal<dim>& x) const {
     const auto n = static_cast<int>(m_inv_diag.size());
     double* X = x.data();
-    // Forward: y_i = x_i - sum_{j < i} L_ij y_j (L by rows).
+    const double* B = b.data();
+    // Forward: y_i = b_i - sum_{j < i} L_ij y_j (L by rows).
     for (int i = 0; i < n; ++i) {
       const Vec<dim> sum = dot_row<dim>(m_row_ptr[static_cast<std::size_t>(i)],
                                         m_row_ptr[static_cast<std::size_t>(i) + 1], m_row_val, m_row_col, X);
-      Eigen::Map<Vec<dim>>(X + i * dim) -= sum;
+      Eigen::Map<Vec<dim>>(X + i * dim) = Eigen::Map<const Vec<dim>>(B + (source ? source[i] : i) * dim) - sum;
     }
     // Diagonal and backward: x_j = y_j / d_j - sum_{i > j} L_ij x_i (L by columns).
     for (int j = n - 1; j >= 0; --j) {
