@@ -228,8 +228,8 @@ void creep_scaling(const std::filesystem::path& dir, Out& out) {
     if (s.text(r, "family") != "cgal-slab") continue;
     const double heap = s.number(r, "heap_mb");
     slab << tex_number(s.number(r, "nodes")) << " & \\texttt{" << tex_escape(s.text(r, "solver")) << "} & "
-         << tex_number(s.number(r, "step_median_us") / 1e3) << " & " << tex_number(s.number(r, "precompute_ms")) << " & "
-         << (std::isfinite(heap) ? tex_number(heap) : std::string("--")) << " & "
+         << tex_number(s.number(r, "step_median_us") / 1e3) << " & " << tex_number(s.number(r, "precompute_ms"))
+         << " & " << (std::isfinite(heap) ? tex_number(heap) : std::string("--")) << " & "
          << tex_number(100 * s.number(r, "error_vs_fem")) << " \\\\\n";
   }
   out.files.emplace_back("slab_rows.tex", slab.str());

@@ -25,8 +25,8 @@ std::size_t heap_in_use() {
 
 /// The solvers of the ladder: the filter by its factor and by its V-cycle, the implicit Euler
 /// baseline (direct in 2D, CG in 3D), and Bullet as a peer.
-constexpr const char* kLadderSolvers[] = {solvers::kFilteredFull, solvers::kFilteredMultigrid,
-                                          solvers::kImplicitEuler, solvers::kBullet};
+constexpr const char* kLadderSolvers[] = {solvers::kFilteredFull, solvers::kFilteredMultigrid, solvers::kImplicitEuler,
+                                          solvers::kBullet};
 
 /// Precompute, median step and heap of `solver` on `model`, timed over `steps` steps alone.
 template <int dim>
