@@ -70,12 +70,9 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
-    m_free_of_row.resize(static_cast<std::size_t>(nf));
     m_node_of_row.resize(static_cast<std::size_t>(nf));
-    for (int a = 0; a < static_cast<int>(nf); ++a) {
-      m_free_of_row[static_cast<std::size_t>(factor.ordered(a))] = a;
+    for (int a = 0; a < static_cast<int>(nf); ++a)
       m_node_of_row[static_cast<std::size_t>(factor.ordered(a))] = model.free_nodes[static_cast<std::size_t>(a)];
-    }
     m_rhs.resize(dim, nf);
   } else {
     m_sparse = filter_matrix_neighbors(model, o.dt);
@@ -122,7 +119,9 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
       finish_step(s);
       return;
     }
-    for (Eigen::Index r = 0; r < nf; ++r) m_dv.col(m_free_of_row[static_cast<std::size_t>(r)]) = dt * m_rhs.col(r);
+    for (Eigen::Index r = 0; r < nf; ++r)
+      m_dv.col(m_model.free_index[static_cast<std::size_t>(m_node_of_row[static_cast<std::size_t>(r)])]) =
+          dt * m_rhs.col(r);
   } else {
     const int* ptr = m_sparse.outerIndexPtr();
     const int* col = m_sparse.innerIndexPtr();

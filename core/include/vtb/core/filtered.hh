@@ -68,7 +68,6 @@ private:
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
-  std::vector<int> m_free_of_row;                        ///< full: factor row -> free index
   std::vector<int> m_node_of_row;                        ///< full: factor row -> node
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node
