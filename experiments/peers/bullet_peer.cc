@@ -98,9 +98,8 @@ public:
     m_model.external_forces(s.t + dt, m_force);
     if (s.applied.cols() == m_force.cols()) m_force += s.applied;
     for (int i = 0; i < m_model.num_nodes(); ++i) m_load[static_cast<std::size_t>(i)] = to_bt<dim>(m_force.col(i));
-    // Supports and drives: massless nodes moved to where the scene puts them at t + dt.
-    m_next.u = s.u;
-    m_next.v = s.v;
+    // Supports and drives: massless nodes moved to where the scene puts them at t + dt (only
+    // the constrained columns of m_next are written and read).
     m_model.apply_constraints(s.t + dt, m_next.u, m_next.v);
     // The state is the caller's: Bullet's nodes start every step from it.
     for (int i = 0; i < m_model.num_nodes(); ++i) {

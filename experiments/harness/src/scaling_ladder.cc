@@ -28,7 +28,10 @@ std::size_t heap_in_use() {
 constexpr const char* kLadderSolvers[] = {solvers::kFilteredFull, solvers::kFilteredMultigrid, solvers::kImplicitEuler,
                                           solvers::kBullet};
 
-/// Precompute, median step and heap of `solver` on `model`, timed over `steps` steps alone.
+/// Precompute, median step and heap of `solver` on `model`, timed over `steps` steps alone:
+/// apart from the error run, whose sampling (the field, strains and rotations every other
+/// step) leaves the caches cold for the next step (the 10k slab's full filter times 6.0 ms per
+/// step inside the run against 3.1 ms here).
 template <int dim>
 void time_solver(const Scene& scene, const Model<dim>& model, const char* solver, int steps, double& pre,
                  double& median, double& bytes) {
@@ -64,7 +67,8 @@ template <int dim> std::string scaling_rows(const Scene& scene, const char* fami
         double pre = 0, median = 0, bytes = std::nan("");
         Trajectory<dim> tr;
         const RunReport r = run_solver(scene, model, solver, 0, tr);
-        if (solver == std::string(solvers::kBullet)) { // its own loop: timed by the run; heap not measured
+        if (solver == std::string(solvers::kBullet)) { // its own loop: timed within the run (so colder than the
+                                                       // others); heap not measured
           pre = r.precompute_seconds + r.calibration_seconds;
           median = r.step_seconds.median;
         } else {
