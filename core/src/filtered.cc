@@ -6,6 +6,8 @@
 
 #include <Eigen/Dense>
 
+#include <algorithm>
+
 namespace vtb {
 
 template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt) {
@@ -56,8 +58,7 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     : Integrator<dim>(o.dt), m_model(model),
       m_full(o.filter == solvers::kFilterFull || o.filter == solvers::kFilterMultigrid),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
-  if (o.filter != solvers::kFilterFull && o.filter != solvers::kFilterNeighbors && o.filter != solvers::kFilterTensor &&
-      o.filter != solvers::kFilterMultigrid)
+  if (std::find(solvers::kFilters.begin(), solvers::kFilters.end(), o.filter) == solvers::kFilters.end())
     throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full, tensor or multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());

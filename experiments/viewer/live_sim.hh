@@ -22,8 +22,7 @@ namespace vtb::viewer {
 inline std::vector<std::string> interactive_solvers() {
   return solvers::names(solvers::is_stepper);
 }
-inline constexpr std::array<const char*, 4> kFilters = {solvers::kFilterFull, solvers::kFilterNeighbors,
-                                                        solvers::kFilterTensor, solvers::kFilterMultigrid};
+using solvers::kFilters;
 /// The spring calibrations ([solver].springs); "fitted" fits once per mesh and material (cached).
 inline constexpr std::array<const char*, 3> kSprings = {"lloyd", "van-gelder", "fitted"};
 

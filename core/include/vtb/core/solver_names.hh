@@ -2,6 +2,8 @@
 /// \file
 /// The solver names, each written once (the registry, solver_registry.hh, describes them).
 
+#include <array>
+
 namespace vtb::solvers {
 
 inline constexpr const char* kExplicit = "explicit";
@@ -20,5 +22,7 @@ inline constexpr const char* kFilterFull = "full";
 inline constexpr const char* kFilterNeighbors = "neighbors";
 inline constexpr const char* kFilterTensor = "tensor";
 inline constexpr const char* kFilterMultigrid = "multigrid"; ///< full, H^-1 by one V-cycle
+/// Every filter, in the order the scene parser, the integrator's check and the viewer list them.
+inline constexpr std::array<const char*, 4> kFilters = {kFilterNeighbors, kFilterFull, kFilterTensor, kFilterMultigrid};
 
 } // namespace vtb::solvers

@@ -45,7 +45,8 @@ inline constexpr Entry kEntries[] = {
     {kFilteredMultigrid, "the full filter with H^-1 applied by one symmetric multigrid V-cycle (large 3D meshes)",
      kFiltered, kFilterMultigrid, "dt, momentum_correction, strain_limit", false, true, true, false},
     {kImplicitEuler,
-     "linearised backward Euler with the spring Jacobian (sparse LDL^T, or warm-started block-Jacobi CG)",
+     "linearised backward Euler with the spring Jacobian (sparse LDL^T, or warm-started CG with block Jacobi or the "
+     "multigrid V-cycle)",
      kImplicitEuler, "", "dt, strain_limit, linear_solver, cg_tolerance", true, true, true, true},
     {kCvode, "SUNDIALS CVODE (BDF, Newton, KLU) on the same ODE, adaptive steps", kCvode, "", "rtol, atol", true, true,
      false, false},
