@@ -6,8 +6,27 @@
 #include "vtb/core/nodal.hh"
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace vtb {
+
+/// 1 / sqrt(x) for x > 0 without the divider (which a square root and a division share, and
+/// which bounds a scalar spring loop): the exponent-halving seed (relative error < 3.5 %), then
+/// four Newton steps y <- y (3/2 - x y^2 / 2), each of which squares the relative error
+/// (3.5e-2 -> 1.8e-3 -> 4.7e-6 -> 3.3e-11 -> 1e-21), so round-off is what remains: within
+/// 1.3 ulp of the exact value (1/sqrt as two rounded operations: 0.75 ulp). Only adds, multiplies
+/// and integer operations, so a loop of it vectorises, and in the same order on every machine.
+inline double newton_inverse_sqrt(double x) {
+  std::uint64_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  bits = 0x5FE6EB50C7B537A9ull - (bits >> 1);
+  double y;
+  std::memcpy(&y, &bits, sizeof bits);
+  const double half = 0.5 * x;
+  for (int it = 0; it < 4; ++it) y = y * (1.5 - half * y * y);
+  return y;
+}
 
 /// Force on node i from the Voigt element (i, j):
 ///   f_i = [ k (l - L0) + c (v_j - v_i) . n ] n,   n = (x_j - x_i) / l,   l = |x_j - x_i|.
