@@ -1,6 +1,8 @@
 #include "vtb/core/multigrid.hh"
 #include "vtb/core/ordered_ldlt.hh"
 
+#include "vector_clones.hh"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -115,14 +117,104 @@ void to_csr(const Sparse& S, std::vector<int>& ptr, std::vector<int>& col, std::
   }
 }
 
-template <int dim> using Cv = Eigen::Map<const Vec<dim>>;
-template <int dim> using Mv = Eigen::Map<Vec<dim>>;
+/// One level's matrices as raw arrays, for the sweeps below.
+struct LevelArrays {
+  const int *lp, *lc, *up, *uc, *pp, *pc;
+  const double *lv, *uv, *pv, *dinv;
+  int n;
+};
+
+// The level's sweeps on nodes of W lanes (x of node i at x[i W .. i W + W)), one GCC vector
+// (two or four doubles, loaded unaligned) per node, so that each matrix entry updates a node
+// with whole vector registers: for 4 lanes, two SSE2 operations in the baseline build and one
+// AVX2 operation in the clones below (always inlined into them). Lane by lane the operations
+// are those of the scalar sweeps, in the same order.
+template <int W> struct LaneType;
+template <> struct LaneType<2> { typedef double type __attribute__((vector_size(16), aligned(8))); };
+template <> struct LaneType<4> { typedef double type __attribute__((vector_size(32), aligned(8))); };
+template <int W> using Lane = typename LaneType<W>::type;
+// Always inlined, so no 32-byte vector crosses a call (core/CMakeLists.txt: -Wno-psabi).
+template <int W> [[gnu::always_inline]] inline Lane<W> load(const double* p) {
+  return *reinterpret_cast<const Lane<W>*>(p);
+}
+template <int W> [[gnu::always_inline]] inline void store(double* p, Lane<W> v) {
+  *reinterpret_cast<Lane<W>*>(p) = v;
+}
+
+/// Forward Gauss-Seidel from x = 0 (only the lower triangle meets nonzero x), then the
+/// restricted residual bc = P^T (b - A x) = P^T (-U x) (the diagonal and lower parts cancel b
+/// exactly after that sweep), with the fine residual formed row by row; bc is zeroed here.
+template <int W>
+[[gnu::always_inline]] inline void presmooth_and_restrict(const LevelArrays& L, int nc, const double* b, double* x,
+                                                          double* bc) {
+  const int *lp = L.lp, *lc = L.lc, *up = L.up, *uc = L.uc, *pp = L.pp, *pc = L.pc;
+  const double *lv = L.lv, *uv = L.uv, *pv = L.pv, *dinv = L.dinv;
+  const int n = L.n;
+  for (int i = 0; i < n; ++i) {
+    Lane<W> s = load<W>(b + i * W);
+    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * load<W>(x + lc[p] * W);
+    store<W>(x + i * W, dinv[i] * s);
+  }
+  for (int c = 0; c < nc * W; ++c) bc[c] = 0;
+  for (int i = 0; i < n; ++i) {
+    Lane<W> r = {};
+    for (int p = up[i]; p < up[i + 1]; ++p) r -= uv[p] * load<W>(x + uc[p] * W);
+    for (int p = pp[i]; p < pp[i + 1]; ++p) store<W>(bc + pc[p] * W, load<W>(bc + pc[p] * W) + pv[p] * r);
+  }
+}
+
+/// x += P xc (gathered by P's rows), then backward Gauss-Seidel with the whole matrix.
+template <int W>
+[[gnu::always_inline]] inline void prolongate_and_postsmooth(const LevelArrays& L, const double* xc, const double* b,
+                                                             double* x) {
+  const int *lp = L.lp, *lc = L.lc, *up = L.up, *uc = L.uc, *pp = L.pp, *pc = L.pc;
+  const double *lv = L.lv, *uv = L.uv, *pv = L.pv, *dinv = L.dinv;
+  const int n = L.n;
+  for (int i = 0; i < n; ++i) {
+    Lane<W> s = load<W>(x + i * W);
+    for (int p = pp[i]; p < pp[i + 1]; ++p) s += pv[p] * load<W>(xc + pc[p] * W);
+    store<W>(x + i * W, s);
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    Lane<W> s = load<W>(b + i * W);
+    Lane<W> t = {}; // two sums, so that the row's subtractions form two shorter chains
+    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * load<W>(x + lc[p] * W);
+    for (int p = up[i]; p < up[i + 1]; ++p) t -= uv[p] * load<W>(x + uc[p] * W);
+    store<W>(x + i * W, dinv[i] * (s + t));
+  }
+}
+
+// The 4-lane (3D) sweeps, built for AVX2 and the baseline (vector_clones.hh).
+VTB_VECTOR_CLONES void presmooth_and_restrict4(const LevelArrays& L, int nc, const double* b, double* x, double* bc) {
+  presmooth_and_restrict<4>(L, nc, b, x, bc);
+}
+VTB_VECTOR_CLONES void prolongate_and_postsmooth4(const LevelArrays& L, const double* xc, const double* b, double* x) {
+  prolongate_and_postsmooth<4>(L, xc, b, x);
+}
+
+template <int W> void presmooth_and_restrict_any(const LevelArrays& L, int nc, const double* b, double* x, double* bc) {
+  if constexpr (W == 4)
+    presmooth_and_restrict4(L, nc, b, x, bc);
+  else
+    presmooth_and_restrict<W>(L, nc, b, x, bc);
+}
+template <int W>
+void prolongate_and_postsmooth_any(const LevelArrays& L, const double* xc, const double* b, double* x) {
+  if constexpr (W == 4)
+    prolongate_and_postsmooth4(L, xc, b, x);
+  else
+    prolongate_and_postsmooth<W>(L, xc, b, x);
+}
 
 } // namespace
 
 template <int dim>
 SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A0, Eigen::Index coarsest) {
   RowSparse A(A0);
+  if constexpr (kLanes != dim) {
+    m_fine_b = Lanes::Zero(kLanes, A.rows());
+    m_fine_x = Lanes::Zero(kLanes, A.rows());
+  }
   std::vector<int> agg;
   while (A.rows() > coarsest) {
     const int nc = aggregate(A, agg);
@@ -139,8 +231,8 @@ SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A
     RowSparse coarse = R * A * P;
     coarse.prune(0.0);
     A = coarse;
-    m_b.emplace_back(Nodal<dim>::Zero(dim, A.rows()));
-    m_x.emplace_back(Nodal<dim>::Zero(dim, A.rows()));
+    m_b.emplace_back(Lanes::Zero(kLanes, A.rows()));
+    m_x.emplace_back(Lanes::Zero(kLanes, A.rows()));
   }
   const Eigen::SparseMatrix<double> Ac(A);
   OrderedLDLT factor(Ac);
@@ -155,54 +247,42 @@ SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A
 }
 
 template <int dim> void SymmetricMultigrid<dim>::apply(const Nodal<dim>& b, Nodal<dim>& x) {
-  cycle(0, b.data(), x.data()); // without levels (a small matrix) that is the exact solve
+  if constexpr (kLanes == dim) {
+    cycle(0, b.data(), x.data()); // without levels (a small matrix) that is the exact solve
+  } else {
+    m_fine_b.template topRows<dim>() = b; // the pad row stays 0
+    cycle(0, m_fine_b.data(), m_fine_x.data());
+    x = m_fine_x.template topRows<dim>();
+  }
 }
 
 template <int dim> void SymmetricMultigrid<dim>::cycle(std::size_t l, const double* b, double* x) {
+  constexpr int W = kLanes;
   if (l == m_levels.size()) {
     double* c = m_coarse_rhs.data();
     for (Eigen::Index i = 0; i < m_coarse_rows; ++i)
-      Mv<dim>(c + m_coarse_order[static_cast<std::size_t>(i)] * dim) = Cv<dim>(b + i * dim);
+      for (int k = 0; k < dim; ++k) c[m_coarse_order[static_cast<std::size_t>(i)] * dim + k] = b[i * W + k];
     m_coarse->solve_in_place<dim>(m_coarse_rhs);
     for (Eigen::Index i = 0; i < m_coarse_rows; ++i)
-      Mv<dim>(x + i * dim) = Cv<dim>(c + m_coarse_order[static_cast<std::size_t>(i)] * dim);
+      for (int k = 0; k < dim; ++k) x[i * W + k] = c[m_coarse_order[static_cast<std::size_t>(i)] * dim + k];
     return;
   }
   const Level& L = m_levels[l];
-  const auto n = static_cast<int>(L.inv_diag.size());
-  const int *lp = L.lower.ptr.data(), *lc = L.lower.col.data(), *up = L.upper.ptr.data(), *uc = L.upper.col.data();
-  const double *lv = L.lower.val.data(), *uv = L.upper.val.data(), *dinv = L.inv_diag.data();
-  // Forward Gauss-Seidel from x = 0: only the lower triangle meets nonzero x.
-  for (int i = 0; i < n; ++i) {
-    Vec<dim> s = Cv<dim>(b + i * dim);
-    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * Cv<dim>(x + lc[p] * dim);
-    Mv<dim>(x + i * dim) = dinv[i] * s;
-  }
-  // Restricted residual: b - A x = -U x after that sweep (the diagonal and lower parts cancel
-  // b exactly), so r_c = P^T (-U x), with the fine residual formed row by row on the fly.
-  double* bc = m_b[l].data();
-  m_b[l].setZero();
-  const int *pp = L.prolong.ptr.data(), *pc = L.prolong.col.data();
-  const double* pv = L.prolong.val.data();
-  for (int i = 0; i < n; ++i) {
-    Vec<dim> r = Vec<dim>::Zero();
-    for (int p = up[i]; p < up[i + 1]; ++p) r -= uv[p] * Cv<dim>(x + uc[p] * dim);
-    for (int p = pp[i]; p < pp[i + 1]; ++p) Mv<dim>(bc + pc[p] * dim) += pv[p] * r;
-  }
-  double* xc = m_x[l].data();
+  const LevelArrays arrays{L.lower.ptr.data(),
+                           L.lower.col.data(),
+                           L.upper.ptr.data(),
+                           L.upper.col.data(),
+                           L.prolong.ptr.data(),
+                           L.prolong.col.data(),
+                           L.lower.val.data(),
+                           L.upper.val.data(),
+                           L.prolong.val.data(),
+                           L.inv_diag.data(),
+                           static_cast<int>(L.inv_diag.size())};
+  double *bc = m_b[l].data(), *xc = m_x[l].data();
+  presmooth_and_restrict_any<W>(arrays, static_cast<int>(m_b[l].cols()), b, x, bc);
   cycle(l + 1, bc, xc);
-  // Prolongate (gather by P's rows), then backward Gauss-Seidel with the whole matrix.
-  for (int i = 0; i < n; ++i) {
-    Vec<dim> s = Cv<dim>(x + i * dim);
-    for (int p = pp[i]; p < pp[i + 1]; ++p) s += pv[p] * Cv<dim>(xc + pc[p] * dim);
-    Mv<dim>(x + i * dim) = s;
-  }
-  for (int i = n - 1; i >= 0; --i) {
-    Vec<dim> s = Cv<dim>(b + i * dim);
-    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * Cv<dim>(x + lc[p] * dim);
-    for (int p = up[i]; p < up[i + 1]; ++p) s -= uv[p] * Cv<dim>(x + uc[p] * dim);
-    Mv<dim>(x + i * dim) = dinv[i] * s;
-  }
+  prolongate_and_postsmooth_any<W>(arrays, xc, b, x);
 }
 
 template <int dim> std::vector<Eigen::Index> SymmetricMultigrid<dim>::level_sizes() const {
@@ -221,6 +301,7 @@ template <int dim> std::size_t SymmetricMultigrid<dim>::memory_bytes() const {
     bytes += csr(L.lower) + csr(L.upper) + csr(L.prolong) + L.inv_diag.size() * sizeof(double);
   for (std::size_t l = 0; l < m_b.size(); ++l)
     bytes += sizeof(double) * static_cast<std::size_t>(m_b[l].size() + m_x[l].size());
+  bytes += sizeof(double) * static_cast<std::size_t>(m_fine_b.size() + m_fine_x.size());
   return bytes;
 }
 

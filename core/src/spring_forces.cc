@@ -3,6 +3,8 @@
 // registers and without the divider (docs/performance.md: 5.2 -> 4.3 us on the 517-node plate).
 #include "vtb/core/spring_network.hh"
 
+#include "vector_clones.hh"
+
 #include <algorithm>
 
 namespace vtb {
@@ -11,17 +13,6 @@ namespace {
 /// Springs per chunk: the chunk's scratch (dim + 2 doubles a spring) stays in L1 and on the
 /// stack, so the step allocates nothing.
 constexpr int kChunk = 256;
-
-// Built for AVX2 and for the baseline, picked at load time (GCC's ifunc dispatch; an AVX-512
-// clone measured slower than AVX2 here). No clone enables FMA and the file is compiled with
-// -ffp-contract=off, so every clone performs the same IEEE operations in the same order as the
-// scalar code: the forces are bitwise the same on every x86-64 machine. Clang (the fuzz build)
-// compiles the baseline alone.
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
-#define VTB_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define VTB_VECTOR_CLONES
-#endif
 
 /// g = (k (l - L0) + c (d . dv) / l) / l per spring, with c = damping + extra k, so that the
 /// force on node i is g d (voigt_force's expression, with 1/l from newton_inverse_sqrt); zero

@@ -53,10 +53,15 @@ private:
     std::vector<double> inv_diag;
     Csr prolong; ///< P by fine rows: gathered to prolongate, scattered to restrict
   };
+  /// Values per node in the cycle's work arrays: 3D nodes are padded to 4 lanes (the pad stays
+  /// 0), so that each matrix entry updates a node with whole vector registers.
+  static constexpr int kLanes = dim == 3 ? 4 : dim;
+  using Lanes = Eigen::Matrix<double, kLanes, Eigen::Dynamic>;
   void cycle(std::size_t l, const double* b, double* x);
 
   std::vector<Level> m_levels;          ///< every level but the coarsest
-  std::vector<Nodal<dim>> m_b, m_x;     ///< work: right-hand side and iterate per coarse level
+  std::vector<Lanes> m_b, m_x;          ///< work: right-hand side and iterate per coarse level
+  Lanes m_fine_b, m_fine_x;             ///< the finest level's, when kLanes != dim
   std::unique_ptr<NodalSolve> m_coarse; ///< the coarsest level's factor
   std::vector<int> m_coarse_order;      ///< coarsest row -> factor row
   Nodal<dim> m_coarse_rhs;              ///< the coarsest right-hand side in factor order
