@@ -4,6 +4,7 @@
 //   --benchmark_report_aggregates_only=true  (medians are what the closing notes quote).
 #include "vtb/core/explicit_euler.hh"
 #include "vtb/core/filtered.hh"
+#include "vtb/core/implicit_euler_cg.hh"
 #include "vtb/core/integrator.hh"
 #include "vtb/core/nodal_solve.hh"
 #include "vtb/core/solver_names.hh"
@@ -56,9 +57,11 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
   State<dim> s = initial_state(model);
   for (int k = 0; k < 10; ++k) integ->step(s); // warm up
   const State<dim> saved = s;
-  long n = 0;
+  const auto* cg = dynamic_cast<const ImplicitEulerCG<dim>*>(integ.get());
+  long n = 0, iterations = 0;
   for (auto _ : st) {
     integ->step(s);
+    if (cg) iterations += cg->last_iterations();
     if (++n % 1000 == 0) {
       st.PauseTiming();
       s = saved; // keep the state in the same regime
@@ -68,6 +71,7 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
   st.counters["nodes"] = model.num_nodes();
   st.counters["springs"] = model.net.num_springs();
   st.counters["dt"] = o.dt;
+  if (cg) st.counters["cg_iterations"] = static_cast<double>(iterations) / static_cast<double>(n);
 }
 
 const Model<2>& plate126() {

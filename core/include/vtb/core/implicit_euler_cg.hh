@@ -44,7 +44,7 @@ private:
   std::vector<Mat<dim>> m_block;                     ///< per spring: B_s
   std::vector<Mat<dim>> m_inv_diag;                  ///< per node: inverse of A's diagonal block (0 if constrained)
   Nodal<dim> m_force, m_b, m_x, m_r, m_z, m_p, m_ap; ///< per node
-  Nodal<dim> m_prev;                                 ///< the step before last's dv
+  Nodal<dim> m_prev, m_prev2;                        ///< the dv of the two steps before the last
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;     ///< multigrid: the preconditioner
   Nodal<dim> m_free_r, m_free_z;                     ///< multigrid: r and z on the free nodes
 };
