@@ -125,13 +125,13 @@ struct LevelArrays {
 };
 
 // The level's sweeps on nodes of W lanes (x of node i at x[i W .. i W + W)), one GCC vector
-// (two or four doubles, loaded unaligned) per node, so that each matrix entry updates a node
-// with whole vector registers: for 4 lanes, two SSE2 operations in the baseline build and one
-// AVX2 operation in the clones below (always inlined into them). Lane by lane the operations
-// are those of the scalar sweeps, in the same order.
+// per node (two or four doubles, loaded unaligned, may_alias as the intrinsics' types are), so
+// that each matrix entry updates a node with whole vector registers: for 4 lanes, two SSE2
+// operations in the baseline build and one AVX2 operation in the clones below (always inlined
+// into them). Lane by lane the operations are those of the scalar sweeps, in the same order.
 template <int W> struct LaneType;
-template <> struct LaneType<2> { typedef double type __attribute__((vector_size(16), aligned(8))); };
-template <> struct LaneType<4> { typedef double type __attribute__((vector_size(32), aligned(8))); };
+template <> struct LaneType<2> { typedef double type __attribute__((vector_size(16), aligned(8), may_alias)); };
+template <> struct LaneType<4> { typedef double type __attribute__((vector_size(32), aligned(8), may_alias)); };
 template <int W> using Lane = typename LaneType<W>::type;
 // Always inlined, so no 32-byte vector crosses a call (core/CMakeLists.txt: -Wno-psabi).
 template <int W> [[gnu::always_inline]] inline Lane<W> load(const double* p) {
