@@ -13,6 +13,7 @@
 #include "vtb/meshes/cgal_generate.hh"
 #endif
 
+#include <Eigen/CholmodSupport>
 #include <benchmark/benchmark.h>
 
 namespace vtb {
@@ -207,6 +208,68 @@ BENCHMARK(BM_kernel_solve_nodal_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_eigen_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_nodal_box1701)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_eigen_box1701)->Unit(benchmark::kMicrosecond);
+
+// CHOLMOD's supernodal Cholesky of the same H (Eigen's CholmodSupernodalLLT, CHOLMOD's own
+// ordering), against OrderedLDLT (Eigen's simplicial LDL^T, AMD) with the nodal solve: the
+// factorisation (the filter's precompute) and the solve of all coordinates (its step).
+template <int dim> void factor_cholmod(benchmark::State& st, const Model<dim>& model) {
+  const Eigen::SparseMatrix<double> H = filter_system_matrix(model, 1e-3);
+  for (auto _ : st) {
+    Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(H);
+    benchmark::DoNotOptimize(llt.info());
+  }
+}
+template <int dim> void factor_simplicial(benchmark::State& st, const Model<dim>& model) {
+  const Eigen::SparseMatrix<double> H = filter_system_matrix(model, 1e-3);
+  for (auto _ : st) {
+    OrderedLDLT factor(H);
+    benchmark::DoNotOptimize(factor.factorize());
+  }
+}
+template <int dim> void solve_cholmod(benchmark::State& st, const Model<dim>& model) {
+  const Eigen::SparseMatrix<double> H = filter_system_matrix(model, 1e-3);
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>> llt(H);
+  const Eigen::MatrixXd rhs = Eigen::MatrixXd::Random(H.rows(), dim);
+  Eigen::MatrixXd x(H.rows(), dim);
+  for (auto _ : st) {
+    x = llt.solve(rhs); // CHOLMOD allocates its result: fine for a kernel benchmark
+    benchmark::DoNotOptimize(x.data());
+  }
+}
+void BM_kernel_solve_cholmod_plate517(benchmark::State& st) {
+  solve_cholmod(st, plate517());
+}
+void BM_kernel_solve_cholmod_box1701(benchmark::State& st) {
+  solve_cholmod(st, box1701());
+}
+void BM_precompute_factor_cholmod_box1701(benchmark::State& st) {
+  factor_cholmod(st, box1701());
+}
+void BM_precompute_factor_simplicial_box1701(benchmark::State& st) {
+  factor_simplicial(st, box1701());
+}
+BENCHMARK(BM_kernel_solve_cholmod_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_solve_cholmod_box1701)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_precompute_factor_cholmod_box1701)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_precompute_factor_simplicial_box1701)->Unit(benchmark::kMillisecond);
+#ifdef VTB_HAVE_CGAL_MESHERS
+void BM_kernel_solve_nodal_slab10k(benchmark::State& st) {
+  solve(st, slab10k(), true);
+}
+void BM_kernel_solve_cholmod_slab10k(benchmark::State& st) {
+  solve_cholmod(st, slab10k());
+}
+void BM_precompute_factor_cholmod_slab10k(benchmark::State& st) {
+  factor_cholmod(st, slab10k());
+}
+void BM_precompute_factor_simplicial_slab10k(benchmark::State& st) {
+  factor_simplicial(st, slab10k());
+}
+BENCHMARK(BM_kernel_solve_nodal_slab10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_solve_cholmod_slab10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_precompute_factor_cholmod_slab10k)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_precompute_factor_simplicial_slab10k)->Unit(benchmark::kMillisecond);
+#endif
 
 void BM_precompute_plate517_neighbors(benchmark::State& st) {
   for (auto _ : st) benchmark::DoNotOptimize(filter_matrix_neighbors(plate517(), 1e-3));
