@@ -141,6 +141,13 @@ template <int W> [[gnu::always_inline]] inline void store(double* p, Lane<W> v) 
   *reinterpret_cast<Lane<W>*>(p) = v;
 }
 
+/// s -= sum over p in [begin, end) of val[p] x(col[p]), term by term: one row's part of a sweep.
+template <int W>
+[[gnu::always_inline]] inline void subtract_row(Lane<W>& s, int begin, int end, const int* col, const double* val,
+                                                const double* x) {
+  for (int p = begin; p < end; ++p) s -= val[p] * load<W>(x + col[p] * W);
+}
+
 /// Forward Gauss-Seidel from x = 0 (only the lower triangle meets nonzero x), then the
 /// restricted residual bc = P^T (b - A x) = P^T (-U x) (the diagonal and lower parts cancel b
 /// exactly after that sweep), with the fine residual formed row by row; bc is zeroed here.
@@ -152,13 +159,13 @@ template <int W>
   const int n = L.n;
   for (int i = 0; i < n; ++i) {
     Lane<W> s = load<W>(b + i * W);
-    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * load<W>(x + lc[p] * W);
+    subtract_row<W>(s, lp[i], lp[i + 1], lc, lv, x);
     store<W>(x + i * W, dinv[i] * s);
   }
   for (int c = 0; c < nc * W; ++c) bc[c] = 0;
   for (int i = 0; i < n; ++i) {
     Lane<W> r = {};
-    for (int p = up[i]; p < up[i + 1]; ++p) r -= uv[p] * load<W>(x + uc[p] * W);
+    subtract_row<W>(r, up[i], up[i + 1], uc, uv, x);
     for (int p = pp[i]; p < pp[i + 1]; ++p) store<W>(bc + pc[p] * W, load<W>(bc + pc[p] * W) + pv[p] * r);
   }
 }
@@ -178,8 +185,8 @@ template <int W>
   for (int i = n - 1; i >= 0; --i) {
     Lane<W> s = load<W>(b + i * W);
     Lane<W> t = {}; // two sums, so that the row's subtractions form two shorter chains
-    for (int p = lp[i]; p < lp[i + 1]; ++p) s -= lv[p] * load<W>(x + lc[p] * W);
-    for (int p = up[i]; p < up[i + 1]; ++p) t -= uv[p] * load<W>(x + uc[p] * W);
+    subtract_row<W>(s, lp[i], lp[i + 1], lc, lv, x);
+    subtract_row<W>(t, up[i], up[i + 1], uc, uv, x);
     store<W>(x + i * W, dinv[i] * (s + t));
   }
 }
