@@ -12,14 +12,14 @@ if [ ! -f "$build/CMakeCache.txt" ]; then
 fi
 # name | file | sed expression
 mutations=(
-  "spring force sign|core/include/vtb/core/spring_kernels.hh|s/return (k \* (l - rest_length) + c \* n.dot(vj - vi)) \* n;/return (k * (rest_length - l) + c * n.dot(vj - vi)) * n;/"
-  "spring Jacobian sign (CVODE)|core/src/cvode_solver.cc|s/if (a >= 0) add(part, a, a, B, -1.0);/if (a >= 0) add(part, a, a, B, 1.0);/"
-  "dashpot dropped from implicit Euler's matrix|core/src/implicit_euler.cc|s/const Mat<dim> B = dt \* dt \* K + dt \* dashpot_jacobian<dim>(xi, xj, net.damping\[sp\]);/const Mat<dim> B = dt * dt * K;/"
-  "dashpot dropped from CVODE's Jacobian|core/src/cvode_solver.cc|s/const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping\[s\]);/const Mat<dim> C = Mat<dim>::Zero();/"
+  "spring force sign|core/springs/include/vtb/springs/spring_kernels.hh|s/return (k \* (l - rest_length) + c \* n.dot(vj - vi)) \* n;/return (k * (rest_length - l) + c * n.dot(vj - vi)) * n;/"
+  "spring Jacobian sign (CVODE)|core/solvers/src/cvode_solver.cc|s/if (a >= 0) add(part, a, a, B, -1.0);/if (a >= 0) add(part, a, a, B, 1.0);/"
+  "dashpot dropped from implicit Euler's matrix|core/solvers/src/implicit_euler.cc|s/const Mat<dim> B = dt \* dt \* K + dt \* dashpot_jacobian<dim>(xi, xj, net.damping\[sp\]);/const Mat<dim> B = dt * dt * K;/"
+  "dashpot dropped from CVODE's Jacobian|core/solvers/src/cvode_solver.cc|s/const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping\[s\]);/const Mat<dim> C = Mat<dim>::Zero();/"
   "saturation removed|core/haptics/src/force_shaping.cc|s/if (norm <= max_force) return f;/if (true) return f;/"
-  "torque correction skipped|core/src/filtered.cc|s/if (m_correct) correct_momentum(s);/(void)m_correct;/"
+  "torque correction skipped|core/solvers/src/filtered.cc|s/if (m_correct) correct_momentum(s);/(void)m_correct;/"
   "FEM thickness scaling halved|reference_fem/src/grid.hh|s/const double t = dim == 2 ? mat.thickness : 1.0;/const double t = dim == 2 ? 0.5 * mat.thickness : 1.0;/"
-  "strain limit skipped|core/src/filtered.cc|s/if (m_strain_limit > 0) limit_strain(s);/(void)m_strain_limit;/"
+  "strain limit skipped|core/solvers/src/filtered.cc|s/if (m_strain_limit > 0) limit_strain(s);/(void)m_strain_limit;/"
 )
 touched=()
 restore() { for f in "${touched[@]}"; do git -C "$root" checkout -- "$f"; done; }

@@ -2,13 +2,13 @@
 // the CGAL plates land: 126 ~ 123 nodes, exactly 517 nodes) and on 3D boxes, plus the W
 // precompute. Run: build/bin/vtb_bench_step --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true  (medians are what the closing notes quote).
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/filtered.hh"
-#include "vtb/core/implicit_euler_cg.hh"
-#include "vtb/core/integrator.hh"
-#include "vtb/core/nodal_solve.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/linalg/nodal_solve.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/problem/solver_names.hh"
+#include "vtb/solvers/explicit_euler.hh"
+#include "vtb/solvers/filtered.hh"
+#include "vtb/solvers/implicit_euler_cg.hh"
+#include "vtb/solvers/integrator.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif

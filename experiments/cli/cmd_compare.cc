@@ -1,5 +1,5 @@
 #include "commands.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/compare.hh"
 

@@ -1,10 +1,10 @@
 #include "commands.hh"
 #include "overrides.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
-#include "vtb/core/simulation.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/bullet.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <iostream>
 #include <memory>

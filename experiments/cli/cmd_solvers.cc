@@ -1,6 +1,6 @@
 #include "commands.hh"
 
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include <cstdio>
 #include <iostream>

@@ -1,5 +1,5 @@
 #include "commands.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include "vtb/harness/sweep.hh"
 

@@ -1,7 +1,7 @@
 #include "overrides.hh"
 
-#include "vtb/core/solver_registry.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -3,8 +3,8 @@
 /// The CLI's own parsing that turns options into what the libraries take: `vtb run`'s
 /// overrides of a scene, and `vtb haptics --fault`.
 
-#include "vtb/core/scene.hh"
 #include "vtb/haptics/session.hh"
+#include "vtb/problem/scene.hh"
 
 #include <optional>
 #include <string>

@@ -1,5 +1,5 @@
 #include "bullet_peer.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include <BulletSoftBody/btDeformableBodySolver.h>
 #include <BulletSoftBody/btDeformableLagrangianForce.h>

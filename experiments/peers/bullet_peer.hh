@@ -11,8 +11,8 @@
 /// Only the harness links Bullet (double precision); vtb::core does not. Bullet's step
 /// allocates (its arrays and trees); the no-allocation rule is vtb's own steppers'.
 
-#include "vtb/core/integrator.hh"
-#include "vtb/core/model.hh"
+#include "vtb/solvers/integrator.hh"
+#include "vtb/springs/model.hh"
 
 #include <memory>
 

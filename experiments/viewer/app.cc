@@ -1,10 +1,10 @@
 #include "app.hh"
-#include "vtb/core/solver_names.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_names.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include "colormap.hh"
 
-#include "vtb/core/cell_fields.hh"
+#include "vtb/problem/cell_fields.hh"
 
 #include "vtb/meshes/input_error.hh"
 

@@ -1,9 +1,9 @@
 #include "live_sim.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/simulation.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/solvers/explicit_euler.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <algorithm>
 #include <chrono>

@@ -5,9 +5,9 @@
 /// by hand (pulls through a virtual coupling), live solver switching, and a watch that catches
 /// a diverging solver instead of dying with it. Allocation-free per step.
 
-#include "vtb/core/integrator.hh"
-#include "vtb/core/scene.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/scene.hh"
+#include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/integrator.hh"
 
 #include <array>
 #include <memory>

@@ -1,7 +1,7 @@
 // The viewer's Dear ImGui panel (live control and readouts) and the colour scale bar.
 #include "app.hh"
 #include "colormap.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include <GLFW/glfw3.h>
 #include <imgui.h>

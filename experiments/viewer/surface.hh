@@ -4,8 +4,8 @@
 /// boundary faces, outward), the cell each belongs to (for its strain colour, from
 /// core's cell_max_principal_strain), the outline edges, and the boundary nodes a pull may grab.
 
-#include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
+#include "vtb/springs/spring_kernels.hh"
 
 #include <array>
 #include <vector>

@@ -2,9 +2,9 @@
 
 #include "app.hh"
 
-#include "vtb/core/model.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/springs/model.hh"
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_glfw.h>

@@ -7,7 +7,7 @@
 /// (deterministic), holds the scripted drag from the first frame, writes the last frame as a
 /// PNG and exits: the mode that tests and figures use under xvfb-run.
 
-#include "vtb/core/scene.hh"
+#include "vtb/problem/scene.hh"
 
 #include <Eigen/Core>
 

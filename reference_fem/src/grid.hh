@@ -3,7 +3,7 @@
 // triangulation of a scene's mesh, the material's Lame constants, the element matrices, the
 // rule for support points on a support's facets, and the strain measure of the summary.
 
-#include "vtb/core/problem.hh"
+#include "vtb/problem/problem.hh"
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/dofs/dof_handler.h>

@@ -1,5 +1,5 @@
-#include "vtb/core/output.hh"
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/problem/output.hh"
 
 namespace vtb::fem {
 

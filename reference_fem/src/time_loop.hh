@@ -3,8 +3,8 @@
 
 #include "time_scheme.hh"
 
-#include "vtb/core/problem.hh"
-#include "vtb/core/run_report.hh"
+#include "vtb/problem/problem.hh"
+#include "vtb/problem/run_report.hh"
 
 #include <algorithm>
 #include <chrono>

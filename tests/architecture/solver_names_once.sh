@@ -4,9 +4,9 @@
 set -u
 cd "$1"
 hits=$(grep -rnE '"(explicit|filtered|filtered-full|filtered-neighbors|implicit-euler|cvode|fem)"' \
-  --include=*.cc --include=*.hh core reference_fem experiments meshes | grep -v '^core/include/vtb/core/solver_names.hh:')
+  --include=*.cc --include=*.hh core reference_fem experiments meshes | grep -v '^core/problem/include/vtb/problem/solver_names.hh:')
 if [ -n "$hits" ]; then
-  echo "solver names written outside core/include/vtb/core/solver_names.hh:"
+  echo "solver names written outside core/problem/include/vtb/problem/solver_names.hh:"
   echo "$hits"
   exit 1
 fi

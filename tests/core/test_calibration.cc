@@ -1,7 +1,7 @@
 // Lumped masses and spring calibration against closed forms.
-#include "vtb/core/calibration.hh"
-#include "vtb/core/spring_network.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/springs/calibration.hh"
+#include "vtb/springs/spring_network.hh"
 
 #include <gtest/gtest.h>
 

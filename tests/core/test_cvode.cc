@@ -1,6 +1,6 @@
 // CVODE as the reference of the discrete spring model.
 #include "support/small_models.hh"
-#include "vtb/core/cvode_solver.hh"
+#include "vtb/solvers/cvode_solver.hh"
 
 #include <gtest/gtest.h>
 

@@ -1,9 +1,9 @@
 // Properties of the paper's filter matrix W = H^-1 M, H = M + dt C_L + dt^2 K_L.
 #include "support/small_models.hh"
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/filtered.hh"
-#include "vtb/core/nodal_solve.hh"
-#include "vtb/core/selected_inverse.hh"
+#include "vtb/linalg/nodal_solve.hh"
+#include "vtb/linalg/selected_inverse.hh"
+#include "vtb/solvers/explicit_euler.hh"
+#include "vtb/solvers/filtered.hh"
 
 #include <Eigen/Dense>
 #include <gtest/gtest.h>

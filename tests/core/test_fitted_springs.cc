@@ -1,14 +1,14 @@
 // springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
 // static cases that the fit never saw (its training loads are the free mesh's modes).
 #include "support/fresh_dir.hh"
-#include "vtb/core/calibration.hh"
-#include "vtb/core/fitted_cache.hh"
-#include "vtb/core/fitted_springs.hh"
-#include "vtb/core/force_jacobian.hh"
-#include "vtb/core/spring_network.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
+#include "vtb/springs/calibration.hh"
+#include "vtb/springs/fitted_cache.hh"
+#include "vtb/springs/fitted_springs.hh"
+#include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/spring_network.hh"
 
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>

@@ -2,9 +2,9 @@
 // stretch, momentum of a free body, the explicit Courant limit, the filtered scheme at
 // large steps.
 #include "support/small_models.hh"
-#include "vtb/core/cvode_solver.hh"
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/simulation.hh"
+#include "vtb/solvers/cvode_solver.hh"
+#include "vtb/solvers/explicit_euler.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

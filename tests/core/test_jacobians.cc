@@ -10,10 +10,10 @@
 // ~ 1e-12 of the stiffness and the round-off ~ eps x 0.1 / 1e-6 ~ 2e-11 of it; 1e-7 of the
 // largest entry bounds both with margin, while a sign error or a dropped term is O(1) of it.
 #include "support/small_models.hh"
-#include "vtb/core/cvode_solver.hh"
-#include "vtb/core/force_jacobian.hh"
-#include "vtb/core/implicit_euler.hh"
-#include "vtb/core/warped_filter.hh"
+#include "vtb/solvers/cvode_solver.hh"
+#include "vtb/solvers/implicit_euler.hh"
+#include "vtb/solvers/warped_filter.hh"
+#include "vtb/springs/force_jacobian.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>

@@ -3,9 +3,9 @@
 // on the linearised filtered step (spectral radius at most 1 at any multiple of the explicit
 // step); what it costs in accuracy is measured in docs/performance.md.
 #include "support/small_models.hh"
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/filtered.hh"
-#include "vtb/core/multigrid.hh"
+#include "vtb/linalg/multigrid.hh"
+#include "vtb/solvers/explicit_euler.hh"
+#include "vtb/solvers/filtered.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>

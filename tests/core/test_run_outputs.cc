@@ -1,9 +1,9 @@
 // vtb run's files: names, headers, reactions in balance with the loads at rest.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
-#include "vtb/core/cell_fields.hh"
-#include "vtb/core/output.hh"
-#include "vtb/core/simulation.hh"
+#include "vtb/problem/cell_fields.hh"
+#include "vtb/problem/output.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>

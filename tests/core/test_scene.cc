@@ -1,6 +1,6 @@
 // Scene files: every bad input is refused with one line naming the file, the key and the problem.
 #include "support/small_models.hh"
-#include "vtb/core/model.hh"
+#include "vtb/springs/model.hh"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
-// The spring kernel of every integrator (core/src/spring_forces.cc: gather, vectorised
+// The spring kernel of every integrator (core/springs/src/spring_forces.cc: gather, vectorised
 // coefficients, scatter, in chunks of 256 springs) against the per-element reference
 // voigt_force summed spring by spring, and the divider-free inverse square root it uses.
-#include "vtb/core/spring_network.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/springs/spring_network.hh"
 
 #include <gtest/gtest.h>
 

@@ -2,8 +2,8 @@
 // stepper's fixed point.
 #include "bullet_peer.hh"
 #include "support/small_models.hh"
-#include "vtb/core/simulation.hh"
 #include "vtb/harness/bullet.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <gtest/gtest.h>
 

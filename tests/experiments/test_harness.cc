@@ -2,14 +2,14 @@
 // explicit stability boundary.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/solver_registry.hh"
 #include "vtb/harness/bench_scale.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/csv_table.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
+#include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/explicit_euler.hh"
 
 #include <gtest/gtest.h>
 

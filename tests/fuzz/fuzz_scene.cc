@@ -1,5 +1,5 @@
 // libFuzzer target: the scene parser must refuse anything with InputError, never crash.
-#include "vtb/core/scene.hh"
+#include "vtb/problem/scene.hh"
 
 #include <cstdint>
 #include <string_view>

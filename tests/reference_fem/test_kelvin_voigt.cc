@@ -1,8 +1,8 @@
 // The deal.II Kelvin-Voigt reference against analytic and published values, and its
 // convergence orders in space and time.
 #include "support/fresh_dir.hh"
-#include "vtb/core/model.hh"
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/springs/model.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif

@@ -1,9 +1,9 @@
 #pragma once
 /// Small models built in code for the tests: a single Voigt element, plates from scenes.
 
-#include "vtb/core/integrator.hh"
-#include "vtb/core/scene.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/problem/scene.hh"
+#include "vtb/solvers/integrator.hh"
 
 #include <string>
 

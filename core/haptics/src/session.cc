@@ -1,32 +1,26 @@
 #include "vtb/haptics/session.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
-#include "vtb/core/integrator.hh"
-#include "vtb/core/output.hh"
-#include "vtb/core/simulation.hh"
+#include "realtime_thread.hh"
 #include "vtb/haptics/contact2d.hh"
 #include "vtb/haptics/contact3d.hh"
 #include "vtb/haptics/coupling.hh"
 #include "vtb/haptics/device.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/haptics/triple_buffer.hh"
-
-#include <nlohmann/json.hpp>
+#include "vtb/problem/output.hh"
+#include "vtb/solvers/integrator.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <fstream>
-#include <iomanip>
 #include <limits>
 #include <sstream>
 #include <thread>
 
-#include <pthread.h>
-#include <sched.h>
 #include <sys/mman.h>
-#include <sys/prctl.h>
 
 namespace vtb {
 namespace {
@@ -295,35 +289,6 @@ template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<
   return plane;
 }
 
-/// The servo thread's real-time set-up (called on that thread): SCHED_FIFO priority, 1 ns
-/// timer slack, and the pin to one core. Returns what was granted, for the summary.
-std::vector<std::string> set_up_servo_thread(const HapticsOptions& opt) {
-  std::vector<std::string> got;
-  if (opt.realtime_priority) {
-    // Granted to root (or CAP_SYS_NICE); else an ordinary thread, and the misses tell.
-    sched_param prio{};
-    prio.sched_priority = 80;
-    got.push_back(pthread_setschedparam(pthread_self(), SCHED_FIFO, &prio) == 0 ? "fifo" : "fifo-denied");
-  }
-  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL); // wake-ups to the microsecond, not 50 us late
-  if (opt.pin_cpu >= 0) {
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    CPU_SET(opt.pin_cpu, &set);
-    got.push_back(pthread_setaffinity_np(pthread_self(), sizeof set, &set) == 0 ? "pinned" : "pinned-denied");
-  }
-  return got;
-}
-
-/// Moves the calling thread to every core it may use but `cpu` (nothing if that is the only one).
-void keep_off_cpu(int cpu) {
-  cpu_set_t set;
-  CPU_ZERO(&set);
-  if (pthread_getaffinity_np(pthread_self(), sizeof set, &set) != 0) return;
-  CPU_CLR(cpu, &set);
-  if (CPU_COUNT(&set) > 0) pthread_setaffinity_np(pthread_self(), sizeof set, &set);
-}
-
 /// The servo loop's own timing, whichever way it ran.
 struct LoopTiming {
   std::vector<double> periods, tick_us; ///< each cycle's period and its own work, us
@@ -471,47 +436,6 @@ HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
   if (!scene.haptics)
     throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
   return with_model(scene, [&](const auto& model) { return run_session(scene, opt, model); });
-}
-
-void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, const std::string& scene_name) {
-  std::ostringstream csv;
-  csv << std::setprecision(10) << "t,hx,hy,fx,fy";
-  for (std::size_t i = 1; i < r.probes.size(); ++i)
-    for (const char* c : {"hx_", "hy_", "fx_", "fy_"}) csv << ',' << c << i;
-  csv << '\n';
-  for (std::size_t k = 0; k < r.t.size(); ++k) {
-    csv << r.t[k];
-    for (const ProbeTrace& p : r.probes) csv << ',' << p.hx[k] << ',' << p.hy[k] << ',' << p.fx[k] << ',' << p.fy[k];
-    csv << '\n';
-  }
-  nlohmann::ordered_json j;
-  j["scene"] = scene_name;
-  j["samples"] = r.samples;
-  j["rate_hz_mean"] = r.rate_hz_mean;
-  j["period_p99_us"] = r.period_p99_us;
-  j["period_max_us"] = r.period_max_us;
-  j["deadline_misses"] = r.deadline_misses;
-  j["realtime_setup"] = r.realtime_setup;
-  j["max_force"] = r.max_force;
-  j["saturated_samples"] = r.saturated_samples;
-  j["nonfinite_samples"] = r.nonfinite_samples;
-  j["energy_to_user"] = r.energy_to_user;
-  j["fault_time"] = r.fault_time;
-  j["force_zero_time"] = r.force_zero_time;
-  j["physics_steps"] = r.physics_steps;
-  j["physics_step_median_us"] = r.physics_step_median_us;
-  j["tick_median_us"] = r.tick_median_us;
-  j["tick_p99_us"] = r.tick_p99_us;
-  j["dim"] = r.dim;
-  j["coupling_stiffness"] = r.coupling_stiffness;
-  j["notes"] = r.notes;
-  j["probes"] = nlohmann::ordered_json::array();
-  for (const ProbeTrace& p : r.probes)
-    j["probes"].push_back({{"max_force", p.max_force},
-                           {"saturated_samples", p.saturated_samples},
-                           {"nonfinite_samples", p.nonfinite_samples},
-                           {"energy_to_user", p.energy_to_user}});
-  write_files_atomically(dir, {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}});
 }
 
 } // namespace vtb

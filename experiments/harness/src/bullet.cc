@@ -1,10 +1,10 @@
 #include "vtb/harness/bullet.hh"
 
 #include "bullet_peer.hh"
-#include "vtb/core/output.hh"
-#include "vtb/core/simulation.hh"
-#include "vtb/core/solver_names.hh"
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/problem/output.hh"
+#include "vtb/problem/solver_names.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <chrono>
 

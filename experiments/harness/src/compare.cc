@@ -1,10 +1,10 @@
 #include "vtb/harness/compare.hh"
-#include "vtb/core/cell_fields.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/cell_fields.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/solvers.hh"
 
-#include "vtb/core/output.hh"
+#include "vtb/problem/output.hh"
 
 #include <chrono>
 #include <cstdio>

@@ -1,11 +1,11 @@
 #include "vtb/harness/paper_data.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include "paper_data_parts.hh"
 
-#include "vtb/core/output.hh"
 #include "vtb/harness/tex.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/problem/output.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -1,7 +1,7 @@
 // The plotted series of `paper_data`: accuracy against speed, convergence, decomposition,
 // stability, creep, scaling, the haptic loop.
 #include "paper_data_parts.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include "vtb/harness/tex.hh"
 

@@ -1,16 +1,16 @@
 #include "vtb/harness/reproduce.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include "reproduce_parts.hh"
 
-#include "vtb/core/cell_fields.hh"
+#include "vtb/problem/cell_fields.hh"
 
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/output.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/sweep.hh"
 #include "vtb/meshes/vtu_io.hh"
+#include "vtb/problem/output.hh"
+#include "vtb/solvers/explicit_euler.hh"
 
 #include <chrono>
 #include <cmath>

@@ -1,10 +1,10 @@
 #include "reproduce_parts.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/solver_names.hh"
 
-#include "vtb/core/output.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/problem/output.hh"
 
 #include <cmath>
 #include <fstream>

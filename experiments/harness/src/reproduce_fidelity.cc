@@ -2,10 +2,10 @@
 // in the linear regime: both static and linear, so the difference is the springs alone.
 #include "reproduce_parts.hh"
 
-#include "vtb/core/force_jacobian.hh"
-#include "vtb/core/model.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/atomic_file.hh"
+#include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/model.hh"
 
 #include <Eigen/SparseCholesky>
 

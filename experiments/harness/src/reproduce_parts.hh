@@ -3,7 +3,7 @@
 /// The reproduction's parts beyond the paper's own table (internal to the harness): each
 /// writes one CSV into the output folder, which the paper (scripts/build_paper.sh) plots.
 
-#include "vtb/core/model.hh"
+#include "vtb/springs/model.hh"
 
 #include <filesystem>
 #include <iosfwd>

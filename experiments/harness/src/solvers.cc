@@ -1,9 +1,9 @@
 #include "vtb/harness/solvers.hh"
-#include "vtb/core/solver_registry.hh"
 #include "vtb/harness/bullet.hh"
+#include "vtb/problem/solver_registry.hh"
 
-#include "vtb/core/explicit_euler.hh"
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/solvers/explicit_euler.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -1,13 +1,13 @@
 #include "vtb/harness/study.hh"
-#include "vtb/core/solver_registry.hh"
 #include "vtb/harness/tex.hh"
+#include "vtb/problem/solver_registry.hh"
 
-#include "vtb/core/cvode_solver.hh"
-#include "vtb/core/explicit_euler.hh"
-#include "vtb/core/output.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/problem/output.hh"
+#include "vtb/solvers/cvode_solver.hh"
+#include "vtb/solvers/explicit_euler.hh"
 
 #include <algorithm>
 #include <chrono>

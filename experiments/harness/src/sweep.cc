@@ -1,10 +1,10 @@
 #include "vtb/harness/sweep.hh"
-#include "vtb/core/solver_registry.hh"
+#include "vtb/problem/solver_registry.hh"
 
 #include "vtb/meshes/atomic_file.hh"
 
-#include "vtb/core/explicit_euler.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/solvers/explicit_euler.hh"
 
 #include <cmath>
 #include <fstream>

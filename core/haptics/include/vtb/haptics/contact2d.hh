@@ -6,8 +6,8 @@
 /// far side. Allocation-free after construction.
 
 #include "vtb/haptics/contact_result.hh"
-#include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
+#include "vtb/springs/spring_kernels.hh"
 
 namespace vtb {
 

@@ -16,8 +16,8 @@
 /// pressed deep never pops through to the far side. Inside/outside is ray parity on the tree.
 
 #include "vtb/haptics/contact_result.hh"
-#include "vtb/core/spring_kernels.hh"
 #include "vtb/meshes/mesh.hh"
+#include "vtb/springs/spring_kernels.hh"
 
 #include <limits>
 #include <memory>

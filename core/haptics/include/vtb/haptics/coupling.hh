@@ -4,7 +4,7 @@
 /// haptics session's servo loop and the viewer's device mode.
 
 #include "vtb/haptics/contact_result.hh"
-#include "vtb/core/spring_kernels.hh"
+#include "vtb/springs/spring_kernels.hh"
 
 #include <array>
 

@@ -5,7 +5,7 @@
 /// at its own dt on the main thread), with saturation, ramp-in and a watchdog. One or several
 /// probes (devices), whose contact forces act on the body in the same physics step.
 
-#include "vtb/core/scene.hh"
+#include "vtb/problem/scene.hh"
 
 #include <filesystem>
 
@@ -21,7 +21,6 @@ struct HapticsOptions {
   bool lock_memory = false;      ///< mlockall(MCL_CURRENT | MCL_FUTURE) for the session's length
   int pin_cpu = -1;              ///< >= 0: the servo thread pinned to that core, the physics kept off it
 };
-
 
 /// One probe's record: handle position and the force sent to its device, per servo sample
 /// (device coordinates), and its totals.

@@ -3,9 +3,9 @@
 /// The harness's `bullet` solver: Bullet's deformable mass-spring world (experiments/peers)
 /// with its one stiffness fitted to the FEM's static answer (docs/peers.md).
 
-#include "vtb/core/model.hh"
-#include "vtb/core/run_report.hh"
-#include "vtb/core/scene.hh"
+#include "vtb/problem/run_report.hh"
+#include "vtb/problem/scene.hh"
+#include "vtb/springs/model.hh"
 
 #include <filesystem>
 

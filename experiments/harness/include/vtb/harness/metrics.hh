@@ -2,7 +2,7 @@
 /// \file
 /// Error metrics between two trajectories sampled at the same times.
 
-#include "vtb/core/simulation.hh"
+#include "vtb/solvers/simulation.hh"
 
 #include <limits>
 #include <vector>

@@ -3,7 +3,7 @@
 /// Every solver of the testbed behind one call, for the harness: the spring integrators,
 /// CVODE and the deal.II reference, each recording the full nodal field at sample times.
 
-#include "vtb/core/simulation.hh"
+#include "vtb/solvers/simulation.hh"
 
 namespace vtb::harness {
 

@@ -4,8 +4,8 @@
 /// ladder, CVODE over an rtol ladder, each measured against one converged reference run, and
 /// the Pareto front of error against wall time per simulated second.
 
-#include "vtb/core/scene.hh"
-#include "vtb/core/solver_names.hh"
+#include "vtb/problem/scene.hh"
+#include "vtb/problem/solver_names.hh"
 
 #include <filesystem>
 #include <ostream>

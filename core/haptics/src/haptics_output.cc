@@ -1,0 +1,53 @@
+// `vtb haptics`'s output files (session.hh): haptics.csv and summary.json, all or nothing.
+#include "vtb/haptics/session.hh"
+#include "vtb/meshes/atomic_file.hh"
+
+#include <nlohmann/json.hpp>
+
+#include <iomanip>
+#include <sstream>
+
+namespace vtb {
+
+void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, const std::string& scene_name) {
+  std::ostringstream csv;
+  csv << std::setprecision(10) << "t,hx,hy,fx,fy";
+  for (std::size_t i = 1; i < r.probes.size(); ++i)
+    for (const char* c : {"hx_", "hy_", "fx_", "fy_"}) csv << ',' << c << i;
+  csv << '\n';
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    csv << r.t[k];
+    for (const ProbeTrace& p : r.probes) csv << ',' << p.hx[k] << ',' << p.hy[k] << ',' << p.fx[k] << ',' << p.fy[k];
+    csv << '\n';
+  }
+  nlohmann::ordered_json j;
+  j["scene"] = scene_name;
+  j["samples"] = r.samples;
+  j["rate_hz_mean"] = r.rate_hz_mean;
+  j["period_p99_us"] = r.period_p99_us;
+  j["period_max_us"] = r.period_max_us;
+  j["deadline_misses"] = r.deadline_misses;
+  j["realtime_setup"] = r.realtime_setup;
+  j["max_force"] = r.max_force;
+  j["saturated_samples"] = r.saturated_samples;
+  j["nonfinite_samples"] = r.nonfinite_samples;
+  j["energy_to_user"] = r.energy_to_user;
+  j["fault_time"] = r.fault_time;
+  j["force_zero_time"] = r.force_zero_time;
+  j["physics_steps"] = r.physics_steps;
+  j["physics_step_median_us"] = r.physics_step_median_us;
+  j["tick_median_us"] = r.tick_median_us;
+  j["tick_p99_us"] = r.tick_p99_us;
+  j["dim"] = r.dim;
+  j["coupling_stiffness"] = r.coupling_stiffness;
+  j["notes"] = r.notes;
+  j["probes"] = nlohmann::ordered_json::array();
+  for (const ProbeTrace& p : r.probes)
+    j["probes"].push_back({{"max_force", p.max_force},
+                           {"saturated_samples", p.saturated_samples},
+                           {"nonfinite_samples", p.nonfinite_samples},
+                           {"energy_to_user", p.energy_to_user}});
+  write_files_atomically(dir, {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}});
+}
+
+} // namespace vtb

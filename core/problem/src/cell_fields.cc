@@ -1,0 +1,94 @@
+#include "vtb/problem/cell_fields.hh"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+namespace vtb {
+
+template <int dim> void cell_max_principal_strain(const Mesh<dim>& mesh, const Nodal<dim>& u, std::vector<float>& out) {
+  out.resize(mesh.cells.size());
+  for (std::size_t c = 0; c < mesh.cells.size(); ++c) {
+    const auto& cell = mesh.cells[c];
+    Mat<dim> Dm, Ds;
+    for (int k = 0; k < dim; ++k) {
+      const int v = cell[static_cast<std::size_t>(k) + 1];
+      Dm.col(k) = mesh.points.col(v) - mesh.points.col(cell[0]);
+      Ds.col(k) = Dm.col(k) + u.col(v) - u.col(cell[0]);
+    }
+    const Mat<dim> F = Ds * Dm.inverse();
+    const Mat<dim> E = 0.5 * (F.transpose() * F - Mat<dim>::Identity());
+    const Vec<dim> ev = Eigen::SelfAdjointEigenSolver<Mat<dim>>(E, Eigen::EigenvaluesOnly).eigenvalues();
+    const double m = std::max(std::abs(ev.minCoeff()), std::abs(ev.maxCoeff()));
+    out[c] = std::isfinite(m) ? static_cast<float>(m) : std::numeric_limits<float>::infinity();
+  }
+}
+
+template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<dim>& u) {
+  double worst = 0;
+  for (const auto& cell : mesh.cells) {
+    Mat<dim> Dm, Du;
+    for (int k = 0; k < dim; ++k) {
+      const int v = cell[static_cast<std::size_t>(k) + 1];
+      Dm.col(k) = mesh.points.col(v) - mesh.points.col(cell[0]);
+      Du.col(k) = u.col(v) - u.col(cell[0]);
+    }
+    const Mat<dim> g = Du * Dm.inverse();
+    const Mat<dim> eps = 0.5 * (g + g.transpose());
+    const double m =
+        Eigen::SelfAdjointEigenSolver<Mat<dim>>(eps, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
+    if (!(m <= worst)) worst = m; // propagates NaN
+  }
+  return worst;
+}
+
+template <int dim> double max_rotation(const Mesh<dim>& mesh, const Nodal<dim>& u) {
+  double worst = 0;
+  for (const auto& cell : mesh.cells) {
+    Mat<dim> Dm, Ds;
+    for (int k = 0; k < dim; ++k) {
+      const int v = cell[static_cast<std::size_t>(k) + 1];
+      Dm.col(k) = mesh.points.col(v) - mesh.points.col(cell[0]);
+      Ds.col(k) = Dm.col(k) + u.col(v) - u.col(cell[0]);
+    }
+    const Mat<dim> F = Ds * Dm.inverse();
+    const Eigen::JacobiSVD<Mat<dim>> svd(F, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Mat<dim> U = svd.matrixU();
+    if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(dim - 1) *= -1; // an inverted cell
+    const Mat<dim> R = U * svd.matrixV().transpose();
+    double angle = 0;
+    if constexpr (dim == 2)
+      angle = std::abs(std::atan2(R(1, 0), R(0, 0)));
+    else
+      angle = std::acos(std::clamp((R.trace() - 1) / 2, -1.0, 1.0));
+    if (!F.allFinite()) angle = std::numeric_limits<double>::quiet_NaN();
+    if (!(angle <= worst)) worst = angle; // propagates NaN
+  }
+  return worst;
+}
+
+std::string small_strain_regime_note(double rotation, double strain) {
+  constexpr double kRotation = 0.1, kStrain = 0.01;
+  if (rotation <= kRotation && strain <= kStrain) return "";
+  std::ostringstream os;
+  os << std::setprecision(3) << "the scene leaves the small-strain regime in which the linear FEM is a reference "
+     << "(max rotation " << rotation << " rad, limit " << kRotation << "; max strain " << strain << ", limit "
+     << kStrain << "): the kinematics the linear theory drops are about "
+     << std::max(rotation * rotation / 2, strain / 2) * 100
+     << " % of the displacement, beyond the reference's own 0.5 %; differences of that size are the kinematics, "
+        "not the springs (docs/fem.md)";
+  return os.str();
+}
+
+template void cell_max_principal_strain<2>(const Mesh<2>&, const Nodal<2>&, std::vector<float>&);
+template void cell_max_principal_strain<3>(const Mesh<3>&, const Nodal<3>&, std::vector<float>&);
+template double max_small_strain<2>(const Mesh<2>&, const Nodal<2>&);
+template double max_small_strain<3>(const Mesh<3>&, const Nodal<3>&);
+template double max_rotation<2>(const Mesh<2>&, const Nodal<2>&);
+template double max_rotation<3>(const Mesh<3>&, const Nodal<3>&);
+
+} // namespace vtb

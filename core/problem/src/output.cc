@@ -1,0 +1,119 @@
+#include "vtb/problem/output.hh"
+#include "vtb/problem/solver_names.hh"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+
+namespace vtb {
+
+std::string summary_json(const RunReport& r, const std::string& scene_name) {
+  nlohmann::ordered_json j;
+  j["scene"] = scene_name;
+  j["solver"] = r.solver;
+  j["dim"] = r.dim;
+  j["nodes"] = r.nodes;
+  if (r.solver != solvers::kFem) {
+    j["free_nodes"] = r.free_nodes;
+    j["springs"] = r.springs;
+  }
+  // dt is a fixed-step solver's step; CVODE chooses its own, so it reports their mean instead.
+  if (r.solver == solvers::kCvode)
+    j["mean_step"] = r.dt;
+  else
+    j["dt"] = r.dt;
+  j["duration"] = r.duration;
+  j["steps"] = r.steps_taken;
+  j["steps_planned"] = r.steps;
+  j["precompute_seconds"] = r.precompute_seconds;
+  j["step_seconds"] = {{"mean", r.step_seconds.mean}, {"median", r.step_seconds.median}, {"p99", r.step_seconds.p99}};
+  j["total_seconds"] = r.total_seconds;
+  j["stable"] = r.stable;
+  if (!r.stable) {
+    j["failure"] = r.failure;
+    j["failure_time"] = r.failure_time;
+  }
+  j["max_strain"] = r.max_strain;
+  j["max_rotation"] = r.max_rotation;
+  if (r.solver != solvers::kFem) j["max_spring_strain"] = r.max_spring_strain;
+  if (r.solver != solvers::kFem) {
+    j["courant_dt_estimate"] = r.courant_dt;
+    j["calibration"] = r.calibration;
+    j["calibration_seconds"] = r.calibration_seconds;
+    if (r.calibration == "fitted") j["calibration_cached"] = r.calibration_cached;
+    j["effective_poisson_ratio"] = r.effective_poisson_ratio;
+  }
+  // Counts (cells, dofs, steps, iterations, degree...) print as integers, not 600.0; times,
+  // tolerances and ratios as numbers.
+  for (const auto& [key, value] : r.extra) {
+    const bool time = key.size() > 8 && key.compare(key.size() - 8, 8, "_seconds") == 0;
+    if (!time && std::isfinite(value) && value == std::floor(value) && std::abs(value) < 9.0e15)
+      j[key] = static_cast<long long>(value);
+    else
+      j[key] = value;
+  }
+  if (r.solver == solvers::kFiltered) {
+    j["filter"] = r.filter;
+    j["momentum_correction"] = r.momentum_correction;
+    j["strain_limit"] = r.strain_limit;
+  }
+  return j.dump(2) + "\n";
+}
+
+void write_pvd(const std::filesystem::path& dir, const std::vector<double>& times) {
+  std::ostringstream os;
+  os << std::setprecision(12)
+     << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/frame_%04zu.vtu", k);
+    os << "<DataSet timestep=\"" << times[k] << "\" group=\"\" part=\"0\" file=\"" << name << "\"/>\n";
+  }
+  os << "</Collection>\n</VTKFile>\n";
+  write_files_atomically(dir, {{"frames.pvd", os.str()}});
+}
+
+/// The summary with each probe's node and its distance from the probe's scene point.
+template <int dim> std::string with_probes(const std::string& summary, const Problem<dim>& model) {
+  auto j = nlohmann::ordered_json::parse(summary);
+  j["probes"] = nlohmann::ordered_json::array();
+  for (std::size_t p = 0; p < model.probes.size(); ++p)
+    j["probes"].push_back({{"name", model.probes[p].first},
+                           {"node", model.probes[p].second},
+                           {"distance", p < model.probe_distance.size() ? model.probe_distance[p] : 0.0}});
+  return j.dump(2) + "\n";
+}
+
+template <int dim>
+void write_run_outputs(const std::filesystem::path& dir, const Problem<dim>& model, const Trajectory<dim>& traj,
+                       const RunReport& report, const std::string& scene_name) {
+  std::ostringstream probes, reactions;
+  probes << std::setprecision(10) << "t,probe,ux,uy,uz\n";
+  reactions << std::setprecision(10) << "t,region,fx,fy,fz\n";
+  for (std::size_t k = 0; k < traj.t.size(); ++k) {
+    for (std::size_t p = 0; p < model.probes.size(); ++p) {
+      const auto& u = traj.probe_u[k][p];
+      probes << traj.t[k] << ',' << model.probes[p].first << ',' << u[0] << ',' << u[1] << ','
+             << (dim == 3 ? u[dim - 1] : 0.0) << '\n';
+    }
+    for (std::size_t q = 0; q < model.supports.size(); ++q) {
+      const auto& f = traj.reaction[k][q];
+      reactions << traj.t[k] << ',' << model.supports[q].name << ',' << f[0] << ',' << f[1] << ','
+                << (dim == 3 ? f[dim - 1] : 0.0) << '\n';
+    }
+  }
+  write_files_atomically(dir, {{"probes.csv", probes.str()},
+                               {"reactions.csv", reactions.str()},
+                               {"summary.json", with_probes(summary_json(report, scene_name), model)}});
+}
+
+template void write_run_outputs<2>(const std::filesystem::path&, const Problem<2>&, const Trajectory<2>&,
+                                   const RunReport&, const std::string&);
+template void write_run_outputs<3>(const std::filesystem::path&, const Problem<3>&, const Trajectory<3>&,
+                                   const RunReport&, const std::string&);
+
+} // namespace vtb

@@ -1,0 +1,78 @@
+#pragma once
+/// \file
+/// The paper's approximate implicit scheme (Cai, Dill, Payandeh, Fig. 2), read as in
+/// DESIGN.md §3 and docs/method.md:
+///
+///   H = M (1 + dt gamma) + dt C_L + dt^2 K_L   on the free nodes (C_L, K_L: graph
+///        Laplacians with edge weights c_ij, k_ij; edges to constrained nodes add to the
+///        diagonal only),
+///   W = H^-1 M, one scalar matrix shared by every coordinate; its rows sum to 1 on a free
+///        body, so it averages accelerations.
+///   F_node = Voigt forces + k_ij dt ((v_j - v_i).n) n + loads(t + dt) - gamma m v,
+///   dv = dt W M^-1 F_node  (= dt H^-1 F_node: linearised backward Euler with the scalar
+///        Laplacian standing in for the spring Jacobian),
+///   momentum correction (free bodies): remove the linear and angular impulse that the filter
+///        added, by a uniform velocity and a rigid rotation about the centre of mass,
+///   v += dv, x += dt v, then the strain limit: every spring stretched beyond
+///        (1 + strain_limit) L0 is shortened to it, moving free ends in inverse proportion to
+///        their masses, and the velocity is updated with the move / dt.
+///
+/// `neighbors` keeps W_ij only for j = i and j a mesh neighbour of i (the paper), computing
+/// just those entries of H^-1 by selected inversion. The truncated W loses positive
+/// definiteness once dt is a few times the explicit limit, and the scheme then diverges
+/// (docs/method.md derives and measures it). `full` applies the whole W = H^-1 M without
+/// forming it: H is constant, so it is factorised once (sparse LDL^T) and each step does
+/// two triangular solves; it is unconditionally stable for the linear problem.
+///
+/// `multigrid` is `full` with H^-1 replaced by one fixed symmetric V-cycle B (multigrid.hh),
+/// for meshes whose factor of H is too large (3D, thousands of nodes). 0 < B <= H^-1, so
+/// B^-1 = H + Delta with Delta >= 0: the step is `full`'s with the extra mass Delta, stable
+/// at any dt for the linear problem as `full` is (docs/method.md; the tests compute the
+/// linearised step's spectral radius).
+
+#include "vtb/linalg/multigrid.hh"
+#include "vtb/linalg/nodal_solve.hh"
+#include "vtb/problem/solver_names.hh"
+#include "vtb/solvers/integrator.hh"
+#include "vtb/solvers/warped_filter.hh"
+
+#include <Eigen/SparseCore>
+
+namespace vtb {
+
+/// H on the free nodes (index = position in model.free_nodes), both triangles stored.
+template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt);
+
+/// W = H^-1 M (dense). For tests and the `full` filter.
+template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim>& model, double dt);
+
+/// W = H^-1 M on the pattern of H (node and its free neighbours), row-compressed.
+template <int dim>
+Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim>& model, double dt);
+
+template <int dim> class FilteredImplicit final : public Integrator<dim> {
+public:
+  FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
+  void step(State<dim>& s) override;
+  std::string_view name() const override { return solvers::kFiltered; }
+
+private:
+  void finish_step(State<dim>& s);
+  void correct_momentum(const State<dim>& s);
+  void limit_strain(State<dim>& s) const;
+
+  const Model<dim>& m_model;
+  bool m_full;
+  std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
+  bool m_correct;
+  double m_strain_limit;
+  std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
+  std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
+  std::vector<int> m_node_of_row;                        ///< full: factor row -> node
+  Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
+  Nodal<dim> m_force;                                    ///< per node
+  Nodal<dim> m_acc, m_dv;                                ///< per free node
+  Nodal<dim> m_rhs;                                      ///< full: dim x free nodes, factor order
+};
+
+} // namespace vtb

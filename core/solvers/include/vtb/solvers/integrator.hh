@@ -1,0 +1,60 @@
+#pragma once
+/// \file
+/// The spring solvers' common interface: precompute once (in the constructor), then `step`
+/// advances the state by the fixed dt and allocates nothing.
+
+#include "vtb/problem/solver_names.hh"
+#include "vtb/springs/model.hh"
+
+#include <memory>
+#include <string_view>
+
+namespace vtb {
+
+/// Mutable simulation state: displacements u and velocities v of every node at time t.
+template <int dim> struct State {
+  double t = 0;
+  Nodal<dim> u;
+  Nodal<dim> v;
+  /// Forces applied from outside the scene during the run (the haptic probe's contact),
+  /// added to the scene's loads when sized like u; empty otherwise.
+  Nodal<dim> applied;
+};
+
+/// Initial state of a model: zero displacement, the scene's initial velocity, constraints.
+template <int dim> State<dim> initial_state(const Model<dim>& model);
+
+template <int dim> class Integrator {
+public:
+  explicit Integrator(double dt) : m_dt(dt) {}
+  virtual ~Integrator() = default;
+  Integrator(const Integrator&) = delete;
+  Integrator& operator=(const Integrator&) = delete;
+
+  /// Advances `s` from s.t to s.t + dt. Allocates nothing.
+  virtual void step(State<dim>& s) = 0;
+  virtual std::string_view name() const = 0;
+  double dt() const { return m_dt; }
+
+private:
+  double m_dt;
+};
+
+/// Options that select and tune a spring solver (from [solver]).
+struct IntegratorOptions {
+  std::string kind = solvers::kFiltered;
+  double dt = 1e-3;
+  std::string filter = solvers::kFilterFull;
+  bool momentum_correction = true;
+  double strain_limit = 0.0;
+  double rtol = 1e-8, atol = 1e-12; ///< cvode
+  /// implicit-euler: auto (direct in 2D, cg in 3D) | direct (sparse LDL^T) | cg
+  std::string linear_solver = "auto";
+  double cg_tolerance = 1e-8; ///< implicit-euler with cg: |r| <= tol |b|
+};
+
+/// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
+template <int dim>
+std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& options);
+
+} // namespace vtb

@@ -1,0 +1,65 @@
+#pragma once
+/// \file
+/// `[solver] filter = "tensor"`: the filtered step with the full rest Jacobian instead of the
+/// paper's isotropic Laplacian, and stiffness warping (Mueller et al. 2002) for rotations.
+///
+///   H_t = M (1 + dt gamma) + dt D_0 + dt^2 K_0   (dim n x dim n on the free nodes: the spring
+///        Jacobian's blocks k n n^T and c n n^T at rest, from the shared assembly),
+///   dv_i = dt R_i [H_t^-1 (R^T F)]_i,
+///
+/// with F the filtered step's node forces and R_i the rotation of node i's neighbourhood
+/// (polar part of sum_j (x_j - x_i)(X_j - X_i)^T over its mesh neighbours). For small
+/// rotations it is the linearised backward Euler of implicit_euler.hh with the Jacobian frozen
+/// at rest, factorised once: the scalar filter's extra mass dt (tau + dt)(K_L (x) I - K) is
+/// gone, and with it the lag of the transient (docs/method.md). Allocates nothing per step.
+///
+/// What the frozen, warped Jacobian leaves explicit is the difference between each spring's
+/// direction now and its rest direction turned by its node's rotation (shear turns springs
+/// apart from their node's average rotation). Against the dashpots (c = tau k along the
+/// spring) that difference is a transverse force c |dn| per unit velocity, treated explicitly:
+/// on the paper's plate (tau = 2 s, strain 0.1) it diverged at dt = 10 ms. So H carries
+/// beta times the springs' transverse stiffness and damping, (dt c + dt^2 k)(I - n n^T), with
+/// beta = twice the largest mismatch |n - R n_0| (R: the mean of both ends' rotations) once it
+/// passes 2e-3, refactorised (no allocation) when the mismatch outgrows beta or falls 8x below
+/// it. Small deformations keep beta = 0 and no lag; a fixed beta of 0.05 would quadruple the
+/// cantilever's tip error.
+
+#include "vtb/linalg/ordered_ldlt.hh"
+#include "vtb/springs/model.hh"
+
+#include <vector>
+
+namespace vtb {
+
+template <int dim> class WarpedFilter {
+public:
+  WarpedFilter(const Model<dim>& model, double dt);
+  /// dv (dim x free nodes) = dt R H_t^-1 R^T F at displacement u (F: dim x nodes).
+  void apply(const Nodal<dim>& u, const Nodal<dim>& force, double dt, Nodal<dim>& dv);
+  /// The rotation of each node's neighbourhood at displacement u (identity at rest).
+  void rotations(const Nodal<dim>& u);
+  const std::vector<Mat<dim>>& rotation() const { return m_rotation; }
+  /// The largest |n_s - R n0_s| over springs s = (i, j), R the normalised mean of R_i and R_j
+  /// (rotations() first).
+  double direction_mismatch(const Nodal<dim>& u) const;
+
+private:
+  WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0);
+  /// Sets beta for this mismatch (refactorising H when it changes).
+  void cover(double mismatch);
+
+  const Model<dim>& m_model;
+  OrderedLDLT m_h;
+  std::vector<Mat<dim>> m_rotation;         ///< per node
+  Nodal<dim> m_rest_dir;                    ///< per spring, unit
+  std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
+  double m_beta = 0;
+  Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
+};
+
+/// H_t on the free dofs (row dim a + p: free node a, axis p), both triangles stored, with
+/// `transverse` (beta) times the springs' transverse stiffness and damping added.
+template <int dim>
+Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double dt, double transverse = 0.0);
+
+} // namespace vtb

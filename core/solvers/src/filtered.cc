@@ -1,0 +1,235 @@
+#include "vtb/solvers/filtered.hh"
+#include "vtb/problem/solver_names.hh"
+
+#include "vtb/linalg/selected_inverse.hh"
+#include "vtb/springs/force_jacobian.hh"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+
+namespace vtb {
+
+template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<dim>& model, double dt) {
+  const auto& net = model.net;
+  const int nf = static_cast<int>(model.free_nodes.size());
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(static_cast<std::size_t>(nf + 4 * net.num_springs()));
+  for (int a = 0; a < nf; ++a) {
+    const int i = model.free_nodes[static_cast<std::size_t>(a)];
+    trip.emplace_back(a, a, net.mass[i] * (1.0 + dt * net.mass_damping));
+  }
+  // The shared assembly at rest, each block taken by its trace: a spring's true Jacobian at
+  // rest is k n n^T (and c n n^T), whose trace is k (c), so H is the edge-weighted Laplacian
+  // M + dt C_L + dt^2 K_L of the paper, the isotropic part of the true M + dt D + dt^2 K.
+  const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
+  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+    const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
+    if (a >= 0 && b >= 0) trip.emplace_back(a, b, -sign * (dt * D.trace() + dt * dt * K.trace()));
+  });
+  Eigen::SparseMatrix<double> H(nf, nf);
+  H.setFromTriplets(trip.begin(), trip.end());
+  return H;
+}
+
+template <int dim> Eigen::MatrixXd filter_matrix_full(const Model<dim>& model, double dt) {
+  const Eigen::MatrixXd H(filter_system_matrix(model, dt));
+  const Eigen::Index nf = H.rows();
+  Eigen::VectorXd m(nf);
+  for (Eigen::Index a = 0; a < nf; ++a) m[a] = model.net.mass[model.free_nodes[static_cast<std::size_t>(a)]];
+  Eigen::MatrixXd W = Eigen::MatrixXd(m.asDiagonal());
+  Eigen::LLT<Eigen::MatrixXd> llt(H);
+  llt.solveInPlace(W);
+  return W;
+}
+
+template <int dim>
+Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model<dim>& model, double dt) {
+  Eigen::SparseMatrix<double> Z = selected_inverse(filter_system_matrix(model, dt));
+  // W_ab = Z_ab m_b: scale column b.
+  for (int b = 0; b < Z.outerSize(); ++b)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(Z, b); it; ++it)
+      it.valueRef() *= model.net.mass[model.free_nodes[static_cast<std::size_t>(b)]];
+  return Eigen::SparseMatrix<double, Eigen::RowMajor>(Z);
+}
+
+template <int dim>
+FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
+    : Integrator<dim>(o.dt), m_model(model),
+      m_full(o.filter == solvers::kFilterFull || o.filter == solvers::kFilterMultigrid),
+      m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
+  if (std::find(solvers::kFilters.begin(), solvers::kFilters.end(), o.filter) == solvers::kFilters.end())
+    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full, tensor or multigrid");
+  const Eigen::Index n = model.num_nodes();
+  const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
+  if (o.filter == solvers::kFilterTensor) {
+    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+  } else if (o.filter == solvers::kFilterMultigrid) {
+    m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
+    m_rhs.resize(dim, nf);
+  } else if (m_full) {
+    OrderedLDLT factor(filter_system_matrix(model, o.dt));
+    if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
+    m_h = std::make_unique<NodalSolve>(factor);
+    m_node_of_row.resize(static_cast<std::size_t>(nf));
+    for (int a = 0; a < static_cast<int>(nf); ++a)
+      m_node_of_row[static_cast<std::size_t>(factor.ordered(a))] = model.free_nodes[static_cast<std::size_t>(a)];
+    m_rhs.resize(dim, nf);
+  } else {
+    m_sparse = filter_matrix_neighbors(model, o.dt);
+  }
+  m_force.resize(dim, n);
+  m_acc.resize(dim, nf);
+  m_dv.resize(dim, nf);
+}
+
+template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
+  const double dt = this->dt();
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const auto nf = static_cast<Eigen::Index>(free.size());
+
+  // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
+  m_model.external_forces(s.t + dt, m_force);
+  if (s.applied.cols() == m_force.cols()) m_force += s.applied;
+  add_internal_forces(net, s.u, s.v, m_force, dt);
+  // The accelerations M^-1 F: what the neighbour filter multiplies and the momentum correction
+  // compares with; the full and tensor filters solve with F itself.
+  if ((!m_full && !m_tensor) || m_correct)
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      m_acc.col(a) = m_force.col(i) / net.mass[i];
+    }
+  // dv = dt W a.
+  if (m_tensor) {
+    m_tensor->apply(s.u, m_force, dt, m_dv);
+  } else if (m_mg) {
+    // H^-1 F_node by one V-cycle, in the free nodes' order.
+    for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);
+    m_mg->apply(m_rhs, m_dv);
+    m_dv *= dt;
+  } else if (m_full) {
+    // W a = H^-1 M a = H^-1 F_node.
+    m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
+    if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
+      for (Eigen::Index r = 0; r < nf; ++r) {
+        const int i = m_node_of_row[static_cast<std::size_t>(r)];
+        s.v.col(i) += dt * m_rhs.col(r);
+        s.u.col(i) += dt * s.v.col(i);
+      }
+      finish_step(s);
+      return;
+    }
+    for (Eigen::Index r = 0; r < nf; ++r)
+      m_dv.col(m_model.free_index[static_cast<std::size_t>(m_node_of_row[static_cast<std::size_t>(r)])]) =
+          dt * m_rhs.col(r);
+  } else {
+    const int* ptr = m_sparse.outerIndexPtr();
+    const int* col = m_sparse.innerIndexPtr();
+    const double* val = m_sparse.valuePtr();
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      Vec<dim> acc = Vec<dim>::Zero();
+      for (int p = ptr[a]; p < ptr[a + 1]; ++p) acc += val[p] * m_acc.col(col[p]);
+      m_dv.col(a) = dt * acc;
+    }
+  }
+  if (m_correct) correct_momentum(s);
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const int i = free[static_cast<std::size_t>(a)];
+    s.v.col(i) += m_dv.col(a);
+    s.u.col(i) += dt * s.v.col(i);
+  }
+  finish_step(s);
+}
+
+/// The step's end: the time, the supports' prescribed motion, the strain limit.
+template <int dim> void FilteredImplicit<dim>::finish_step(State<dim>& s) {
+  s.t += this->dt();
+  m_model.apply_constraints(s.t, s.u, s.v);
+  if (m_strain_limit > 0) limit_strain(s);
+}
+
+template <int dim> void FilteredImplicit<dim>::correct_momentum(const State<dim>& s) {
+  // The unfiltered impulse dt F carries exactly the right linear and angular impulse
+  // (internal forces are central pairs); remove what the filter changed.
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const auto nf = static_cast<Eigen::Index>(free.size());
+  const double dt = this->dt();
+  double mtot = 0;
+  Vec<dim> xg = Vec<dim>::Zero(), dp = Vec<dim>::Zero();
+  for (Eigen::Index a = 0; a < nf; ++a) {
+    const int i = free[static_cast<std::size_t>(a)];
+    const double m = net.mass[i];
+    mtot += m;
+    xg += m * (net.rest.col(i) + s.u.col(i));
+    dp += m * (m_dv.col(a) - dt * m_acc.col(a));
+  }
+  xg /= mtot;
+  m_dv.colwise() -= dp / mtot;
+  if constexpr (dim == 2) {
+    double dl = 0, inertia = 0;
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Vec<2> r = net.rest.col(i) + s.u.col(i) - xg;
+      const Vec<2> e = m_dv.col(a) - dt * m_acc.col(a);
+      dl += net.mass[i] * (r.x() * e.y() - r.y() * e.x());
+      inertia += net.mass[i] * r.squaredNorm();
+    }
+    const double w = dl / inertia;
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Vec<2> r = net.rest.col(i) + s.u.col(i) - xg;
+      m_dv.col(a) -= Vec<2>(-w * r.y(), w * r.x());
+    }
+  } else {
+    Eigen::Vector3d dl = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Eigen::Vector3d r = net.rest.col(i) + s.u.col(i) - xg;
+      const Eigen::Vector3d e = m_dv.col(a) - dt * m_acc.col(a);
+      dl += net.mass[i] * r.cross(e);
+      inertia += net.mass[i] * (r.squaredNorm() * Eigen::Matrix3d::Identity() - r * r.transpose());
+    }
+    const Eigen::Vector3d w = inertia.ldlt().solve(dl);
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      const Eigen::Vector3d r = net.rest.col(i) + s.u.col(i) - xg;
+      m_dv.col(a) -= w.cross(r);
+    }
+  }
+}
+
+template <int dim> void FilteredImplicit<dim>::limit_strain(State<dim>& s) const {
+  const auto& net = m_model.net;
+  const double inv_dt = 1.0 / this->dt();
+  const double limit = 1.0 + m_strain_limit;
+  for (int sp = 0; sp < net.num_springs(); ++sp) {
+    const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];
+    const double wi = m_model.constrained[static_cast<std::size_t>(i)] ? 0.0 : 1.0 / net.mass[i];
+    const double wj = m_model.constrained[static_cast<std::size_t>(j)] ? 0.0 : 1.0 / net.mass[j];
+    if (wi + wj == 0) continue;
+    const Vec<dim> d = net.rest.col(j) + s.u.col(j) - net.rest.col(i) - s.u.col(i);
+    const double l = d.norm();
+    const double target = limit * net.rest_length[sp];
+    if (!(l > target)) continue;
+    const Vec<dim> shift = (l - target) / (l * (wi + wj)) * d; // total shortening along d
+    const Vec<dim> di = wi * shift, dj = -wj * shift;
+    s.u.col(i) += di;
+    s.v.col(i) += inv_dt * di;
+    s.u.col(j) += dj;
+    s.v.col(j) += inv_dt * dj;
+  }
+}
+
+template class FilteredImplicit<2>;
+template class FilteredImplicit<3>;
+template Eigen::SparseMatrix<double> filter_system_matrix<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double> filter_system_matrix<3>(const Model<3>&, double);
+template Eigen::MatrixXd filter_matrix_full<2>(const Model<2>&, double);
+template Eigen::MatrixXd filter_matrix_full<3>(const Model<3>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<2>(const Model<2>&, double);
+template Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors<3>(const Model<3>&, double);
+
+} // namespace vtb

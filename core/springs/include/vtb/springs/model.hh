@@ -1,0 +1,32 @@
+#pragma once
+/// \file
+/// What the spring solvers simulate: the scene's Problem and the spring network made from it.
+
+#include "vtb/problem/problem.hh"
+#include "vtb/problem/run_report.hh"
+#include "vtb/springs/spring_network.hh"
+
+namespace vtb {
+
+template <int dim> struct Model : Problem<dim> { SpringNetwork<dim> net; };
+
+/// The problem (build_problem) and its spring network ([solver].springs calibration).
+template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
+
+/// What every spring solver reports alike (the integrators and CVODE): the solver's name, the
+/// sizes, the duration and the calibration (its name, wall time, whether it came from the
+/// cache, and the Poisson ratio the lattice implies).
+template <int dim> RunReport spring_report(const Model<dim>& model, const std::string& solver);
+
+/// Loads the scene's mesh, builds the model in the mesh's dimension and returns f(model); f
+/// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)
+/// and may move the model away.
+template <class F> auto with_model(const Scene& scene, F&& f) {
+  return with_mesh(scene, [&](auto& m) {
+    constexpr int dim = std::decay_t<decltype(m)>::points_dim;
+    Model<dim> model = build_model<dim>(scene, std::move(m));
+    return f(model);
+  });
+}
+
+} // namespace vtb

@@ -1,0 +1,54 @@
+#pragma once
+/// \file
+/// The immutable mass-spring model: nodes with lumped masses, one Voigt element per edge.
+
+#include "vtb/meshes/mesh.hh"
+#include "vtb/problem/scene.hh"
+#include "vtb/springs/spring_kernels.hh"
+
+namespace vtb {
+
+template <int dim> struct SpringNetwork {
+  Nodal<dim> rest;                      ///< rest positions X
+  Eigen::VectorXd mass;                 ///< lumped nodal masses
+  std::vector<std::array<int, 2>> edge; ///< springs (i < j)
+  Eigen::VectorXd rest_length;          ///< L0 per spring
+  Eigen::VectorXd stiffness;            ///< k per spring, N/m
+  Eigen::VectorXd damping;              ///< c = tau k per spring, N s/m
+  double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
+  std::string calibration;              ///< "lloyd" | "van-gelder" | "fitted"
+  double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
+  bool calibration_cached = false;      ///< "fitted": the constants came from the fit cache (fitted_cache.hh)
+
+  /// Adjacency in CSR form: the springs at node i are adj_spring[adj_ptr[i] .. adj_ptr[i+1]),
+  /// leading to adj_node[...] (sorted by neighbour).
+  std::vector<int> adj_ptr, adj_node, adj_spring;
+
+  int num_nodes() const { return static_cast<int>(mass.size()); }
+  int num_springs() const { return static_cast<int>(edge.size()); }
+};
+
+/// Builds the network of a mesh with the scene's material and calibration.
+template <int dim>
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration);
+
+/// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
+/// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt
+/// for its k dt (v_j - v_i) term), and -gamma m v. Allocates nothing.
+template <int dim>
+void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
+                         double extra_damping_per_k = 0.0);
+
+/// Largest |l / L0 - 1| over all springs at X + u.
+template <int dim> double max_strain(const SpringNetwork<dim>& net, const Nodal<dim>& u);
+
+/// Elastic energy sum 1/2 k (l - L0)^2 and kinetic energy sum 1/2 m |v|^2.
+template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u);
+template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v);
+
+/// The mean over a cell's edges of its spring's axial force k (l - L0) (N, tension > 0).
+template <int dim>
+void cell_spring_force(const Mesh<dim>& mesh, const SpringNetwork<dim>& net, const Nodal<dim>& u,
+                       std::vector<double>& out);
+
+} // namespace vtb

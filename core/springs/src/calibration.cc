@@ -1,0 +1,178 @@
+#include "vtb/springs/calibration.hh"
+
+#include <Eigen/Dense>
+#include <algorithm>
+
+namespace vtb {
+
+template <int dim> Eigen::VectorXd lumped_masses(const Mesh<dim>& mesh, double density, double thickness) {
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(mesh.num_nodes());
+  const double scale = density * (dim == 2 ? thickness : 1.0) / (dim + 1);
+  for (const auto& c : mesh.cells) {
+    const double share = scale * std::abs(signed_measure(mesh, c));
+    for (int v : c) m[v] += share;
+  }
+  return m;
+}
+
+namespace {
+
+/// Index of edge (a, b) in the sorted unique edge list.
+int edge_index(const std::vector<std::array<int, 2>>& edges, int a, int b) {
+  const std::array<int, 2> key{std::min(a, b), std::max(a, b)};
+  return static_cast<int>(std::lower_bound(edges.begin(), edges.end(), key) - edges.begin());
+}
+
+template <int dim> Eigen::Matrix<double, dim*(dim + 1) / 2, dim*(dim + 1) / 2> elasticity(double E, double nu) {
+  constexpr int nv = dim * (dim + 1) / 2;
+  Eigen::Matrix<double, nv, nv> D = Eigen::Matrix<double, nv, nv>::Zero();
+  if constexpr (dim == 2) { // plane stress, engineering shear strain
+    const double f = E / (1 - nu * nu);
+    D << f, f * nu, 0, f * nu, f, 0, 0, 0, f * (1 - nu) / 2;
+  } else {
+    const double lambda = E * nu / ((1 + nu) * (1 - 2 * nu));
+    const double mu = E / (2 * (1 + nu));
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) D(i, j) = lambda;
+      D(i, i) = lambda + 2 * mu;
+      D(3 + i, 3 + i) = mu;
+    }
+  }
+  return D;
+}
+
+} // namespace
+
+template <int dim>
+Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh<dim>::Cell& cell, double E, double nu,
+                                      double thickness) {
+  constexpr int nv = dim * (dim + 1) / 2;
+  Mat<dim> J;
+  for (int k = 0; k < dim; ++k) J.col(k) = mesh.points.col(cell[k + 1]) - mesh.points.col(cell[0]);
+  const Mat<dim> Jinv = J.inverse();
+  Eigen::Matrix<double, dim, dim + 1> grad; // column a = grad of barycentric a
+  for (int a = 1; a <= dim; ++a) grad.col(a) = Jinv.row(a - 1).transpose();
+  grad.col(0) = -grad.rightCols(dim).rowwise().sum();
+  Eigen::Matrix<double, nv, dim*(dim + 1)> B = Eigen::Matrix<double, nv, dim*(dim + 1)>::Zero();
+  for (int a = 0; a <= dim; ++a) {
+    const int c = a * dim;
+    if constexpr (dim == 2) {
+      B(0, c) = grad(0, a);
+      B(1, c + 1) = grad(1, a);
+      B(2, c) = grad(1, a);
+      B(2, c + 1) = grad(0, a);
+    } else {
+      for (int i = 0; i < 3; ++i) B(i, c + i) = grad(i, a);
+      B(3, c + 1) = grad(2, a); // yz
+      B(3, c + 2) = grad(1, a);
+      B(4, c) = grad(2, a); // xz
+      B(4, c + 2) = grad(0, a);
+      B(5, c) = grad(1, a); // xy
+      B(5, c + 1) = grad(0, a);
+    }
+  }
+  const double V = std::abs(J.determinant()) / (dim == 2 ? 2.0 : 6.0) * (dim == 2 ? thickness : 1.0);
+  return V * B.transpose() * elasticity<dim>(E, nu) * B;
+}
+
+template <int dim>
+Eigen::SparseMatrix<double> fem_stiffness_matrix(const Mesh<dim>& mesh, double E, double nu, double thickness) {
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(mesh.cells.size() * (dim + 1) * (dim + 1) * dim * dim);
+  for (const auto& c : mesh.cells) {
+    const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, thickness);
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
+                              Ke(a * dim + i, b * dim + j));
+  }
+  Eigen::SparseMatrix<double> K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
+  K.setFromTriplets(trip.begin(), trip.end());
+  return K;
+}
+
+template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, double E, double thickness) {
+  const auto edges = unique_edges(mesh);
+  Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
+  const double t = dim == 2 ? thickness : 1.0;
+  for (const auto& c : mesh.cells) {
+    const double measure = std::abs(signed_measure(mesh, c));
+    for (int a = 0; a <= dim; ++a)
+      for (int b = a + 1; b <= dim; ++b) {
+        const double l2 = (mesh.points.col(c[a]) - mesh.points.col(c[b])).squaredNorm();
+        k[edge_index(edges, c[a], c[b])] += E * t * measure / l2;
+      }
+  }
+  return k;
+}
+
+template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness) {
+  constexpr int ne = dim * (dim + 1) / 2; // edges per simplex
+  constexpr int n = dim * (dim + 1);      // element dofs
+  const auto edges = unique_edges(mesh);
+  Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
+  std::array<Eigen::Matrix<double, n, n>, ne> S;
+  std::array<std::array<int, 2>, ne> local{};
+  for (const auto& c : mesh.cells) {
+    const Eigen::MatrixXd K = fem_element_stiffness(mesh, c, E, nu, thickness);
+    int e = 0;
+    for (int a = 0; a <= dim; ++a)
+      for (int b = a + 1; b <= dim; ++b, ++e) {
+        const Vec<dim> d = mesh.points.col(c[b]) - mesh.points.col(c[a]);
+        const Mat<dim> nn = d * d.transpose() / d.squaredNorm();
+        S[e].setZero();
+        S[e].template block<dim, dim>(a * dim, a * dim) = nn;
+        S[e].template block<dim, dim>(b * dim, b * dim) = nn;
+        S[e].template block<dim, dim>(a * dim, b * dim) = -nn;
+        S[e].template block<dim, dim>(b * dim, a * dim) = -nn;
+        local[e] = {c[a], c[b]};
+      }
+    Eigen::Matrix<double, ne, ne> G;
+    Eigen::Matrix<double, ne, 1> rhs;
+    for (int p = 0; p < ne; ++p) {
+      rhs[p] = (S[p].array() * K.array()).sum();
+      for (int q = 0; q < ne; ++q) G(p, q) = (S[p].array() * S[q].array()).sum();
+    }
+    // Least squares with non-negative constants: drop negative ones and refit.
+    std::array<bool, ne> active;
+    active.fill(true);
+    Eigen::Matrix<double, ne, 1> x = Eigen::Matrix<double, ne, 1>::Zero();
+    for (int iter = 0; iter < ne; ++iter) {
+      Eigen::Matrix<double, ne, ne> Ga = G;
+      Eigen::Matrix<double, ne, 1> ra = rhs;
+      for (int p = 0; p < ne; ++p)
+        if (!active[static_cast<std::size_t>(p)]) {
+          Ga.row(p).setZero();
+          Ga.col(p).setZero();
+          Ga(p, p) = 1;
+          ra[p] = 0;
+        }
+      x = Ga.ldlt().solve(ra);
+      bool changed = false;
+      for (int p = 0; p < ne; ++p)
+        if (active[static_cast<std::size_t>(p)] && x[p] < 0) {
+          active[static_cast<std::size_t>(p)] = false;
+          changed = true;
+        }
+      if (!changed) break;
+    }
+    for (int p = 0; p < ne; ++p)
+      k[edge_index(edges, local[static_cast<std::size_t>(p)][0], local[static_cast<std::size_t>(p)][1])] +=
+          std::max(0.0, x[p]);
+  }
+  return k;
+}
+
+#define VTB_INSTANTIATE(D)                                                                                             \
+  template Eigen::VectorXd lumped_masses<D>(const Mesh<D>&, double, double);                                           \
+  template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D>&, double, double);                                    \
+  template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D>&, double, double, double);                                 \
+  template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);     \
+  template Eigen::SparseMatrix<double> fem_stiffness_matrix<D>(const Mesh<D>&, double, double, double);
+VTB_INSTANTIATE(2)
+VTB_INSTANTIATE(3)
+#undef VTB_INSTANTIATE
+
+} // namespace vtb

@@ -1,0 +1,86 @@
+#include "vtb/springs/fitted_cache.hh"
+
+#include "vtb/meshes/atomic_file.hh"
+#include "vtb/springs/fitted_springs.hh"
+
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace vtb {
+namespace {
+
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '4', '\n'}; // the version: bump when the fit changes
+
+struct Fnv {
+  std::uint64_t h = 1469598103934665603ULL;
+  void add(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ULL;
+  }
+  void add(double x) { add(&x, sizeof x); }
+};
+
+template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double E, double nu, double t) {
+  Fnv f;
+  f.add(kMagic, sizeof kMagic);
+  const int d = dim;
+  f.add(&d, sizeof d);
+  f.add(mesh.points.data(), sizeof(double) * static_cast<std::size_t>(mesh.points.size()));
+  for (const auto& c : mesh.cells) f.add(c.data(), sizeof(int) * c.size());
+  for (const double x : {E, nu, dim == 2 ? t : 1.0}) f.add(x);
+  const FitOptions o;
+  for (const double x :
+       {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, double(o.cg_iterations)})
+    f.add(x);
+  return f.h;
+}
+
+bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return false;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::size_t want = sizeof kMagic + sizeof(double) * static_cast<std::size_t>(k.size());
+  if (bytes.size() != want || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) return false;
+  std::memcpy(k.data(), bytes.data() + sizeof kMagic, want - sizeof kMagic);
+  return k.allFinite() && (k.array() >= 0).all();
+}
+
+} // namespace
+
+std::filesystem::path fit_cache_dir() {
+  if (const char* v = std::getenv("VTB_CACHE_DIR")) return v; // empty: off
+  if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) return std::filesystem::path(x) / "vtb";
+  if (const char* h = std::getenv("HOME"); h && *h) return std::filesystem::path(h) / ".cache" / "vtb";
+  return {};
+}
+
+template <int dim>
+Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t, bool* hit) {
+  const std::filesystem::path dir = fit_cache_dir();
+  char name[40];
+  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, E, nu, t)));
+  Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
+  const bool found = !dir.empty() && read_cache(dir / name, k);
+  if (hit) *hit = found;
+  if (found) return k;
+  k = fitted_stiffness(mesh, E, nu, t);
+  if (dir.empty()) return k;
+  try {
+    ensure_directory(dir);
+    write_file_atomically(dir / name, [&](std::ostream& os) {
+      os.write(kMagic, sizeof kMagic);
+      os.write(reinterpret_cast<const char*>(k.data()), static_cast<std::streamsize>(sizeof(double) * k.size()));
+    });
+  } catch (const std::exception&) { // best effort: a read-only or full cache is passed over
+  }
+  return k;
+}
+
+template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, bool*);
+template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, bool*);
+
+} // namespace vtb

@@ -1,0 +1,369 @@
+#include "vtb/springs/fitted_springs.hh"
+
+#include "vtb/linalg/nodal.hh"
+#include "vtb/meshes/input_error.hh"
+#include "vtb/springs/calibration.hh"
+#include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/spring_network.hh"
+
+#include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace vtb {
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using Triplets = std::vector<Eigen::Triplet<double>>;
+
+/// Rigid motions of the mesh: dim translations and the rotations about the centroid.
+template <int dim> MatrixXd rigid_modes(const Mesh<dim>& mesh) {
+  const int n = mesh.num_nodes();
+  constexpr int r = dim == 2 ? 3 : 6;
+  MatrixXd R = MatrixXd::Zero(dim * n, r);
+  const Vec<dim> c = mesh.points.rowwise().mean();
+  for (int v = 0; v < n; ++v) {
+    const Vec<dim> x = mesh.points.col(v) - c;
+    for (int i = 0; i < dim; ++i) R(dim * v + i, i) = 1;
+    if constexpr (dim == 2) {
+      R(2 * v, 2) = -x[1];
+      R(2 * v + 1, 2) = x[0];
+    } else {
+      for (int k = 0; k < 3; ++k) {
+        const Vec<3> w = Vec<3>::Unit(k).cross(x);
+        R.block<3, 1>(3 * v, 3 + k) = w;
+      }
+    }
+  }
+  return R;
+}
+
+/// A statically determinate set of pinned dofs that removes exactly the rigid motions: node a
+/// (the first) entirely; at node b (farthest from a) the components across ab; in 3D one
+/// component at node c (farthest from the line ab) against the rotation about ab. A linear
+/// static answer with these pins is the free body's answer plus a rigid motion.
+template <int dim> std::vector<int> pinned_dofs(const Mesh<dim>& mesh) {
+  const int n = mesh.num_nodes();
+  const Vec<dim> xa = mesh.points.col(0);
+  Eigen::Index b = 0;
+  (mesh.points.colwise() - xa).colwise().squaredNorm().maxCoeff(&b);
+  const Vec<dim> d = mesh.points.col(b) - xa;
+  std::vector<int> pins;
+  for (int i = 0; i < dim; ++i) pins.push_back(i);
+  Eigen::Index p = 0;
+  d.cwiseAbs().maxCoeff(&p);
+  for (int i = 0; i < dim; ++i)
+    if (i != p) pins.push_back(dim * static_cast<int>(b) + i);
+  if constexpr (dim == 3) {
+    const Vec<3> axis = d.normalized();
+    double best = -1;
+    int c = 0;
+    for (int v = 0; v < n; ++v) {
+      const double dist = axis.cross(Vec<3>(mesh.points.col(v) - xa)).norm();
+      if (dist > best) best = dist, c = v;
+    }
+    const Vec<3> w = axis.cross(Vec<3>(mesh.points.col(c) - xa));
+    Eigen::Index q = 0;
+    w.cwiseAbs().maxCoeff(&q);
+    pins.push_back(3 * c + static_cast<int>(q));
+  }
+  return pins;
+}
+
+/// Solves with a symmetric matrix whose pinned dofs are removed (their solution is zero).
+class PinnedSolver {
+public:
+  PinnedSolver(int dofs, const std::vector<int>& pins) : m_reduced(static_cast<std::size_t>(dofs), 0) {
+    for (int d : pins) m_reduced[static_cast<std::size_t>(d)] = -1;
+    for (auto& r : m_reduced)
+      if (r == 0) r = m_size++;
+  }
+  /// Factorises the matrix (full indices; pinned rows and columns dropped).
+  void factorize(const SpMat& full) {
+    Triplets kept;
+    kept.reserve(static_cast<std::size_t>(full.nonZeros()));
+    for (int col = 0; col < full.outerSize(); ++col)
+      for (SpMat::InnerIterator it(full, col); it; ++it) {
+        const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
+        if (r >= 0 && c >= 0) kept.emplace_back(r, c, it.value());
+      }
+    SpMat A(m_size, m_size);
+    A.setFromTriplets(kept.begin(), kept.end());
+    if (!m_analysed) m_ldlt.analyzePattern(A), m_analysed = true;
+    m_ldlt.factorize(A);
+    if (m_ldlt.info() != Eigen::Success)
+      throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
+                       "pinned (is the mesh in one piece?)");
+  }
+  MatrixXd solve(const MatrixXd& rhs) const {
+    MatrixXd reduced(m_size, rhs.cols());
+    for (Eigen::Index d = 0; d < rhs.rows(); ++d)
+      if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) reduced.row(r) = rhs.row(d);
+    const MatrixXd x = m_ldlt.solve(reduced);
+    MatrixXd out = MatrixXd::Zero(rhs.rows(), rhs.cols());
+    for (Eigen::Index d = 0; d < rhs.rows(); ++d)
+      if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) out.row(d) = x.row(r);
+    return out;
+  }
+
+private:
+  std::vector<int> m_reduced;
+  int m_size = 0;
+  bool m_analysed = false;
+  Eigen::SimplicialLDLT<SpMat> m_ldlt;
+};
+
+/// The lowest `count` non-rigid modes of K phi = lambda M phi (M diagonal) by subspace
+/// iteration with Rayleigh-Ritz: X <- Pi_M K^+ M X, Pi_M the M-orthogonal projector off the
+/// rigid modes (K^+ through the pinned solve: the pins add only rigid motions, which Pi_M
+/// removes). Columns M-orthonormal, ascending.
+MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass, const MatrixXd& R, int count,
+                      VectorXd& eigenvalues) {
+  const Eigen::Index N = K.rows();
+  const int block = count + std::max(8, count / 2);
+  const MatrixXd RtMR = R.transpose() * mass.asDiagonal() * R;
+  const Eigen::LLT<MatrixXd> rtmr(RtMR);
+  auto project = [&](MatrixXd& Y) { Y -= R * rtmr.solve(R.transpose() * (mass.asDiagonal() * Y)); };
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  MatrixXd X(N, block);
+  for (Eigen::Index j = 0; j < X.cols(); ++j)
+    for (Eigen::Index i = 0; i < N; ++i) X(i, j) = uni(rng);
+  project(X);
+  VectorXd previous = VectorXd::Constant(count, -1.0);
+  for (int it = 0; it < 300; ++it) {
+    MatrixXd Y = solver.solve(mass.asDiagonal() * X);
+    project(Y);
+    MatrixXd Kr = Y.transpose() * (K * Y), Mr = Y.transpose() * mass.asDiagonal() * Y;
+    Kr = 0.5 * (Kr + Kr.transpose()).eval();
+    Mr = 0.5 * (Mr + Mr.transpose()).eval();
+    const Eigen::GeneralizedSelfAdjointEigenSolver<MatrixXd> es(Kr, Mr);
+    X = Y * es.eigenvectors();
+    const VectorXd lambda = es.eigenvalues().head(count);
+    const bool converged = ((lambda - previous).cwiseAbs().array() <= 1e-8 * lambda.array()).all();
+    previous = lambda;
+    if (converged) break;
+  }
+  eigenvalues = previous;
+  return X.leftCols(count);
+}
+
+/// The network's stiffness at rest, sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i), through
+/// the shared Jacobian assembly (force_jacobian.hh; stiffness signs).
+template <int dim> void rest_stiffness_triplets(const SpringNetwork<dim>& net, const Nodal<dim>& rest, Triplets& trip) {
+  trip.clear();
+  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
+    for (int p = 0; p < dim; ++p)
+      for (int q = 0; q < dim; ++q) trip.emplace_back(dim * i + p, dim * j + q, -sign * K(p, q));
+  });
+}
+
+/// The training set: M-orthonormal lowest non-rigid modes of the free mesh, projected off the
+/// rigid motions and scaled to unit norm (targets T), their loads F = K_fem T, the orthonormal
+/// rigid basis Q, and the pins that make the free stiffnesses invertible.
+struct Training {
+  MatrixXd Q, T, F;
+  std::vector<int> pins;
+};
+
+/// The fit's state at one x: the network's answers U to the training loads, the residual
+/// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
+template <int dim> class Fit {
+public:
+  /// `net`: the mesh's network (its stiffness is set at each evaluate); `dir`: its springs'
+  /// unit rest directions.
+  Fit(const SpringNetwork<dim>& net, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr,
+      PinnedSolver& solver)
+      : m_net(net), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver),
+        m_rest(Nodal<dim>::Zero(dim, net.num_nodes())) {}
+
+  /// Factorises K_s at x and solves the training loads; returns 1/2 ||residual||^2.
+  double evaluate(const VectorXd& x) {
+    m_k = m_k0.array() * x.array().exp();
+    m_net.stiffness = m_k;
+    rest_stiffness_triplets(m_net, m_rest, m_trip);
+    m_ks.setFromTriplets(m_trip.begin(), m_trip.end());
+    m_solver.factorize(m_ks);
+    m_U = m_solver.solve(m_F);
+    m_res = project(m_U) - m_T;
+    m_H = gather(m_U);
+    for (Eigen::Index m = 0; m < m_H.cols(); ++m) m_H.col(m).array() *= m_k.array();
+    return 0.5 * m_res.squaredNorm();
+  }
+  const MatrixXd& residual() const { return m_res; }
+
+  /// J v: d residual / dx along v = -P K^+ G diag(h_m) v per mode.
+  MatrixXd apply(const VectorXd& v) const {
+    MatrixXd W = MatrixXd::Zero(m_F.rows(), m_F.cols());
+    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
+      const auto [i, j] = m_net.edge[s];
+      const auto se = static_cast<Eigen::Index>(s);
+      for (Eigen::Index m = 0; m < W.cols(); ++m) {
+        const Vec<dim> g = (m_H(se, m) * v[se]) * m_dir.col(se);
+        W.col(m).template segment<dim>(dim * j) += g;
+        W.col(m).template segment<dim>(dim * i) -= g;
+      }
+    }
+    return -project(m_solver.solve(W));
+  }
+  /// J^T Y = -sum_m h_m .* (G^T K^+ P y_m).
+  VectorXd apply_transpose(const MatrixXd& Y) const {
+    const MatrixXd Z = gather(m_solver.solve(project(Y)));
+    return -(Z.array() * m_H.array()).rowwise().sum();
+  }
+
+private:
+  MatrixXd project(const MatrixXd& U) const { return U - m_Q * (m_Q.transpose() * U); }
+  /// G^T U: per spring and column, n_s . (u_j - u_i).
+  MatrixXd gather(const MatrixXd& U) const {
+    MatrixXd out(static_cast<Eigen::Index>(m_net.edge.size()), U.cols());
+    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
+      const auto [i, j] = m_net.edge[s];
+      const auto se = static_cast<Eigen::Index>(s);
+      for (Eigen::Index m = 0; m < U.cols(); ++m)
+        out(se, m) =
+            m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i));
+    }
+    return out;
+  }
+
+  SpringNetwork<dim> m_net;
+  const Nodal<dim>& m_dir;
+  const VectorXd& m_k0;
+  const MatrixXd &m_Q, &m_T, &m_F;
+  PinnedSolver& m_solver;
+  const Nodal<dim> m_rest; ///< zero displacement
+  VectorXd m_k;
+  Triplets m_trip;
+  SpMat m_ks{m_F.rows(), m_F.rows()};
+  MatrixXd m_U, m_res, m_H;
+};
+
+/// Conjugate gradients on (J^T J + shift I) d = b, from d = 0, to a relative residual of 1e-2
+/// (an inexact Gauss-Newton step) or `max_iterations`.
+template <int dim>
+VectorXd normal_cg(const Fit<dim>& fit, double shift, const VectorXd& b, int max_iterations, int& used) {
+  VectorXd d = VectorXd::Zero(b.size()), r = b, p = r;
+  double rr = r.squaredNorm();
+  const double stop = 1e-4 * rr;
+  for (used = 0; used < max_iterations && rr > stop; ++used) {
+    const VectorXd Ap = fit.apply_transpose(fit.apply(p)) + shift * p;
+    const double alpha = rr / p.dot(Ap);
+    d += alpha * p;
+    r -= alpha * Ap;
+    const double rr_new = r.squaredNorm();
+    p = r + (rr_new / rr) * p;
+    rr = rr_new;
+  }
+  return d;
+}
+
+template <int dim>
+Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, double weighting) {
+  const int n = mesh.num_nodes(), N = dim * n;
+  Training tr;
+  const SpMat K = fem_stiffness_matrix(mesh, E, nu, thickness);
+  tr.pins = pinned_dofs(mesh);
+  PinnedSolver fem_solver(N, tr.pins);
+  fem_solver.factorize(K);
+  VectorXd mass(N);
+  const VectorXd m_nodes = lumped_masses(mesh, 1.0, thickness);
+  for (int v = 0; v < n; ++v) mass.template segment<dim>(dim * v).setConstant(m_nodes[v]);
+  const MatrixXd R = rigid_modes(mesh);
+  tr.Q = Eigen::HouseholderQR<MatrixXd>(R).householderQ() * MatrixXd::Identity(N, R.cols());
+  VectorXd lambda;
+  tr.T = lowest_modes(K, fem_solver, mass, R, modes, lambda);
+  tr.T -= tr.Q * (tr.Q.transpose() * tr.T);
+  tr.T.colwise().normalize();
+  for (int m = 0; m < modes; ++m) tr.T.col(m) *= std::pow(lambda[0] / lambda[m], weighting);
+  tr.F = K * tr.T;
+  return tr;
+}
+
+/// Levenberg-Marquardt on 1/2 ||r(x)||^2 + mu/2 ||x||^2 from x (fit evaluated at x), with x
+/// held above log(floor); each step an inexact CG solve of the damped normal equations.
+/// Returns the accepted x; fit is left evaluated there.
+template <int dim> VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, FitReport& rep) {
+  const auto ns = x.size();
+  // The scale of J^T J's diagonal (one Hutchinson probe) sets mu and the first damping.
+  std::mt19937 rng(2);
+  VectorXd probe(ns);
+  for (Eigen::Index s = 0; s < ns; ++s) probe[s] = (rng() & 1U) ? 1.0 : -1.0;
+  const double scale = fit.apply(probe).squaredNorm() / static_cast<double>(ns);
+  const double mu = o.pull * scale, lower = std::log(o.floor);
+  double lambda = 0.1 * scale, objective = 0.5 * fit.residual().squaredNorm() + 0.5 * mu * x.squaredNorm();
+  for (int it = 0; it < o.max_iterations; ++it) {
+    const VectorXd gradient = fit.apply_transpose(fit.residual()) + mu * x;
+    int used = 0;
+    const VectorXd trial = (x + normal_cg(fit, mu + lambda, -gradient, o.cg_iterations, used)).cwiseMax(lower);
+    rep.cg_iterations += used;
+    ++rep.iterations;
+    const double trial_objective = fit.evaluate(trial) + 0.5 * mu * trial.squaredNorm();
+    if (trial_objective < objective) {
+      const double gain = (objective - trial_objective) / objective;
+      x = trial;
+      objective = trial_objective;
+      lambda /= 3;
+      if (gain < o.tolerance) break;
+    } else {
+      lambda *= 5;
+      fit.evaluate(x); // back to the accepted point's factor and residual
+    }
+  }
+  return x;
+}
+
+} // namespace
+
+template <int dim>
+Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness,
+                                 const FitOptions& options, FitReport* report) {
+  const int n = mesh.num_nodes(), N = dim * n;
+  const int modes = options.modes > 0 ? options.modes : (dim == 2 ? 16 : 24);
+  // The network (van Gelder's constants, no dashpots): its edges, and the assembly's input.
+  const SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
+  const auto& edges = net.edge;
+  const auto ns = static_cast<Eigen::Index>(edges.size());
+  if (N - (dim == 2 ? 3 : 6) < modes + 8)
+    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) +
+                     " nodes; the fit needs at least " +
+                     std::to_string((modes + 8 + (dim == 2 ? 3 : 6) + dim - 1) / dim));
+  Nodal<dim> dir(dim, ns);
+  for (Eigen::Index s = 0; s < ns; ++s)
+    dir.col(s) = (mesh.points.col(edges[static_cast<std::size_t>(s)][1]) -
+                  mesh.points.col(edges[static_cast<std::size_t>(s)][0]))
+                     .normalized();
+  const Training tr = training_set(mesh, E, nu, thickness, modes, options.weighting);
+  PinnedSolver solver(N, tr.pins);
+  // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
+  // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
+  // Lloyd's per-element fit can leave near-mechanisms that van Gelder does not.
+  const VectorXd& vg = net.stiffness;
+  const VectorXd lloyd = lloyd_stiffness(mesh, E, nu, thickness).cwiseMax(0.01 * vg);
+  const VectorXd zero = VectorXd::Zero(ns);
+  FitReport rep;
+  rep.modes = modes;
+  rep.lloyd_residual = std::sqrt(2 * Fit<dim>(net, dir, lloyd, tr, solver).evaluate(zero) / modes);
+  const double vg_residual = std::sqrt(2 * Fit<dim>(net, dir, vg, tr, solver).evaluate(zero) / modes);
+  const VectorXd& prior = vg_residual < rep.lloyd_residual ? vg : lloyd;
+  rep.prior = &prior == &vg ? "van-gelder" : "lloyd";
+  Fit<dim> fit(net, dir, prior, tr, solver);
+  VectorXd x = zero;
+  if (options.start.size() == ns)
+    x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
+  fit.evaluate(x);
+  x = levenberg_marquardt(fit, x, options, rep);
+  rep.fitted_residual = std::sqrt(fit.residual().squaredNorm() / modes);
+  if (report) *report = rep;
+  return prior.array() * x.array().exp();
+}
+
+template Eigen::VectorXd fitted_stiffness<2>(const Mesh<2>&, double, double, double, const FitOptions&, FitReport*);
+template Eigen::VectorXd fitted_stiffness<3>(const Mesh<3>&, double, double, double, const FitOptions&, FitReport*);
+
+} // namespace vtb

@@ -1,0 +1,34 @@
+#include "vtb/springs/model.hh"
+
+#include "vtb/springs/calibration.hh"
+
+namespace vtb {
+
+template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
+  Model<dim> model;
+  static_cast<Problem<dim>&>(model) = build_problem<dim>(scene, std::move(mesh));
+  model.net = build_network(model.mesh, scene.material, scene.solver.springs);
+  return model;
+}
+
+template <int dim> RunReport spring_report(const Model<dim>& model, const std::string& solver) {
+  RunReport rep;
+  rep.solver = solver;
+  rep.dim = dim;
+  rep.nodes = model.num_nodes();
+  rep.springs = model.net.num_springs();
+  rep.free_nodes = static_cast<int>(model.free_nodes.size());
+  rep.duration = model.duration;
+  rep.calibration = model.net.calibration;
+  rep.calibration_seconds = model.net.calibration_seconds;
+  rep.calibration_cached = model.net.calibration_cached;
+  rep.effective_poisson_ratio = spring_poisson_ratio(dim);
+  return rep;
+}
+
+template RunReport spring_report<2>(const Model<2>&, const std::string&);
+template RunReport spring_report<3>(const Model<3>&, const std::string&);
+template Model<2> build_model<2>(const Scene&, Mesh<2>);
+template Model<3> build_model<3>(const Scene&, Mesh<3>);
+
+} // namespace vtb

@@ -1,0 +1,196 @@
+// The Kelvin-Voigt reference's set-up: the run, the dofs, the supports, the assembly.
+// Members of KelvinVoigtProblem (kelvin_voigt_problem.hh), instantiated for both backends.
+#include "kelvin_voigt_problem.hh"
+#include "vtb/problem/solver_names.hh"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+namespace vtb::fem {
+
+template <int dim, class Backend>
+RunReport KelvinVoigtProblem<dim, Backend>::run(Trajectory<dim>& out, bool record_field) {
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  {
+    dealii::TimerOutput::Scope s(m_timer, "setup");
+    m_backend.create(m_model, m_opt.refinements, *m_tria, m_loads_of_id);
+    setup_dofs();
+    setup_nodes();
+    setup_constraints();
+  }
+  {
+    dealii::TimerOutput::Scope s(m_timer, "assembly");
+    assemble();
+  }
+  {
+    dealii::TimerOutput::Scope s(m_timer, "factorisation");
+    m_solver.factor(m_A0);
+    initial_state();
+  }
+  RunReport rep = header();
+  rep.precompute_seconds = std::chrono::duration<double>(clock::now() - t0).count();
+  march(
+      m_scheme, m_model.duration, m_model.output_interval, rep,
+      [&](double t) {
+        dealii::TimerOutput::Scope s(m_timer, "time stepping");
+        step(t);
+      },
+      [&] { return std::isfinite(m_u.l2_norm()); },
+      [&](double t) {
+        dealii::TimerOutput::Scope s(m_timer, "output");
+        record(t, out, record_field);
+      },
+      [&](std::span<const double> times) {
+        dealii::TimerOutput::Scope s(m_timer, "output");
+        interpolate_samples(out, times);
+      });
+  if (!m_nonlinear_failure.empty()) {
+    rep.stable = false;
+    rep.failure = m_nonlinear_failure;
+    rep.failure_time = m_failure_time;
+  }
+  rep.max_strain = m_max_strain;
+  rep.max_rotation = m_max_rotation;
+  for (const auto& [phase, seconds] : m_timer.get_summary_data(dealii::TimerOutput::total_wall_time)) {
+    std::string key = "phase_" + phase + "_seconds";
+    std::replace(key.begin(), key.end(), ' ', '_');
+    rep.extra.push_back({key, seconds});
+  }
+  return rep;
+}
+
+template <int dim, class Backend> RunReport KelvinVoigtProblem<dim, Backend>::header() const {
+  RunReport rep;
+  rep.solver = solvers::kFem;
+  rep.dim = dim;
+  rep.dt = m_opt.dt;
+  rep.duration = m_model.duration;
+  rep.nodes = m_model.num_nodes();
+  rep.extra = {{"cells", static_cast<double>(m_tria->n_global_active_cells())},
+               {"dofs", static_cast<double>(m_dofs.n_dofs())},
+               {"degree", static_cast<double>(m_opt.degree)},
+               {"refinements", static_cast<double>(m_opt.refinements)},
+               {"mpi_ranks", static_cast<double>(m_backend.ranks())}};
+  return rep;
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_dofs() {
+  m_dofs.distribute_dofs(m_fe);
+  m_owned = m_dofs.locally_owned_dofs();
+  dealii::DoFTools::extract_locally_relevant_dofs(m_dofs, m_relevant);
+  dealii::DynamicSparsityPattern dsp(m_relevant);
+  dealii::DoFTools::make_sparsity_pattern(m_dofs, dsp, dealii::AffineConstraints<double>(), true);
+  m_backend.reinit(dsp, m_owned, m_relevant, {&m_K, &m_M, &m_C, &m_A, &m_A0, &m_M0, &m_T});
+  for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta, &m_da, &m_dv})
+    m_backend.reinit(*v, m_owned);
+  m_backend.reinit_ghosted(m_ghosted, m_owned, m_relevant);
+  m_backend.reinit_ghosted(m_ghosted_v, m_owned, m_relevant);
+
+  const auto n = m_dofs.n_dofs();
+  m_point.assign(n, dealii::Point<dim>());
+  m_comp.assign(n, -1); // -1: not seen by this process
+  dealii::FEValues<dim> fev(m_mapping, m_fe, dealii::Quadrature<dim>(m_fe.get_unit_support_points()),
+                            dealii::update_quadrature_points);
+  std::vector<dof_t> local(m_fe.n_dofs_per_cell());
+  for (const auto& cell : m_dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    fev.reinit(cell);
+    cell->get_dof_indices(local);
+    for (unsigned int i = 0; i < local.size(); ++i) {
+      m_point[local[i]] = fev.quadrature_point(i);
+      m_comp[local[i]] = static_cast<int>(m_fe.system_to_component_index(i).first);
+    }
+  }
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_nodes() {
+  std::map<std::vector<double>, int> node_of_point;
+  for (int i = 0; i < m_model.num_nodes(); ++i) {
+    const dealii::Point<dim> p = to_point<dim>(m_model.mesh.points.col(i));
+    node_of_point[std::vector<double>(p.begin_raw(), p.end_raw())] = i;
+  }
+  m_node.assign(static_cast<std::size_t>(m_model.num_nodes()) * dim, kUnseen);
+  std::vector<double> found(static_cast<std::size_t>(m_model.num_nodes()), 0.0);
+  for (dof_t d = 0; d < m_dofs.n_dofs(); ++d) {
+    if (m_comp[d] < 0) continue;
+    const auto it = node_of_point.find(std::vector<double>(m_point[d].begin_raw(), m_point[d].end_raw()));
+    if (it == node_of_point.end()) continue;
+    m_node[static_cast<std::size_t>(it->second) * dim + static_cast<std::size_t>(m_comp[d])] = d;
+    found[static_cast<std::size_t>(it->second)] = 1;
+  }
+  m_backend.sum(found);
+  for (std::size_t i = 0; i < found.size(); ++i)
+    if (found[i] == 0) throw std::runtime_error("fem: node " + std::to_string(i) + " is not a support point");
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_constraints() {
+  const auto n = m_dofs.n_dofs();
+  m_support_of.assign(n, -1);
+  const double grow = 1e-9 * bounding_diagonal(m_model.mesh), tol = 1e-10 * bounding_diagonal(m_model.mesh);
+  for (std::size_t s = 0; s < m_model.supports.size(); ++s) {
+    const auto& sup = m_model.supports[s];
+    for (int node : sup.nodes)
+      for (int a = 0; a < dim; ++a) {
+        const dof_t d = m_node[static_cast<std::size_t>(node) * dim + static_cast<std::size_t>(a)];
+        if (d != kUnseen) m_support_of[d] = static_cast<int>(s);
+      }
+    for (dof_t d = 0; d < n; ++d) {
+      if (m_comp[d] < 0) continue;
+      bool in = false;
+      if (sup.box) {
+        in = true;
+        for (int a = 0; a < dim; ++a)
+          in = in && m_point[d][a] >= sup.box->min[a] - grow && m_point[d][a] <= sup.box->max[a] + grow;
+      }
+      for (const auto& f : sup.facets)
+        if (!in) in = on_facet<dim>(m_model.mesh, m_point[d], f, tol);
+      if (in) m_support_of[d] = static_cast<int>(s);
+    }
+  }
+  m_constraints.reinit(m_relevant);
+  for (dof_t d = 0; d < n; ++d)
+    if (m_support_of[d] >= 0) m_constraints.add_line(d);
+  m_constraints.close();
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::assemble() {
+  const double ck = m_scheme.ck(), cm = m_scheme.cm(), cc = m_scheme.cc();
+  const dealii::QGaussSimplex<dim> quad(static_cast<unsigned int>(m_opt.degree + 1));
+  dealii::FEValues<dim> fev(m_mapping, m_fe, quad,
+                            dealii::update_values | dealii::update_gradients | dealii::update_JxW_values);
+  const unsigned int nd = m_fe.n_dofs_per_cell();
+  dealii::FullMatrix<double> k(nd, nd), m(nd, nd), c(nd, nd), a(nd, nd);
+  std::vector<dof_t> local(nd);
+  const dealii::AffineConstraints<double> none;
+  for (const auto& cell : m_dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    fev.reinit(cell);
+    element_matrices(fev, m_fe, m_mat, k, m);
+    c = 0;
+    c.add(m_mat.retardation_time, k, m_mat.mass_damping, m);
+    a = 0;
+    a.add(ck, k, cm, m);
+    a.add(cc, c);
+    cell->get_dof_indices(local);
+    none.distribute_local_to_global(k, local, m_K);
+    none.distribute_local_to_global(m, local, m_M);
+    none.distribute_local_to_global(c, local, m_C);
+    none.distribute_local_to_global(a, local, m_A);
+    m_constraints.distribute_local_to_global(a, local, m_A0);
+    m_constraints.distribute_local_to_global(m, local, m_M0);
+  }
+  for (auto* A : {&m_K, &m_M, &m_C, &m_A, &m_A0, &m_M0}) A->compress(dealii::VectorOperation::add);
+}
+
+template class KelvinVoigtProblem<2, SerialBackend<2>>;
+template class KelvinVoigtProblem<3, SerialBackend<3>>;
+template class KelvinVoigtProblem<2, DistributedBackend<2>>;
+template class KelvinVoigtProblem<3, DistributedBackend<3>>;
+
+} // namespace vtb::fem

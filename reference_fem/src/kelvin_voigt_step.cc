@@ -1,0 +1,233 @@
+// The Kelvin-Voigt reference's time step: loads, the initial state, the linear step and the nonlinear (Newton) step.
+// Members of KelvinVoigtProblem (kelvin_voigt_problem.hh), instantiated for both backends.
+#include "kelvin_voigt_problem.hh"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/fe/fe_values.h>
+
+#include <Eigen/Dense>
+
+#include <limits>
+namespace vtb::fem {
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::load_vector(double t, Vector& f) {
+  f = 0;
+  std::vector<dealii::Tensor<1, dim>> traction(m_loads_of_id.size());
+  bool any = false;
+  for (std::size_t id = 1; id < m_loads_of_id.size(); ++id)
+    for (int l : m_loads_of_id[id]) {
+      const auto& load = m_model.loads[static_cast<std::size_t>(l)];
+      double measure = 0;
+      for (const auto& fc : load.facets) measure += facet_measure(m_model.mesh, fc);
+      const double s = ramp_factor(t, load.start, load.ramp);
+      for (int a = 0; a < dim; ++a) traction[id][a] += s * load.total[a] / measure;
+      any = any || s != 0;
+    }
+  if (any) add_tractions(traction, f);
+  for (const auto& load : m_model.loads) {
+    if (!load.facets.empty()) continue;
+    const double s = ramp_factor(t, load.start, load.ramp);
+    for (std::size_t k = 0; k < load.nodes.size(); ++k)
+      for (int a = 0; a < dim; ++a) {
+        const dof_t d = m_node[static_cast<std::size_t>(load.nodes[k]) * dim + static_cast<std::size_t>(a)];
+        if (d != kUnseen && m_owned.is_element(d)) f[d] += s * load.force(a, static_cast<Eigen::Index>(k));
+      }
+  }
+  f.compress(dealii::VectorOperation::add);
+}
+
+template <int dim, class Backend>
+void KelvinVoigtProblem<dim, Backend>::add_tractions(const std::vector<dealii::Tensor<1, dim>>& traction, Vector& f) {
+  const dealii::QGaussSimplex<dim - 1> fquad(static_cast<unsigned int>(m_opt.degree + 1));
+  dealii::FEFaceValues<dim> fv(m_mapping, m_fe, fquad, dealii::update_values | dealii::update_JxW_values);
+  std::vector<dof_t> local(m_fe.n_dofs_per_cell());
+  dealii::Vector<double> cell_f(m_fe.n_dofs_per_cell());
+  const dealii::AffineConstraints<double> none;
+  for (const auto& cell : m_dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    cell_f = 0;
+    bool on_load = false;
+    for (const unsigned int face : cell->face_indices()) {
+      const auto id = cell->face(face)->boundary_id();
+      if (!cell->face(face)->at_boundary() || id == 0 || id >= m_loads_of_id.size()) continue;
+      fv.reinit(cell, face);
+      on_load = true;
+      for (unsigned int q = 0; q < fquad.size(); ++q)
+        for (unsigned int i = 0; i < cell_f.size(); ++i)
+          cell_f[i] += traction[id][m_fe.system_to_component_index(i).first] * fv.shape_value(i, q) * fv.JxW(q);
+    }
+    if (!on_load) continue;
+    cell->get_dof_indices(local);
+    none.distribute_local_to_global(cell_f, local, f);
+  }
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::zero_prescribed(Vector& v) {
+  for (const auto d : m_owned)
+    if (m_support_of[d] >= 0) v[d] = 0;
+  v.compress(dealii::VectorOperation::insert);
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::initial_state() {
+  m_u = 0;
+  m_a = 0;
+  const Nodal<dim>& V = m_model.initial_velocity;
+  Eigen::Matrix<double, dim + 1, Eigen::Dynamic> X(dim + 1, m_model.num_nodes());
+  X.topRows(dim) = m_model.mesh.points;
+  X.row(dim).setOnes();
+  const Eigen::Matrix<double, dim, dim + 1> affine = (X * X.transpose()).ldlt().solve(X * V.transpose()).transpose();
+  for (const auto d : m_owned) {
+    Eigen::Matrix<double, dim + 1, 1> x;
+    for (int a = 0; a < dim; ++a) x[a] = m_point[d][a];
+    x[dim] = 1;
+    m_v[d] = affine.row(m_comp[d]).dot(x);
+    if (m_support_of[d] >= 0) {
+      m_u[d] = prescribed(d, 0.0);
+      m_v[d] = prescribed_rate(d, 0.0);
+    }
+  }
+  m_u.compress(dealii::VectorOperation::insert);
+  m_v.compress(dealii::VectorOperation::insert);
+  if (!m_scheme.newmark_family) return;
+  load_vector(-1e-12 * m_opt.dt, m_rhs);
+  m_C.vmult(m_tmp, m_v);
+  m_rhs -= m_tmp;
+  m_K.vmult(m_tmp, m_u);
+  m_rhs -= m_tmp;
+  zero_prescribed(m_rhs);
+  typename Backend::Solver mass;
+  mass.factor(m_M0);
+  mass.solve(m_a, m_rhs);
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step(double t_new) {
+  if (m_opt.nonlinear) return step_nonlinear(t_new);
+  load_vector(m_scheme.load_time(t_new), m_rhs);
+  m_scheme.add_history(m_M, m_C, m_K, m_u, m_v, m_a, m_da, m_dv, m_tmp, m_rhs);
+  m_ubar = m_u;
+  for (const auto d : m_owned)
+    if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
+  m_ubar.compress(dealii::VectorOperation::insert);
+  m_A.vmult(m_tmp, m_ubar);
+  m_rhs -= m_tmp;
+  zero_prescribed(m_rhs);
+  m_solver.solve(m_delta, m_rhs);
+  m_ubar += m_delta;
+  if (!m_opt.static_solve) {
+    for (const auto d : m_owned) {
+      if (m_scheme.newmark_family && m_support_of[d] >= 0) {
+        // On prescribed dofs the motion is known: its rate and (piecewise linear ramps) zero
+        // acceleration; the Newmark update would ring there after a kink.
+        m_v[d] = prescribed_rate(d, t_new);
+        m_a[d] = 0;
+        continue;
+      }
+      double v = m_v[d], a = m_a[d];
+      m_scheme.update(m_ubar[d], m_u[d], m_da[d], m_dv[d], v, a);
+      m_v[d] = v;
+      m_a[d] = a;
+    }
+    m_a.compress(dealii::VectorOperation::insert);
+    m_v.compress(dealii::VectorOperation::insert);
+  }
+  m_u = m_ubar;
+}
+
+template <int dim, class Backend>
+void KelvinVoigtProblem<dim, Backend>::nonlinear_force(const Vector& u, const Vector& v, Vector& f, double rate,
+                                                       bool tangent) {
+  m_ghosted = u;
+  m_ghosted_v = v;
+  f = 0;
+  if (tangent) m_T = 0;
+  assemble_nonlinear<dim>(m_mapping, m_fe, m_dofs, m_mat, m_opt.degree, m_ghosted, m_ghosted_v, m_constraints,
+                          NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate});
+}
+
+template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(double load_scale) {
+  const bool dynamic = !m_opt.static_solve;
+  const double dt = m_opt.dt, rate = dynamic ? 1 / dt : 0.0;
+  const double mass_weight = dynamic ? 1 / (dt * dt) + m_mat.mass_damping / dt : 0.0;
+  double first = -1;
+  for (int it = 0; it < 25; ++it) {
+    m_dv = m_ubar;
+    m_dv -= m_u;
+    m_dv *= rate;
+    nonlinear_force(m_ubar, m_dv, m_rhs, rate, true);
+    if (dynamic) m_T.add(mass_weight, m_M0); // the consistent mass, prescribed rows eliminated
+    m_rhs.add(-load_scale, m_f);
+    if (dynamic) {
+      m_tmp = m_dv;
+      m_tmp -= m_v;
+      m_tmp *= 1 / dt;
+      m_tmp.add(m_mat.mass_damping, m_dv);
+      m_M.vmult_add(m_rhs, m_tmp);
+    }
+    zero_prescribed(m_rhs);
+    const double r = m_rhs.l2_norm();
+    if (!std::isfinite(r)) return false;
+    if (first < 0) first = std::max(r, load_scale * m_f.l2_norm());
+    if (r <= 1e-9 * first) return true;
+    m_newton.factor(m_T);
+    m_newton.solve(m_delta, m_rhs);
+    m_ubar -= m_delta;
+    // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin
+    // cantilever, cond ~ 1e9): an update of 1e-10 of the displacement has converged too.
+    if (m_delta.l2_norm() <= 1e-10 * m_ubar.l2_norm()) return true;
+  }
+  return false;
+}
+
+template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_nonlinear(double t_new) {
+  load_vector(t_new, m_f);
+  m_ubar = m_u;
+  for (const auto d : m_owned)
+    if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
+  m_ubar.compress(dealii::VectorOperation::insert);
+  if (m_opt.static_solve) {
+    const Vector target = m_ubar;
+    Vector accepted = m_u;
+    double s = 0, ds = 0.125;
+    while (s < 1) {
+      const double s1 = std::min(1.0, s + ds);
+      m_ubar = accepted;
+      for (const auto d : m_owned)
+        if (m_support_of[d] >= 0) m_ubar[d] = s1 * target[d];
+      m_ubar.compress(dealii::VectorOperation::insert);
+      if (newton(s1)) {
+        s = s1;
+        accepted = m_ubar;
+        ds = std::min(0.5, 1.5 * ds);
+      } else if ((ds /= 2) < 1e-4) {
+        return fail_nonlinear("Newton did not converge at load factor " + std::to_string(s1), t_new);
+      }
+    }
+    m_ubar = accepted;
+    m_u = m_ubar;
+    return;
+  }
+  if (!newton(1.0)) return fail_nonlinear("Newton did not converge in the step", t_new);
+  for (const auto d : m_owned) {
+    double v = m_v[d], a = m_a[d];
+    m_scheme.update(m_ubar[d], m_u[d], 0.0, 0.0, v, a);
+    m_v[d] = v;
+    m_a[d] = a;
+  }
+  m_a.compress(dealii::VectorOperation::insert);
+  m_v.compress(dealii::VectorOperation::insert);
+  m_u = m_ubar;
+}
+
+template <int dim, class Backend>
+void KelvinVoigtProblem<dim, Backend>::fail_nonlinear(const std::string& why, double t) {
+  m_nonlinear_failure = "fem (nonlinear): " + why;
+  m_failure_time = t;
+  m_u = std::numeric_limits<double>::quiet_NaN();
+}
+
+template class KelvinVoigtProblem<2, SerialBackend<2>>;
+template class KelvinVoigtProblem<3, SerialBackend<3>>;
+template class KelvinVoigtProblem<2, DistributedBackend<2>>;
+template class KelvinVoigtProblem<3, DistributedBackend<3>>;
+
+} // namespace vtb::fem
