@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The README's viewer pictures, made by the viewer's headless mode under Xvfb (needs the
 # packages of setup.sh): the paper's 517-node plate under its step load with a pull held on
-# its top edge, and the press scene in device mode (the ProCAT's handle pressing the edge).
+# its top edge, the press scene in device mode (the ProCAT's handle pressing the edge), and the
+# 3D slab in device mode (the handle pressing its top face in the scene's [haptics.plane]).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 img="$VTB_ROOT/docs/img"
@@ -11,3 +12,5 @@ run "$VTB_ROOT/experiments/scenes/plate517_step.toml" --frames 120 --drag 0.1,0.
   --screenshot "$img/viewer_plate517.png"
 run "$VTB_ROOT/experiments/scenes/haptic_press.toml" --device --frames 120 --drag 0.05,0.08:0.05,0.045 \
   --screenshot "$img/viewer_device.png"
+run "$VTB_ROOT/experiments/scenes/haptic_slab_press.toml" --device --frames 120 \
+  --drag 0.1,0.025,0.05:0.1,0.025,0.015 --screenshot "$img/viewer_slab_device.png"

@@ -29,7 +29,8 @@ Action add_view(CLI::App& app) {
   cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors | tensor | multigrid");
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
   cmd->add_flag("--device", o->device,
-                "Device mode (2D): the mouse, or the --drag path, is the hand on the simulated ProCAT");
+                "Device mode: the mouse, or the --drag path, is the hand on the simulated ProCAT (3D: in the scene's "
+                "[haptics.plane])");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     viewer::ViewOptions v;

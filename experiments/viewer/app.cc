@@ -91,17 +91,17 @@ template <int dim> void App<dim>::start_drag(const Eigen::Vector3d& from, const 
 }
 
 template <int dim> void App<dim>::set_device_mode(bool on) {
-  if constexpr (dim == 2) {
-    if (on && !m_device) m_device = std::make_unique<DeviceMode>(m_sim->model().mesh, *m_scene);
-    m_device_on = on;
-    m_sim->set_hook(on ? m_device.get() : nullptr);
-  } else if (on) {
-    throw InputError("vtb view: device mode needs a 2D scene (the ProCAT is a planar device)");
-  }
+  if (on && !m_device) m_device = std::make_unique<DeviceMode<dim>>(m_sim->model().mesh, *m_scene);
+  m_device_on = on;
+  m_sim->set_hook(on ? m_device.get() : nullptr);
 }
 
 template <int dim> void App<dim>::set_hand(const Eigen::Vector3d& p) {
-  if (m_device) m_device->hand = p.head<2>();
+  if (!m_device) return;
+  m_device->set_hand(from3(p));
+  m_hand_path[static_cast<std::size_t>(m_hand_head)] = to3(m_device->hand());
+  m_hand_head = (m_hand_head + 1) % kHandPath;
+  m_hand_count = std::min(m_hand_count + 1, kHandPath);
 }
 
 template <int dim> void App<dim>::layout() {
@@ -125,8 +125,13 @@ template <int dim> void App<dim>::handle_mouse() {
   const bool shift = glfwGetKey(m_window, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
                      glfwGetKey(m_window, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
   const bool in_view = cursor.x() > m_cam.left && cursor.x() < m_cam.left + m_cam.width;
-  if (m_device_on && in_view && !io.WantCaptureMouse && !m_scripted)
-    set_hand(m_cam.from_window(cursor, Eigen::Vector3d::Zero()));
+  if (m_device_on && m_device && in_view && !io.WantCaptureMouse && !m_scripted) {
+    // The hand moves in the device's plane: the cursor's ray meets it (2D: the plate's plane).
+    const auto& plane = m_device->plane();
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+    if constexpr (dim == 3) normal = plane.axes.col(0).cross(plane.axes.col(1));
+    set_hand(m_cam.on_plane(cursor, to3(plane.origin), normal));
+  }
   if (!io.WantCaptureMouse) {
     if (ImGui::IsMouseClicked(ImGuiMouseButton_Left) && !m_device_on) {
       // Grab the boundary node nearest to the cursor on the screen.
@@ -201,6 +206,13 @@ template <int dim> void App<dim>::draw_body() {
       const auto c = viridis(s);
       put(m_tris, p[k], c.data(), n);
     }
+  }
+  // A light that moves with the camera, above and to the left of the eye: the faces a viewer
+  // sees head-on are bright, those turned away darker, at any orbit.
+  if constexpr (dim == 3) {
+    const Eigen::Vector3d eye = m_cam.direction(); // from the centre toward the eye
+    const Eigen::Vector3d right = Eigen::Vector3d::UnitY().cross(eye).normalized(), up = eye.cross(right);
+    m_gl.set_light(eye + 0.6 * up - 0.4 * right);
   }
   // Pushed back a little so that the edges drawn over them win the depth test.
   glEnable(GL_POLYGON_OFFSET_FILL);
@@ -280,29 +292,41 @@ template <int dim> void App<dim>::frame(double sim_seconds, double wall_budget) 
 }
 
 template <int dim> void App<dim>::draw_device() {
-  // The handle (white), its proxy on the surface (red), and the force sent to the device as
-  // an arrow from the handle, its length 20 px plus 150 px at the device's force limit.
+  // The hand's recent path in the device's plane (grey), the grip from hand to handle, the
+  // handle (white), its proxy on the surface (red), and the force the device renders as an
+  // arrow from the handle, its length 20 px plus 150 px at the device's force limit.
   if (!m_device) return;
   ImDrawList* fg = ImGui::GetForegroundDrawList();
   const float px = 1.0f / std::max(1.0f, ImGui::GetIO().DisplayFramebufferScale.x);
-  auto at = [&](const Eigen::Vector2d& p) {
-    const Eigen::Vector2d w = m_cam.to_window(Eigen::Vector3d(p.x(), p.y(), 0.0)) * px;
+  auto at3 = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector2d w = m_cam.to_window(p) * px;
     return ImVec2(static_cast<float>(w.x()), static_cast<float>(w.y()));
   };
-  const ImVec2 h = at(m_device->handle()), q = at(m_device->proxy());
+  auto at = [&](const Vec<dim>& p) { return at3(to3(p)); };
+  for (int k = 1; k < m_hand_count; ++k) {
+    const auto i = static_cast<std::size_t>((m_hand_head - m_hand_count + k - 1 + kHandPath) % kHandPath);
+    fg->AddLine(at3(m_hand_path[i]), at3(m_hand_path[(i + 1) % kHandPath]), IM_COL32(90, 90, 90, 200), 2.0f);
+  }
+  const ImVec2 hand = at(m_device->hand()), h = at(m_device->handle()), q = at(m_device->proxy());
+  fg->AddLine(hand, h, IM_COL32(90, 90, 90, 255), 1.5f);
+  fg->AddCircle(hand, 5.0f, IM_COL32(60, 60, 60, 255), 0, 1.5f);
   if (m_device->touching()) {
     fg->AddLine(h, q, IM_COL32(255, 80, 80, 255), 2.0f);
     fg->AddCircleFilled(q, 6.0f, IM_COL32(255, 60, 60, 255));
   }
   fg->AddCircleFilled(h, 7.0f, IM_COL32(255, 255, 255, 255));
   fg->AddCircle(h, 7.0f, IM_COL32(30, 30, 30, 255), 0, 2.0f);
-  const Eigen::Vector2d f = m_device->force();
+  const Vec<dim> f = m_device->force();
   if (f.norm() > 1e-6) {
+    // The arrow's screen direction: the force's direction seen through the camera.
+    const ImVec2 ahead = at(m_device->handle() + (0.05 * m_cam.extent / f.norm()) * f);
+    Eigen::Vector2d u(ahead.x - h.x, ahead.y - h.y);
+    if (u.norm() < 1e-9) u = Eigen::Vector2d(0, -1);
+    u.normalize();
     const double len = 20 + 150 * f.norm() / m_device->max_force();
-    const Eigen::Vector2d dir = f.normalized();
-    const ImVec2 tip(h.x + static_cast<float>(len * dir.x()), h.y - static_cast<float>(len * dir.y()));
+    const ImVec2 tip(h.x + static_cast<float>(len * u.x()), h.y + static_cast<float>(len * u.y()));
     fg->AddLine(h, tip, IM_COL32(20, 20, 20, 255), 3.0f);
-    const Eigen::Vector2d u = Eigen::Vector2d(f.x(), -f.y()).normalized(), w(-u.y(), u.x());
+    const Eigen::Vector2d w(-u.y(), u.x());
     auto off = [&](double a, double b) {
       return ImVec2(tip.x + static_cast<float>(a * u.x() + b * w.x()),
                     tip.y + static_cast<float>(a * u.y() + b * w.y()));

@@ -10,6 +10,7 @@
 #include "surface.hh"
 #include "viewer.hh"
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -33,11 +34,11 @@ public:
   /// Holds the scripted drag (scene points) as a pinned pull.
   void start_drag(const Eigen::Vector3d& from, const Eigen::Vector3d& to);
   const LiveSim<dim>& sim() const { return *m_sim; }
-  /// Device mode (2D): on or off; InputError in 3D.
+  /// Device mode: on or off (3D: the device acts in the scene's [haptics.plane]).
   void set_device_mode(bool on);
-  /// Where the hand holds the handle in device mode (scene coordinates).
+  /// Where the hand holds the handle in device mode (a scene point, taken to the device's plane).
   void set_hand(const Eigen::Vector3d& p);
-  const DeviceMode* device() const { return m_device.get(); }
+  const DeviceMode<dim>* device() const { return m_device.get(); }
   double last_physics_seconds() const { return m_physics_seconds; }
 
 private:
@@ -77,8 +78,11 @@ private:
   SimControls m_edit; ///< what the panel edits
   std::string m_message;
   float m_trace[LiveSim<dim>::kTrace] = {};
-  float m_force_trace[DeviceMode::kTrace] = {};
-  std::unique_ptr<DeviceMode> m_device; ///< 2D only
+  float m_force_trace[DeviceMode<dim>::kTrace] = {};
+  std::unique_ptr<DeviceMode<dim>> m_device;
+  static constexpr int kHandPath = 240;                 ///< hand positions kept for the path drawn
+  std::array<Eigen::Vector3d, kHandPath> m_hand_path{}; ///< ring, in the device's plane
+  int m_hand_head = 0, m_hand_count = 0;
   bool m_device_on = false;
   bool m_scripted = false;
   const Scene* m_scene = nullptr;

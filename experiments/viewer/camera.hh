@@ -74,6 +74,11 @@ struct Camera {
   /// The scene point under a window pixel on the plane through `on` facing the camera
   /// (z = 0 in 2D).
   Eigen::Vector3d from_window(const Eigen::Vector2d& px, const Eigen::Vector3d& on) const {
+    return on_plane(px, on, perspective ? direction() : Eigen::Vector3d::UnitZ());
+  }
+  /// The scene point under a window pixel on the plane through `on` with normal n (the cursor's
+  /// ray meets it; the near point when the ray runs along it).
+  Eigen::Vector3d on_plane(const Eigen::Vector2d& px, const Eigen::Vector3d& on, const Eigen::Vector3d& n) const {
     const double x = 2 * (px.x() - left) / width - 1, y = 1 - 2 * px.y() / height;
     const Eigen::Matrix4d inv = mvp().inverse();
     auto unproject = [&](double z) {
@@ -81,7 +86,6 @@ struct Camera {
       return Eigen::Vector3d(h.head<3>() / h.w());
     };
     const Eigen::Vector3d a = unproject(-1), b = unproject(1);
-    const Eigen::Vector3d n = perspective ? direction() : Eigen::Vector3d::UnitZ();
     const double denom = n.dot(b - a);
     if (std::abs(denom) < 1e-300) return a;
     return a + (n.dot(on - a) / denom) * (b - a);

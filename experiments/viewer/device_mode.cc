@@ -17,65 +17,74 @@ HandScript still_hand(const Scene& scene) {
 
 } // namespace
 
-DeviceMode::DeviceMode(const Mesh2& mesh, const Scene& scene)
+template <int dim>
+DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene)
     : m_params{scene.haptics ? scene.haptics->max_force : 4.0, 0.2, 0.03, 0.05},
       m_k(std::min(scene.haptics ? scene.haptics->coupling_stiffness : 400.0, DeviceSpec{}.max_stiffness)),
       m_b(scene.haptics ? scene.haptics->coupling_damping : 2.0),
-      m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_hand(still_hand(scene)), m_contact(mesh),
-      m_shaper(m_params), m_x(mesh.points) {}
+      m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_plane(device_plane(scene, mesh)),
+      m_hand(still_hand(scene)), m_contact(mesh, 1), m_shaper(m_params), m_x(mesh.points) {}
 
-void DeviceMode::before_step(const Model<2>& model, const State<2>& s, double dt, Nodal<2>& applied) {
+template <int dim>
+void DeviceMode<dim>::before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) {
   // The ticks that fall in [t, t + dt): at least one per step.
   const int n = std::max(1, static_cast<int>(std::lround(dt / m_period)));
   const double h = dt / n;
   if (!m_device) { // the handle starts where the hand is (not dragged in from the origin)
-    m_hand.waypoints = {hand};
+    m_hand.waypoints = {m_hand_device};
     m_device.emplace(DeviceSpec{}, m_hand);
   }
   SimulatedProCAT& device = *m_device;
-  device.hold_hand_at(hand);
+  device.hold_hand_at(m_hand_device);
   m_x = model.net.rest + s.u;
   const bool finite = m_x.allFinite() && s.v.allFinite();
-  Eigen::Vector2d on_body_sum = Eigen::Vector2d::Zero();
+  if (finite) m_contact.refit(m_x);
+  Vec<dim> on_body_sum = Vec<dim>::Zero();
   int facet = -1;
-  std::array<double, 2> weights{};
+  std::array<double, dim> weights{};
   for (int k = 0; k < n; ++k) {
     Eigen::Vector2d pos, vel;
     device.read(pos, vel);
-    ContactResult<2> c;
-    if (finite) c = m_contact.update(pos, m_x);
-    Eigen::Vector2d raw = Eigen::Vector2d::Zero();
+    const Vec<dim> handle = m_plane.to_world(pos);
+    ContactResult<dim> c;
+    if (finite) c = m_contact.update(0, handle, m_x);
+    Vec<dim> raw = Vec<dim>::Zero();
     if (c.touching)
-      raw = virtual_coupling<2>(c, m_contact.facets()[static_cast<std::size_t>(c.facet)], pos, vel, s.v, m_k, m_b);
-    m_force = m_shaper.shape(raw, m_t, m_t, finite);
+      raw = virtual_coupling<dim>(c, m_contact.facets()[static_cast<std::size_t>(c.facet)], handle, m_plane.axes * vel,
+                                  s.v, m_k, m_b);
+    const Vec<dim> f = m_shaper.shape(raw, m_t, m_t, finite);
+    m_force_device = m_plane.axes.transpose() * f;
     m_saturated += m_shaper.last_saturated();
-    device.command(m_force);
+    device.command(m_force_device);
     device.advance(h);
     m_t += h;
     ++m_ticks;
     m_touching = c.touching;
-    m_proxy = c.proxy;
+    m_proxy = c.touching ? c.proxy : handle;
     if (c.touching) {
       facet = c.facet;
       weights = c.weights;
-      on_body_sum -= m_force;
+      on_body_sum -= f;
     }
-    m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force.norm());
+    m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force_device.norm());
     m_head = (m_head + 1) % kTrace;
     m_count = std::min(m_count + 1, kTrace);
   }
   // The step's force on the body: the ticks' mean, on the last touched facet's nodes.
   if (facet >= 0) {
     const auto& e = m_contact.facets()[static_cast<std::size_t>(facet)];
-    for (int k = 0; k < 2; ++k)
+    for (int k = 0; k < dim; ++k)
       applied.col(e[static_cast<std::size_t>(k)]) += weights[static_cast<std::size_t>(k)] * on_body_sum / n;
   }
 }
 
-int DeviceMode::force_trace(float* out) const {
+template <int dim> int DeviceMode<dim>::force_trace(float* out) const {
   for (int k = 0; k < m_count; ++k)
     out[k] = m_trace[static_cast<std::size_t>((m_head - m_count + k + kTrace) % kTrace)];
   return m_count;
 }
+
+template class DeviceMode<2>;
+template class DeviceMode<3>;
 
 } // namespace vtb::viewer

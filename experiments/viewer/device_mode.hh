@@ -1,15 +1,18 @@
 #pragma once
 /// \file
-/// The viewer's device mode (2D): the mouse is the scripted user's hand on a simulated ProCAT;
-/// the handle's proxy collides with the deformed boundary (the haptics module's contact), the
-/// virtual coupling's force is shaped (saturation, ramp-in, watchdog) and sent to the device,
-/// and its reaction acts on the body. The servo runs at 1 kHz of simulated time, in lockstep
-/// with the physics steps (each step runs the ticks that fall in it).
+/// The viewer's device mode: the mouse is the scripted user's hand on a simulated ProCAT. In 2D
+/// the device's plane is the body's; in 3D the scene's [haptics.plane] places it (as in
+/// `vtb haptics`): the mouse moves the hand in that plane, the handle's proxy collides with the
+/// deformed surface (the haptics module's contact, one AABB tree), the virtual coupling's force
+/// is shaped whole (saturation, ramp-in, watchdog), the device renders its in-plane part and the
+/// body receives the whole reaction. The servo runs at 1 kHz of simulated time, in lockstep with
+/// the physics steps (each step runs the ticks that fall in it).
 
 #include "live_sim.hh"
 
-#include "vtb/haptics/contact2d.hh"
+#include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/device.hh"
+#include "vtb/haptics/device_plane.hh"
 #include "vtb/haptics/force_shaping.hh"
 
 #include <array>
@@ -17,20 +20,24 @@
 
 namespace vtb::viewer {
 
-class DeviceMode final : public StepHook<2> {
+template <int dim> class DeviceMode final : public StepHook<dim> {
 public:
   static constexpr int kTrace = 600;
   /// The scene's [haptics] settings when it has them, else the defaults of DESIGN.md §2.
-  DeviceMode(const Mesh2& mesh, const Scene& scene);
+  DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
-  void before_step(const Model<2>& model, const State<2>& s, double dt, Nodal<2>& applied) override;
+  void before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) override;
 
-  Eigen::Vector2d hand = Eigen::Vector2d::Zero(); ///< where the user's hand holds the handle (scene coordinates)
+  /// Where the user's hand holds the handle: a body point, taken to the device's plane.
+  void set_hand(const Vec<dim>& p) { m_hand_device = m_plane.to_device(p); }
+  const DevicePlane<dim>& plane() const { return m_plane; }
 
-  Eigen::Vector2d handle() const { return m_device ? m_device->true_position() : hand; }
-  const Eigen::Vector2d& proxy() const { return m_proxy; }
+  Vec<dim> hand() const { return m_plane.to_world(m_hand_device); }
+  Vec<dim> handle() const { return m_plane.to_world(m_device ? m_device->true_position() : m_hand_device); }
+  const Vec<dim>& proxy() const { return m_proxy; }
   bool touching() const { return m_touching; }
-  const Eigen::Vector2d& force() const { return m_force; } ///< last force sent to the device, N
+  /// The last force the device rendered (its in-plane part), in the body's space, N.
+  Vec<dim> force() const { return m_plane.axes * m_force_device; }
   double max_force() const { return m_params.max_force; }
   long ticks() const { return m_ticks; }
   long saturated() const { return m_saturated; }
@@ -39,14 +46,17 @@ public:
   int force_trace(float* out) const;
 
 private:
-  ForceShaper::Params m_params;
+  typename BasicForceShaper<dim>::Params m_params;
   double m_k, m_b, m_period;
+  DevicePlane<dim> m_plane;
   HandScript m_hand;
+  Eigen::Vector2d m_hand_device = Eigen::Vector2d::Zero();
   std::optional<SimulatedProCAT> m_device; ///< made at the first tick, with the handle in the hand
-  BoundaryContact m_contact;
-  ForceShaper m_shaper;
-  Nodal<2> m_x;
-  Eigen::Vector2d m_proxy = Eigen::Vector2d::Zero(), m_force = Eigen::Vector2d::Zero();
+  Contacts<dim> m_contact;                 ///< one probe
+  BasicForceShaper<dim> m_shaper;
+  Nodal<dim> m_x;
+  Vec<dim> m_proxy = Vec<dim>::Zero();
+  Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;
   double m_t = 0;

@@ -16,12 +16,15 @@ layout(location = 1) in vec3 col;
 layout(location = 2) in vec3 nrm;
 uniform mat4 mvp;
 uniform int lit;
+uniform vec3 light;
 out vec3 colour;
 void main() {
   gl_Position = mvp * vec4(pos, 1.0);
-  float shade = 1.0;
-  if (lit != 0) shade = 0.35 + 0.65 * abs(dot(normalize(nrm), normalize(vec3(0.4, 0.8, 0.6))));
-  colour = col * shade;
+  colour = col;
+  if (lit != 0) {
+    float d = abs(dot(normalize(nrm), light));
+    colour = col * (0.30 + 0.70 * d) + vec3(0.24) * d * d;
+  }
 }
 )";
 
@@ -60,6 +63,7 @@ GlDraw::GlDraw() {
   if (!ok) throw std::runtime_error("vtb view: shader program does not link");
   m_mvp = glGetUniformLocation(m_program, "mvp");
   m_lit = glGetUniformLocation(m_program, "lit");
+  m_light_at = glGetUniformLocation(m_program, "light");
   glGenVertexArrays(1, &m_vao);
   glGenBuffers(1, &m_vbo);
   glBindVertexArray(m_vao);
@@ -84,6 +88,7 @@ void GlDraw::draw(const std::vector<float>& v, Mode mode, const Eigen::Matrix4d&
   const Eigen::Matrix4f m = mvp.cast<float>();
   glUniformMatrix4fv(m_mvp, 1, GL_FALSE, m.data()); // Eigen is column-major, as GL expects
   glUniform1i(m_lit, lit ? 1 : 0);
+  glUniform3f(m_light_at, m_light.x(), m_light.y(), m_light.z());
   glBindVertexArray(m_vao);
   glBindBuffer(GL_ARRAY_BUFFER, m_vbo);
   glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(float)), v.data(), GL_STREAM_DRAW);

@@ -138,14 +138,16 @@ template <int dim> void App<dim>::draw_panel() {
 template <int dim> void App<dim>::draw_device_panel() {
   ImGui::Separator();
   ImGui::TextDisabled("device");
-  if constexpr (dim == 2) {
-    bool on = m_device_on;
-    if (ImGui::Checkbox("device mode: the mouse holds the ProCAT", &on)) set_device_mode(on);
-  } else {
-    ImGui::TextWrapped("device mode needs a 2D scene (the ProCAT is planar)");
-  }
+  bool on = m_device_on;
+  if (ImGui::Checkbox("device mode: the mouse holds the ProCAT", &on)) set_device_mode(on);
   if (!m_device_on || !m_device) return;
-  const DeviceMode& d = *m_device;
+  const DeviceMode<dim>& d = *m_device;
+  if constexpr (dim == 3) {
+    const auto& pl = d.plane();
+    ImGui::TextWrapped("plane: origin (%.3g, %.3g, %.3g), x (%.2g, %.2g, %.2g), y (%.2g, %.2g, %.2g)", pl.origin.x(),
+                       pl.origin.y(), pl.origin.z(), pl.axes(0, 0), pl.axes(1, 0), pl.axes(2, 0), pl.axes(0, 1),
+                       pl.axes(1, 1), pl.axes(2, 1));
+  }
   const double wall = glfwGetTime() - m_wall_start;
   ImGui::Text("servo: 1 kHz of simulated time (lockstep)");
   ImGui::Text("%ld ticks, %.0f per wall second", d.ticks(), wall > 0 ? d.ticks() / wall : 0.0);

@@ -2,6 +2,7 @@
 
 #include "app.hh"
 
+#include "vtb/haptics/device_plane.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/springs/model.hh"
@@ -123,7 +124,7 @@ int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live,
               << "; pulls " << sim.num_pulls();
     for (int k = 0; k < sim.num_pulls(); ++k) std::cout << (k ? ", " : " (") << sim.pull_force(k).norm() << " N";
     std::cout << (sim.num_pulls() ? ")" : "") << "\n";
-    if (const DeviceMode* d = app.device())
+    if (const DeviceMode<dim>* d = app.device())
       std::cout << "vtb view: device: " << d->ticks() << " servo ticks, |F| = " << d->force().norm() << " N, saturated "
                 << d->saturated() << ", " << (d->touching() ? "in contact" : "free") << "\n";
     if (!sim.failure().empty()) std::cout << "vtb view: unstable: " << sim.failure() << "\n";
@@ -131,6 +132,28 @@ int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live,
   }
   (void)frame_sum;
   return 0;
+}
+
+/// A pull's grip must be on the body (the probe rule of scene files): its start farther than the
+/// longest edge from every node is a typo or the wrong units, not a pull (a start 700 m from a
+/// 0.2 m plate was once run as a 118,704 N pull). Bad input naming the point and the distance.
+template <int dim> void check_drag_start(const Model<dim>& model, const Eigen::Vector3d& from) {
+  const Vec<dim> p = from.head<dim>();
+  const Eigen::Index node = [&] {
+    Eigen::Index k = 0;
+    (model.mesh.points.colwise() - p).colwise().squaredNorm().minCoeff(&k);
+    return k;
+  }();
+  const double d = (model.mesh.points.col(node) - p).norm();
+  const double longest = model.net.rest_length.size() ? model.net.rest_length.maxCoeff() : 0.0;
+  if (d > longest) {
+    std::ostringstream os;
+    os << "--drag: the pull starts at [";
+    for (int a = 0; a < dim; ++a) os << (a ? ", " : "") << p[a];
+    os << "], " << d << " m from the body (nearest node " << node << "); a pull must start within the longest edge ("
+       << longest << " m) of a node";
+    throw InputError(os.str());
+  }
 }
 
 } // namespace
@@ -164,11 +187,12 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
   return std::visit(
       [&](auto& m) {
         constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-        if (o.device && dim != 2) throw InputError("--device needs a 2D scene (the ProCAT is a planar device)");
         // The simulation is built before the window opens, so that a scene the solvers refuse
         // is reported as bad input (exit 1) whether or not there is a display.
         std::string note;
         auto sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), initial_controls(scene, o, &note));
+        if (o.drag && !o.device) check_drag_start(sim->model(), o.drag->first);
+        if (o.device) device_plane(scene, sim->model().mesh); // a plane the scene cannot hold is bad input now
         Window win(o, "vtb view: " + scene.name);
         return session<dim>(win, scene, std::move(sim), std::move(note), o);
       },

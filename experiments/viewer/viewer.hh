@@ -23,7 +23,8 @@ struct ViewOptions {
   std::optional<std::pair<Eigen::Vector3d, Eigen::Vector3d>> drag; ///< scene points: grab at first, pull to second
   std::optional<std::string> solver, filter;
   std::optional<double> dt;
-  bool device = false; ///< device mode: the mouse (or the drag) is the hand on the simulated ProCAT (2D)
+  bool device =
+      false; ///< device mode: the mouse (or the drag) is the hand on the simulated ProCAT (3D: in [haptics.plane])
   int width = 1280, height = 760;
 };
 

@@ -230,11 +230,67 @@ TEST(Viewer, DeviceModePressesTheSurfaceThroughTheProcatWithinItsLimit) {
     return b.y1;
   };
   EXPECT_GT(top(pressed), top(rest) + 3) << "the edge under the handle is pushed down";
-  viewer::ViewOptions three;
-  three.frames = 1;
-  three.device = true;
+}
+
+/// How many pixels of the drawing area differ between two pictures of the same size.
+long differing(const Image& a, const Image& b) {
+  long n = 0;
+  for (int y = 0; y < a.h; ++y)
+    for (int x = kLeft; x < kRight; ++x)
+      n += std::abs(a.at(x, y)[0] - b.at(x, y)[0]) + std::abs(a.at(x, y)[1] - b.at(x, y)[1]) +
+               std::abs(a.at(x, y)[2] - b.at(x, y)[2]) >
+           30;
+  return n;
+}
+
+TEST(Viewer, DeviceModeIn3DPressesTheSlabInTheScenesPlane) {
+  // The 3D haptic scene: the ProCAT acts in the slab's [haptics.plane] (the x-z plane through
+  // y = 0.025). The hand (the scripted drag, as world points) moves from 3 cm above the top face
+  // (z = 0.02) to 5 mm into it and holds. The proxy rests on the deformed surface (the AABB
+  // tree's contact), the device feels a push within its limit (the coupling is 400 N/m, so at
+  // most 2 N for a 5 mm gap; the soft layer gives, so less, and more than the 2D test's floor),
+  // and the picture changes where the handle presses: the handle, its path and the force arrow.
+  const test::FreshDir dir;
+  const Scene slab = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_slab_press.toml");
+  viewer::ViewOptions o;
+  o.frames = 90;
+  const Image rest = shot(slab, o, dir, "rest.png");
+  o.device = true;
+  o.drag = viewer::parse_drag("0.1,0.025,0.05:0.1,0.025,0.015");
+  std::string text;
+  const Image pressed = shot(slab, o, dir, "press.png", &text);
+  const auto at = text.find("vtb view: device: ");
+  ASSERT_NE(at, std::string::npos) << text;
+  double force = 0;
+  ASSERT_EQ(std::sscanf(text.c_str() + text.find("|F| = ", at), "|F| = %lf", &force), 1) << text;
+  EXPECT_GT(force, 0.03) << text;
+  EXPECT_LT(force, 2.0) << text;
+  EXPECT_NE(text.find("saturated 0, in contact"), std::string::npos) << text;
+  EXPECT_EQ(text.find("unstable"), std::string::npos) << text;
+  EXPECT_GT(differing(rest, pressed), 400) << "the handle, its path and the force arrow are drawn";
+}
+
+TEST(Viewer, A3DBodyAtRestIsShadedSoItsShapeReads) {
+  // At rest every cell has zero strain: one colour (viridis' dark end) on every face, so only
+  // the light tells the faces apart. The slab's visible faces must differ in brightness by
+  // more than 30 of 255 between the darker and the brighter tenth of its pixels: a flat colour
+  // gives 0, the earlier fixed light gave about 6 on that dark colour.
+  const test::FreshDir dir;
   const Scene slab = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/slab_press.toml");
-  EXPECT_THROW(viewer::run_viewer(slab, three), InputError) << "the ProCAT is planar";
+  viewer::ViewOptions o;
+  o.frames = 2;
+  const Image im = shot(slab, o, dir, "slab.png");
+  std::vector<double> luma;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = kLeft; x < kRight; ++x) {
+      const unsigned char* p = im.at(x, y);
+      const int hi = std::max({p[0], p[1], p[2]}), lo = std::min({p[0], p[1], p[2]});
+      if (!background(p) && hi - lo > 20) luma.push_back(0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]);
+    }
+  ASSERT_GT(luma.size(), 20000u) << "the body is drawn";
+  std::sort(luma.begin(), luma.end());
+  const double p10 = luma[luma.size() / 10], p90 = luma[luma.size() * 9 / 10];
+  EXPECT_GT(p90 - p10, 30.0) << "p10 " << p10 << ", p90 " << p90;
 }
 
 TEST(Viewer, BadOptionsAreInputErrors) {
@@ -248,6 +304,10 @@ TEST(Viewer, BadOptionsAreInputErrors) {
   o.frames = 0;
   o.screenshot = "x.png";
   EXPECT_THROW(viewer::run_viewer(plate(), o), InputError) << "a screenshot needs --frames";
+  o.screenshot.clear();
+  o.frames = 1;
+  o.drag = viewer::parse_drag("700,0:700.1,0"); // 700 m from a 0.2 m plate: not a pull on it
+  EXPECT_THROW(viewer::run_viewer(plate(), o), InputError) << "a pull must start on the body";
 }
 
 } // namespace

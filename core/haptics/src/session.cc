@@ -2,10 +2,10 @@
 #include "vtb/problem/solver_registry.hh"
 
 #include "realtime_thread.hh"
-#include "vtb/haptics/contact2d.hh"
-#include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/coupling.hh"
 #include "vtb/haptics/device.hh"
+#include "vtb/haptics/device_plane.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/haptics/triple_buffer.hh"
 #include "vtb/problem/output.hh"
@@ -43,42 +43,6 @@ template <int dim> struct ContactCommand {
   Vec<dim> force_on_body = Vec<dim>::Zero();
 };
 template <int dim> using Commands = std::vector<ContactCommand<dim>>; ///< one per probe, sized once
-
-/// The 2-DOF device's plane in the body's space: world = origin + axes * device.
-template <int dim> struct DevicePlane {
-  Vec<dim> origin = Vec<dim>::Zero();
-  Eigen::Matrix<double, dim, 2> axes = Eigen::Matrix<double, dim, 2>::Identity();
-};
-
-/// The probes' proxies against the body: the 2D boundary walk, or one AABB tree and a proxy
-/// per probe in 3D.
-template <int dim> class Contacts;
-
-template <> class Contacts<2> {
-public:
-  Contacts(const Mesh2& mesh, std::size_t probes) {
-    m_c.reserve(probes);
-    for (std::size_t i = 0; i < probes; ++i) m_c.emplace_back(mesh);
-  }
-  void refit(const Nodal<2>&) {}
-  ContactResult<2> update(std::size_t i, const Eigen::Vector2d& h, const Nodal<2>& x) { return m_c[i].update(h, x); }
-  const std::vector<std::array<int, 2>>& facets() const { return m_c.front().facets(); }
-
-private:
-  std::vector<BoundaryContact> m_c;
-};
-
-template <> class Contacts<3> {
-public:
-  Contacts(const Mesh3& mesh, std::size_t probes) : m_tree(mesh), m_c(probes, SurfaceContact(m_tree)) {}
-  void refit(const Nodal<3>& x) { m_tree.rebuild(x); }
-  ContactResult<3> update(std::size_t i, const Eigen::Vector3d& h, const Nodal<3>& x) { return m_c[i].update(h, x); }
-  const std::vector<std::array<int, 3>>& facets() const { return m_tree.facets(); }
-
-private:
-  SurfaceTree m_tree;
-  std::vector<SurfaceContact> m_c;
-};
 
 /// The servo side: devices, proxies, coupling, shaping, log. No allocation in tick().
 template <int dim> class Servo {
@@ -266,27 +230,6 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
     devices.push_back(std::make_unique<SimulatedProCAT>(spec, hand));
   }
   return devices;
-}
-
-template <int dim> DevicePlane<dim> device_plane(const Scene& scene, const Mesh<dim>& mesh) {
-  DevicePlane<dim> plane;
-  if constexpr (dim == 2) {
-    if (scene.haptics->plane)
-      throw InputError(scene.file.string() + ": [haptics.plane] places the device in a 3D body; this mesh is 2D");
-  } else {
-    if (scene.haptics->plane) {
-      plane.origin = scene.haptics->plane->origin;
-      plane.axes << scene.haptics->plane->x_axis, scene.haptics->plane->y_axis;
-    } else {
-      // The device's x-y plane through the first waypoint given as a 3D point, else through
-      // the middle of the body in z.
-      plane.origin.z() = 0.5 * (mesh.points.row(2).minCoeff() + mesh.points.row(2).maxCoeff());
-      const auto& hand = scene.haptics->hand;
-      if (hand && !hand->waypoints.empty() && hand->waypoints.front().size() == 3)
-        plane.origin.z() = hand->waypoints.front()[2];
-    }
-  }
-  return plane;
 }
 
 /// The servo loop's own timing, whichever way it ran.
