@@ -5,7 +5,8 @@
 #    rows, .dat series; every string escaped, every number computed, none typed in the LaTeX);
 # 2. each paper/figures/NAME.tex is drawn alone by pgfplots (standalone class) into
 #    OUT_DIR/figures/NAME.pdf and REPRODUCE_DIR/figures/NAME.png (report.md shows them);
-# 3. paper/vtb.tex is built into OUT_DIR/vtb.pdf with latexmk, shell escape off.
+# 3. paper/vtb.tex is built into OUT_DIR/vtb.pdf with latexmk (BibTeX for paper/references.bib), shell
+#    escape off.
 # Without LaTeX: one line naming what to install, exit 3, the reproduction's data untouched.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -24,7 +25,7 @@ done
 
 mkdir -p "$out/figures" "$in/figures"
 "$vtb" paper-data "$in" "$out/data" >/dev/null
-export TEXINPUTS="$root/paper:"
+export TEXINPUTS="$root/paper:" BIBINPUTS="$root/paper:"
 latex=(latexmk -pdf -interaction=nonstopmode -halt-on-error -quiet
   "-pdflatex=pdflatex -no-shell-escape %O %S")
 

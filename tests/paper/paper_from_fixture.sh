@@ -51,6 +51,18 @@ grep -Eq 'filtered-multigrid +4\.32 ' "$tmp/vtb.txt" || fail "the changed slab s
 # pdflatex logs "\write18 enabled" (or "restricted \write18 enabled") whenever shell escape is on.
 grep -q 'write18 enabled' "$tmp/paper/vtb.log" && fail "pdflatex ran with shell escape"
 grep -q 'Quick reproduction' "$tmp/vtb.txt" || fail "a --quick reproduction's paper does not say so"
+# The references: BibTeX ran (a References section listing the works), every citation resolved
+# (an unresolved \cite prints [?]), and the seed paper and the calibrations are among them.
+grep -q '^ *References' "$tmp/vtb.txt" || fail "the paper has no References section"
+grep -qF '[?]' "$tmp/vtb.txt" && fail "a citation did not resolve ([?] in the PDF)"
+# (BibTeX's plain style lowercases titles and LaTeX may hyphenate a word at a line's end: the
+# phrases are matched without case on the text with its lines joined.)
+refs=$(tr '\n' ' ' < "$tmp/vtb.txt" | tr -s ' ')
+for work in 'Toward deformation modeling with haptic feedback' 'Identification of spring parameters' \
+  'Approximate simulation of elastic membranes' 'Large steps in cloth simulation' 'Stable real-time' \
+  'Z-width of a haptic display' 'SUNDIALS: Suite of nonlinear' 'library, version 9.4' 'Improved two-dimensional'; do
+  grep -qiF "$work" <<<"$refs" || fail "the references do not list: $work"
+done
 
 non_blank() { # PNG -> fraction of pixels that differ from the most common grey level > 1 %
   pdftoppm -gray -r 40 -singlefile "$1" "$tmp/probe"
