@@ -4,6 +4,7 @@
 
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/bullet.hh"
+#include "vtb/harness/ranks.hh"
 #include "vtb/solvers/simulation.hh"
 
 #include <iostream>
@@ -36,6 +37,8 @@ Action add_run(CLI::App& app) {
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const Scene run = with_overrides(scene, ov);
+    // Under mpirun the FEM spreads its mesh over the ranks; a spring solver runs on rank 0 alone.
+    if (run.solver.kind != solvers::kFem && !harness::world().root()) return 0;
     const RunReport r = run.solver.kind == solvers::kFem      ? fem::run_scene(run, out, o->frames)
                         : run.solver.kind == solvers::kBullet ? harness::run_bullet_scene(run, out, o->frames)
                                                               : run_scene(run, out, o->frames);

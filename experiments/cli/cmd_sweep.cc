@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "vtb/harness/ranks.hh"
 #include "vtb/problem/solver_names.hh"
 
 #include "vtb/harness/sweep.hh"
@@ -25,6 +26,7 @@ Action add_sweep(CLI::App& app) {
   return [o]() {
     const Scene scene = read_scene(o->scene);
     const auto cells = harness::run_sweep(scene, o->dts, o->scales, o->solvers, &std::cerr);
+    if (!harness::world().root()) return 0; // under mpirun rank 0 gathered every cell; it alone writes
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-sweep") : std::filesystem::path(o->out);
     harness::write_sweep(cells, out / "stability.csv");

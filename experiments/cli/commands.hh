@@ -5,6 +5,9 @@
 
 #include <CLI/CLI.hpp>
 
+#include "vtb/harness/study.hh"
+
+#include <filesystem>
 #include <functional>
 
 namespace vtb::cli {
@@ -19,6 +22,9 @@ Action add_reproduce(CLI::App& app);
 Action add_haptics(CLI::App& app);
 Action add_view(CLI::App& app);
 Action add_study(CLI::App& app);
+Action add_merge(CLI::App& app); ///< vtb merge: the parts of a sharded study joined
+/// Writes a study's files into out and prints its table (vtb study, vtb merge).
+int finish_study(const harness::StudyResult& result, const std::filesystem::path& out);
 Action add_paper_data(CLI::App& app);
 Action add_solvers(CLI::App& app);
 Action add_bench(CLI::App& app);

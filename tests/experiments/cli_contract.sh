@@ -102,9 +102,14 @@ env -u DISPLAY "$vtb" view "$work/typo.toml" --frames 2 2> "$work/err"; rc=$?
 check "view of a bad scene is bad input before any window" '[ $rc -eq 1 ] && grep -q "youngs_modulus" "$work/err"'
 env -u DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --drag 1,2 2> "$work/err"; rc=$?
 check "view refuses a malformed --drag" '[ $rc -eq 1 ] && grep -q "\-\-drag" "$work/err"'
+env -u DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --drag 700,0:700.1,0 --screenshot "$work/far.png" 2> "$work/err"; rc=$?
+check "view refuses a pull that starts off the body (700 m from a 0.2 m plate), naming the point and distance" '[ $rc -eq 1 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "\[700, 0\]" "$work/err" && grep -q "m from the body" "$work/err" && [ ! -e "$work/far.png" ]'
 
 "$vtb" study "$src/experiments/scenes/plate123_step.toml" --quick --solvers filtered-full,implicit-euler --reference cvode --out "$work/out_study" > "$work/study.txt" 2> /dev/null; rc=$?
 check "study writes study.csv (header + 6 runs) and study_plot.tex" '[ $rc -eq 0 ] && [ $(wc -l < "$work/out_study/study.csv") -eq 7 ] && [ -s "$work/out_study/study_plot.tex" ] && grep -q "Pareto front" "$work/study.txt"'
+# The plot draws whichever solvers ran (here neither bullet nor the paper's full set): a PNG, no
+# "no plot" note, and the legend names exactly the solvers of the study.
+check "study draws its plot for any solver set" '[ -s "$work/out_study/study_plot.png" ] && ! grep -q "no plot" "$work/study.txt" && pdftotext "$work/out_study/study_plot.pdf" - | grep -q "filtered-full" && ! pdftotext "$work/out_study/study_plot.pdf" - | grep -qi "bullet"'
 "$vtb" study "$src/experiments/scenes/plate123_step.toml" --solvers fem --out "$work/out_study2" 2> "$work/err"; rc=$?
 check "study refuses a solver it cannot ladder" '[ $rc -eq 1 ] && grep -q "not one to study" "$work/err" && [ ! -e "$work/out_study2" ]'
 

@@ -9,6 +9,8 @@
 #include "vtb/solvers/cvode_solver.hh"
 #include "vtb/solvers/explicit_euler.hh"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -16,9 +18,20 @@
 #include <cstdlib>
 #include <fstream>
 #include <iomanip>
+#include <numeric>
+#include <optional>
 #include <sstream>
 
 namespace vtb::harness {
+
+std::vector<std::string> default_study_solvers(int dim) {
+  std::vector<std::string> names;
+  for (const solvers::Entry& e : solvers::kEntries)
+    if (e.springs && e.fixed_step && *e.filter && (dim == 3 || std::string_view(e.filter) != solvers::kFilterMultigrid))
+      names.emplace_back(e.name);
+  for (const char* s : {solvers::kImplicitEuler, solvers::kExplicit, solvers::kCvode}) names.emplace_back(s);
+  return names;
+}
 
 std::vector<double> dt_ladder(double dt, bool quick) {
   if (quick) return {4 * dt, dt, dt / 4};
@@ -114,58 +127,231 @@ std::vector<double> solver_dts(const Scene& scene, const Model<dim>& model, cons
   return quick ? std::vector<double>{0.9 * limit} : std::vector<double>{0.9 * limit, 0.45 * limit};
 }
 
+/// One cell of a study: a solver at one step, or CVODE at one tolerance, in the serial order.
+struct Cell {
+  std::string solver;
+  double dt = 0, rtol = 0;
+  double steps = 0, budget = 0; ///< skipped when steps > budget
+  double cost = 0;              ///< estimated: steps x nodes (x 8 for a factor or CVODE's Newton)
+};
+
+template <int dim> std::vector<Cell> study_cells(const Scene& scene, const Model<dim>& model, const StudyOptions& o) {
+  std::vector<Cell> cells;
+  const double n = model.num_nodes(), scene_steps = model.duration / scene.solver.dt;
+  for (const auto& solver : o.solvers.empty() ? default_study_solvers(dim) : o.solvers) {
+    if (solver == solvers::kCvode) {
+      for (double rtol : rtol_ladder(o.quick))
+        cells.push_back({solver, 0, rtol, 0, 0, 8 * n * scene_steps * std::cbrt(1e-3 / rtol)});
+      continue;
+    }
+    for (double dt : solver_dts(scene, model, solver, o.quick)) {
+      const double steps = model.duration / dt, budget = o.quick ? 2e5 : 2e6;
+      const double factor = solver == solvers::kImplicitEuler ? 8 : 1;
+      cells.push_back({solver, dt, 0, steps, budget, steps > budget ? 0 : factor * steps * n});
+    }
+  }
+  return cells;
+}
+
+/// A run's trajectory as doubles (what compare() reads: times, probes, reactions, fields), so
+/// that rank 0 can send the reference to the others.
+template <int dim> std::vector<double> pack(const Trajectory<dim>& tr) {
+  const std::size_t samples = tr.t.size(), probes = samples ? tr.probe_u[0].size() : 0,
+                    supports = samples && !tr.reaction.empty() ? tr.reaction[0].size() : 0,
+                    nodes = tr.field.empty() ? 0 : static_cast<std::size_t>(tr.field[0].cols());
+  std::vector<double> v = {double(samples), double(probes), double(supports), double(nodes)};
+  for (std::size_t k = 0; k < samples; ++k) {
+    v.push_back(tr.t[k]);
+    for (const auto& p : tr.probe_u[k]) v.insert(v.end(), p.data(), p.data() + dim);
+    if (supports)
+      for (const auto& r : tr.reaction[k]) v.insert(v.end(), r.data(), r.data() + dim);
+    if (nodes) v.insert(v.end(), tr.field[k].data(), tr.field[k].data() + dim * nodes);
+  }
+  return v;
+}
+
+template <int dim> Trajectory<dim> unpack(const std::vector<double>& v) {
+  Trajectory<dim> tr;
+  const auto samples = static_cast<std::size_t>(v[0]), probes = static_cast<std::size_t>(v[1]),
+             supports = static_cast<std::size_t>(v[2]);
+  const auto nodes = static_cast<Eigen::Index>(v[3]);
+  std::size_t at = 4;
+  const auto vec = [&] {
+    Vec<dim> x = Eigen::Map<const Vec<dim>>(v.data() + at);
+    at += dim;
+    return x;
+  };
+  for (std::size_t k = 0; k < samples; ++k) {
+    tr.t.push_back(v[at++]);
+    tr.probe_u.emplace_back();
+    for (std::size_t p = 0; p < probes; ++p) tr.probe_u.back().push_back(vec());
+    if (supports) {
+      tr.reaction.emplace_back();
+      for (std::size_t r = 0; r < supports; ++r) tr.reaction.back().push_back(vec());
+    }
+    if (nodes) {
+      tr.field.push_back(Eigen::Map<const Nodal<dim>>(v.data() + at, dim, nodes));
+      at += static_cast<std::size_t>(dim * nodes);
+    }
+  }
+  return tr;
+}
+
+/// A row as one line of text, every double exact (hexadecimal), for the gather on rank 0 and
+/// study.json.
+nlohmann::json row_json(const StudyRow& r) {
+  const auto hex = [](double x) {
+    char b[40];
+    std::snprintf(b, sizeof b, "%a", x);
+    return std::string(b);
+  };
+  return {{"cell", r.cell},
+          {"solver", r.solver},
+          {"dt", hex(r.dt)},
+          {"rtol", hex(r.rtol)},
+          {"stable", r.stable},
+          {"skipped", r.skipped},
+          {"failure", r.failure},
+          {"error_all", hex(r.error_all)},
+          {"error_probes", hex(r.error_probes)},
+          {"step_median", hex(r.step_median)},
+          {"total_seconds", hex(r.total_seconds)},
+          {"cost", hex(r.cost)},
+          {"binding", r.binding}};
+}
+
+StudyRow row_from_json(const nlohmann::json& j) {
+  const auto num = [&](const char* key) { return std::strtod(j.at(key).get<std::string>().c_str(), nullptr); };
+  StudyRow r;
+  r.cell = j.at("cell").get<long>();
+  r.solver = j.at("solver").get<std::string>();
+  r.dt = num("dt");
+  r.rtol = num("rtol");
+  r.stable = j.at("stable").get<bool>();
+  r.skipped = j.at("skipped").get<bool>();
+  r.failure = j.at("failure").get<std::string>();
+  r.error_all = num("error_all");
+  r.error_probes = num("error_probes");
+  r.step_median = num("step_median");
+  r.total_seconds = num("total_seconds");
+  r.cost = num("cost");
+  r.binding = j.at("binding").get<std::string>();
+  return r;
+}
+
+/// A cell's run, kept until the reference has arrived to measure it against.
+template <int dim> struct Finished {
+  StudyRow row;
+  RunReport rep;
+  Trajectory<dim> tr;
+  double wall = 0;
+};
+
 template <int dim>
 StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyOptions& o, std::ostream* log) {
   using clock = std::chrono::steady_clock;
+  const Ranks w = world();
+  const bool spread = w.size > 1 && !o.shard.active();
   StudyResult res;
   res.scene = scene.name;
   res.reference = o.reference;
   res.filter = scene.solver.filter;
   res.nodes = model.num_nodes();
   res.duration = model.duration;
+  res.shard = o.shard;
+  const std::string where = binding(&res.timing_shared);
+  if (!w.root() && !o.shard.active()) log = nullptr; // rank 0 alone prints
+  const std::vector<Cell> cells = study_cells(scene, model, o);
+  res.cells = static_cast<long>(cells.size());
+  std::vector<double> costs;
+  for (const Cell& c : cells) costs.push_back(c.cost);
+  std::vector<std::size_t> order(cells.size()); // the queue's order: costliest first
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return costs[a] > costs[b]; });
+
+  // Collectives in one order on every rank: the queue's window first, then the reference's
+  // broadcast (posted here by the others, sent by rank 0 when it has the reference), then the
+  // gather of the rows.
+  std::optional<CellQueue> queue;
+  if (!o.shard.active()) queue.emplace(static_cast<long>(cells.size()));
   Trajectory<dim> ref;
-  res.reference_note = reference_run(scene, model, o.reference, ref);
-  if (log) *log << "reference: " << res.reference_note << "\n";
-  const auto add = [&](StudyRow row) {
+  bool have_ref = false;
+  std::optional<Broadcast> sent;
+  if (spread) sent.emplace();
+  if (w.root() || !spread) {
+    res.reference_note = reference_run(scene, model, o.reference, ref);
+    have_ref = true;
+    if (spread) sent->send(pack(ref));
+    if (log) *log << "reference: " << res.reference_note << "\n";
+  }
+  std::vector<Finished<dim>> waiting;
+  const auto measure = [&](Finished<dim>& f) {
+    StudyRow row = measured_row(f.row, f.rep, f.tr, ref, f.wall, model.duration);
     if (log)
       *log << "  " << row.solver << (row.rtol > 0 ? " rtol " : " dt ") << (row.rtol > 0 ? row.rtol : row.dt)
-           << (row.skipped  ? " " + row.failure
-               : row.stable ? ""
-                            : " UNSTABLE")
-           << (row.skipped
-                   ? ""
-                   : ": error " + std::to_string(row.error_all) + ", " + std::to_string(row.total_seconds) + " s")
-           << "\n";
+           << (row.stable ? "" : " UNSTABLE") << ": error " << std::to_string(row.error_all) << ", "
+           << std::to_string(row.total_seconds) << " s\n";
     res.rows.push_back(std::move(row));
   };
-  for (const auto& solver : o.solvers) {
-    if (solver == solvers::kCvode) {
-      for (double rtol : rtol_ladder(o.quick)) {
-        Trajectory<dim> tr;
-        const auto a = clock::now();
-        const RunReport rep = simulate_cvode(model, CvodeOptions{rtol, rtol * 1e-4}, tr, true);
-        StudyRow row;
-        row.solver = solver;
-        row.rtol = rtol;
-        add(measured_row(row, rep, tr, ref, std::chrono::duration<double>(clock::now() - a).count(), model.duration));
-      }
-      continue;
+  const auto run_cell = [&](std::size_t i, long taken) {
+    const Cell& c = cells[i];
+    StudyRow row;
+    row.cell = static_cast<long>(i);
+    row.solver = c.solver;
+    row.binding = where;
+    if (log && spread) *log << "[" << taken + 1 << "/" << cells.size() << " cells taken across ranks]\n";
+    if (c.rtol == 0 && c.steps > c.budget) {
+      row = skipped_row(c.solver, c.dt, c.steps, c.budget);
+      row.cell = static_cast<long>(i);
+      row.binding = where;
+      if (log) *log << "  " << row.solver << " dt " << row.dt << " " << row.failure << "\n";
+      res.rows.push_back(std::move(row));
+      return;
     }
-    for (double dt : solver_dts(scene, model, solver, o.quick)) {
-      const double steps = model.duration / dt, budget = o.quick ? 2e5 : 2e6;
-      if (steps > budget) {
-        add(skipped_row(solver, dt, steps, budget));
-        continue;
-      }
-      Trajectory<dim> tr;
-      const auto a = clock::now();
-      const RunReport rep = run_solver(scene, model, solver, dt, tr);
-      StudyRow row;
-      row.solver = solver;
-      row.dt = dt;
-      add(measured_row(row, rep, tr, ref, std::chrono::duration<double>(clock::now() - a).count(), model.duration));
+    Finished<dim> f;
+    const auto a = clock::now();
+    if (c.rtol > 0) {
+      row.rtol = c.rtol;
+      f.rep = simulate_cvode(model, CvodeOptions{c.rtol, c.rtol * 1e-4}, f.tr, true);
+    } else {
+      row.dt = c.dt;
+      f.rep = run_solver(scene, model, c.solver, c.dt, f.tr);
+    }
+    f.wall = std::chrono::duration<double>(clock::now() - a).count();
+    f.row = std::move(row);
+    if (!have_ref && sent->ready()) {
+      ref = unpack<dim>(sent->data());
+      have_ref = true;
+    }
+    waiting.push_back(std::move(f));
+    if (have_ref) {
+      for (auto& g : waiting) measure(g);
+      waiting.clear();
+    }
+  };
+  if (o.shard.active()) {
+    const std::vector<int> part = split_by_cost(costs, o.shard.count);
+    for (std::size_t k = 0; k < order.size(); ++k)
+      if (part[order[k]] == o.shard.index) run_cell(order[k], static_cast<long>(k));
+  } else {
+    for (long k; (k = queue->next()) >= 0;) run_cell(order[static_cast<std::size_t>(k)], k);
+  }
+  if (!have_ref) {
+    sent->wait();
+    ref = unpack<dim>(sent->data());
+  }
+  for (auto& g : waiting) measure(g);
+  if (spread) { // every row to rank 0, in the serial order there
+    nlohmann::json mine = nlohmann::json::array();
+    for (const auto& r : res.rows) mine.push_back(row_json(r));
+    const std::vector<std::string> all = gather_on_root(mine.dump());
+    if (w.root()) {
+      res.rows.clear();
+      for (const auto& text : all)
+        for (const auto& j : nlohmann::json::parse(text)) res.rows.push_back(row_from_json(j));
     }
   }
+  std::sort(res.rows.begin(), res.rows.end(), [](const StudyRow& a, const StudyRow& b) { return a.cell < b.cell; });
   mark_pareto(res.rows);
   return res;
 }
@@ -177,23 +363,29 @@ std::string num(double x) {
   return os.str();
 }
 
-/// The figure: pgfplots, log-log, every stable run a mark per solver, the front a line.
-/// The study's series in the format of the reproduction's (paper_series.cc), so that the
-/// paper's own Pareto figure, paper/figures/accuracy_speed.tex, draws both: data/acc_NAME.dat
-/// per solver (cost error), data/pareto.dat, and data/numbers.tex naming the reference.
-std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r, const std::string& filter) {
-  const auto plotted = [&](const std::string& solver) {
-    return solver == solvers::kFiltered ? "filtered-" + filter : solver;
-  };
+/// The solvers a study's rows plot, in the order they ran (`filtered` as the scene's filter).
+std::vector<std::string> plotted_solvers(const StudyResult& r) {
+  std::vector<std::string> names;
+  for (const auto& row : r.rows) {
+    const std::string name = row.solver == solvers::kFiltered ? "filtered-" + r.filter : row.solver;
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  return names;
+}
+
+/// The figure's series, in the format of the reproduction's (paper_series.cc): data/acc_NAME.dat
+/// per solver the study ran (cost error; empty when it had no stable run), data/pareto.dat, and
+/// data/numbers.tex naming the reference.
+std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r) {
   std::vector<std::pair<std::string, std::string>> files;
-  for (const char* name : {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler,
-                           solvers::kCvode, solvers::kFem, solvers::kExplicit}) {
+  for (const std::string& name : plotted_solvers(r)) {
     std::ostringstream t;
     t << "cost error\n";
     for (const auto& row : r.rows)
-      if (plotted(row.solver) == name && row.stable && std::isfinite(row.error_all) && row.error_all > 0)
+      if ((row.solver == solvers::kFiltered ? "filtered-" + r.filter : row.solver) == name && row.stable &&
+          std::isfinite(row.error_all) && row.error_all > 0)
         t << num(row.cost) << ' ' << num(row.error_all) << '\n';
-    files.emplace_back(std::string("acc_") + name + ".dat", t.str());
+    files.emplace_back("acc_" + name + ".dat", t.str());
   }
   std::vector<const StudyRow*> front;
   for (const auto& row : r.rows)
@@ -208,11 +400,38 @@ std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r,
   return files;
 }
 
-/// study_plot.tex: the paper's figure drawn alone from data/ (standalone class).
-std::string plot_tex(const std::filesystem::path& paper_dir) {
-  return "\\documentclass[border=4pt]{standalone}\n\\input{" + (paper_dir / "preamble.tex").string() +
-         "}\n\\begin{document}\n\\input{" + (paper_dir / "figures/accuracy_speed.tex").string() +
-         "}\n\\end{document}\n";
+/// Each solver's pgfplots style (paper/preamble.tex, shared with the paper's figures): cvode,
+/// fem and explicit have styles of their own names.
+std::string plot_style(const std::string& solver) {
+  static constexpr std::pair<const char*, const char*> kStyles[] = {
+      {solvers::kFilteredFull, "full"},        {solvers::kFilteredNeighbors, "neighbors"},
+      {solvers::kFilteredTensor, "tensor"},    {solvers::kFilteredMultigrid, "multigrid"},
+      {solvers::kImplicitEuler, "ie"},         {solvers::kBullet, "bullet"},
+      {solvers::kCvode, solvers::kCvode},      {solvers::kFem, solvers::kFem},
+      {solvers::kExplicit, solvers::kExplicit}};
+  for (const auto& [name, style] : kStyles)
+    if (solver == name) return style;
+  return "black, mark=+";
+}
+
+/// study_plot.tex: the paper's accuracy-against-cost figure (paper/figures/accuracy_speed.tex)
+/// for the solvers this study ran, whichever they are, drawn from data/ (standalone class).
+/// Legend entries are drawn apart from the data, so that an empty series cannot shift them.
+std::string plot_tex(const std::filesystem::path& paper_dir, const std::vector<std::string>& names) {
+  std::ostringstream t;
+  t << "\\documentclass[border=4pt]{standalone}\n\\input{" << (paper_dir / "preamble.tex").string()
+    << "}\n\\begin{document}\n\\begin{tikzpicture}\n"
+    << "\\begin{axis}[vtb, width=9cm, height=6.2cm, xmode=log, ymode=log,\n"
+    << "  xlabel={wall time per simulated second [s]}, ylabel={max.\\ rel.\\ $L_2$ displacement error vs "
+       "\\vtbAccuracyReference},\n  legend pos=outer north east]\n";
+  for (const std::string& s : names)
+    t << "\\addlegendimage{" << plot_style(s) << "} \\addlegendentry{" << tex_escape(s) << "}\n";
+  t << "\\addlegendimage{black, thick, dashed, mark=o, mark size=3.5pt} \\addlegendentry{Pareto front}\n";
+  for (const std::string& s : names)
+    t << "\\addplot[" << plot_style(s) << ", forget plot] table[x=cost, y=error] {data/acc_" << s << ".dat};\n";
+  t << "\\addplot[black, thick, dashed, mark=o, mark size=3.5pt, forget plot] table[x=cost, y=error] "
+       "{data/pareto.dat};\n\\end{axis}\n\\end{tikzpicture}\n\\end{document}\n";
+  return t.str();
 }
 
 } // namespace
@@ -222,6 +441,8 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
     if (!solvers::find(solver, "vtb study").springs)
       throw InputError("vtb study: solver \"" + solver + "\" is not one to study (" +
                        solvers::list(solvers::is_spring) + ")");
+  if (o.reference != solvers::kFem && o.reference != solvers::kCvode) // before any rank waits for it
+    throw InputError("vtb study: --reference must be fem or cvode, not \"" + o.reference + "\"");
   Scene scene = scene_in;
   if (o.quick && scene.duration > 1.0) { // a quick study looks at the first second
     scene.duration = 1.0;
@@ -233,11 +454,83 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
   });
 }
 
+namespace {
+
+/// The whole result, for vtb merge: what the study was and every row exact.
+nlohmann::json study_json(const StudyResult& r) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const auto& row : r.rows) rows.push_back(row_json(row));
+  return {{"scene", r.scene},
+          {"reference", r.reference},
+          {"reference_note", r.reference_note},
+          {"filter", r.filter},
+          {"nodes", r.nodes},
+          {"duration", r.duration},
+          {"cells", r.cells},
+          {"shard", r.shard.index},
+          {"shards", r.shard.count},
+          {"timing_shared", r.timing_shared},
+          {"rows", rows}};
+}
+
+} // namespace
+
+StudyResult merge_studies(const std::vector<std::filesystem::path>& dirs) {
+  if (dirs.empty()) throw InputError("vtb merge: no part folders given");
+  StudyResult all;
+  std::vector<int> seen;
+  for (const auto& dir : dirs) {
+    const auto file = dir / "study.json";
+    std::ifstream in(file);
+    if (!in)
+      throw InputError(file.string() + ": cannot be read (is " + dir.string() + " a part of vtb study --shard?)");
+    nlohmann::json j;
+    try {
+      j = nlohmann::json::parse(in);
+    } catch (const std::exception& e) {
+      throw InputError(file.string() + ": not a study.json (" + e.what() + ")");
+    }
+    const auto what = [&](const char* key) { return j.at(key).dump(); };
+    if (seen.empty()) {
+      all.scene = j.at("scene").get<std::string>();
+      all.reference = j.at("reference").get<std::string>();
+      all.reference_note = j.at("reference_note").get<std::string>();
+      all.filter = j.at("filter").get<std::string>();
+      all.nodes = j.at("nodes").get<int>();
+      all.duration = j.at("duration").get<double>();
+      all.cells = j.at("cells").get<long>();
+      all.shard.count = j.at("shards").get<int>();
+      seen.assign(static_cast<std::size_t>(all.shard.count), 0);
+    } else {
+      for (const char* key : {"scene", "reference", "filter", "nodes", "cells", "shards"})
+        if (what(key) != study_json(all).at(key).dump())
+          throw InputError(file.string() + ": a part of another study (" + key + " is " + what(key) + ", not " +
+                           study_json(all).at(key).dump() + ")");
+    }
+    const int k = j.at("shard").get<int>();
+    if (k < 0 || k >= all.shard.count || seen[static_cast<std::size_t>(k)]++)
+      throw InputError(file.string() + ": part " + std::to_string(k) + " of " + std::to_string(all.shard.count) +
+                       " is given twice");
+    all.timing_shared = all.timing_shared || j.at("timing_shared").get<bool>();
+    for (const auto& row : j.at("rows")) all.rows.push_back(row_from_json(row));
+  }
+  for (std::size_t k = 0; k < seen.size(); ++k)
+    if (!seen[k])
+      throw InputError("vtb merge: part " + std::to_string(k) + " of " + std::to_string(seen.size()) +
+                       " is missing (run vtb study --shard " + std::to_string(k) + "/" + std::to_string(seen.size()) +
+                       ")");
+  std::sort(all.rows.begin(), all.rows.end(), [](const StudyRow& a, const StudyRow& b) { return a.cell < b.cell; });
+  for (auto& r : all.rows) r.pareto = false;
+  mark_pareto(all.rows);
+  all.shard = Shard{};
+  return all;
+}
+
 std::filesystem::path write_study(const StudyResult& r, const std::filesystem::path& dir, std::string& note) {
   ensure_directory(dir);
   std::ostringstream c;
   c << "solver,dt,rtol,stable,error_all,error_probes,step_median_seconds,total_seconds,seconds_per_simulated_second,"
-       "realtime_factor,pareto,note\n";
+       "realtime_factor,pareto,note,binding\n";
   for (const auto& row : r.rows)
     c << row.solver << ',' << num(row.dt) << ',' << (row.rtol > 0 ? num(row.rtol) : "") << ','
       << (row.skipped  ? ""
@@ -246,9 +539,11 @@ std::filesystem::path write_study(const StudyResult& r, const std::filesystem::p
       << ',' << num(row.error_all) << ',' << num(row.error_probes) << ',' << (row.skipped ? "" : num(row.step_median))
       << ',' << (row.skipped ? "" : num(row.total_seconds)) << ',' << (row.skipped ? "" : num(row.cost)) << ','
       << (row.stable ? num(1.0 / row.cost) : "") << ',' << (row.pareto ? "true" : "false") << ",\"" << row.failure
-      << "\"\n";
-  write_files_atomically(dir / "data", plot_data(r, r.filter));
-  write_files_atomically(dir, {{"study.csv", c.str()}, {"study_plot.tex", plot_tex(VTB_PAPER_DIR)}});
+      << "\",\"" << row.binding << "\"\n";
+  write_files_atomically(dir / "data", plot_data(r));
+  write_files_atomically(dir, {{"study.csv", c.str()},
+                               {"study.json", study_json(r).dump(1) + "\n"},
+                               {"study_plot.tex", plot_tex(VTB_PAPER_DIR, plotted_solvers(r))}});
   // The PNG needs LaTeX (pgfplots) and poppler: both optional here, so their absence is a note.
   if (std::system("command -v pdflatex >/dev/null 2>&1 && command -v pdftoppm >/dev/null 2>&1") != 0) {
     note = "no plot: pdflatex or pdftoppm is not installed (study_plot.tex is written; the paper's setup installs "

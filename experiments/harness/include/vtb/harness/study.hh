@@ -3,7 +3,15 @@
 /// `vtb study SCENE`: accuracy against cost on any scene. Every fixed-step solver over a dt
 /// ladder, CVODE over an rtol ladder, each measured against one converged reference run, and
 /// the Pareto front of error against wall time per simulated second.
+///
+/// A study is a list of cells (one solver at one step or tolerance). Under `mpirun -np N` the
+/// ranks take cells from one queue (costliest first) while rank 0 first runs the reference and
+/// sends it to the others, which keep their finished runs until it arrives; rank 0 gathers the
+/// rows, in the serial order. With `--shard K/N` a process runs the K-th of N static parts
+/// (split by estimated cost; each part runs the reference itself) and `vtb merge` joins the
+/// parts' study.json files. Errors are the serial run's to the bit; timing columns are not.
 
+#include "vtb/harness/ranks.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/problem/solver_names.hh"
 
@@ -15,8 +23,8 @@
 namespace vtb::harness {
 
 struct StudyOptions {
-  std::vector<std::string> solvers = {solvers::kFilteredFull, solvers::kFilteredNeighbors, solvers::kImplicitEuler,
-                                      solvers::kExplicit, solvers::kCvode};
+  std::vector<std::string> solvers;      ///< empty: default_study_solvers(the scene's dimension)
+  Shard shard;                           ///< --shard K/N: only the K-th of N parts
   std::string reference = solvers::kFem; ///< fem: P2 with one refinement at dt / 4; cvode: rtol 1e-10
   bool quick = false;                    ///< shorter ladders
 };
@@ -32,6 +40,8 @@ struct StudyRow {
   double step_median = 0, total_seconds = 0;
   double cost = 0; ///< wall seconds per simulated second
   bool pareto = false;
+  long cell = 0;       ///< its place in the serial study
+  std::string binding; ///< where it ran (ranks.hh binding()): a timing column
 };
 
 struct StudyResult {
@@ -41,7 +51,15 @@ struct StudyResult {
   double duration = 0;
   std::string reference_note; ///< what the reference run was
   std::vector<StudyRow> rows;
+  long cells = 0;             ///< in the whole study (a shard holds some of them)
+  Shard shard;                ///< which part this is (1 part: the whole study)
+  bool timing_shared = false; ///< two ranks of one node may have shared a core: step times may be each other's
 };
+
+/// What a study runs when no solvers are named: every filter of the registry that suits a
+/// body of this dimension (the V-cycle filter is for 3D meshes), implicit Euler, explicit and
+/// CVODE, so that a study answers "which is best on my scene" without the user knowing names.
+std::vector<std::string> default_study_solvers(int dim);
 
 /// The dt ladder of a fixed-step solver: the scene's dt times 4, 2, 1, 1/2, 1/4, 1/8 (quick:
 /// 4, 1, 1/4); the explicit scheme's is 0.9 and 0.45 of its stability limit instead (quick:
@@ -55,10 +73,16 @@ std::vector<double> rtol_ladder(bool quick);
 /// nodes) and cost.
 void mark_pareto(std::vector<StudyRow>& rows);
 
+/// Runs the study (this rank's or this shard's share of it). Under MPI every rank calls it and
+/// rank 0 gets the whole result; the others get their own rows only and write nothing.
 StudyResult run_study(const Scene& scene, const StudyOptions& options, std::ostream* progress = nullptr);
 
-/// study.csv (one row per run, the front marked) and study_plot.tex (pgfplots, log-log error
-/// against cost, the front drawn); returns the plot's PNG path when LaTeX and pdftoppm are
+/// Joins the parts of a sharded study (each part's study.json) into the whole: InputError
+/// naming the folder when the parts are of different studies, or a part is missing or twice.
+StudyResult merge_studies(const std::vector<std::filesystem::path>& part_dirs);
+
+/// study.csv (one row per run, the front marked), study.json (the rows whole, for vtb merge) and study_plot.tex
+/// (pgfplots, log-log error against cost, the front drawn); returns the plot's PNG path when LaTeX and pdftoppm are
 /// installed, else an empty path and `note` says why. Nothing is left half-written.
 std::filesystem::path write_study(const StudyResult& result, const std::filesystem::path& dir, std::string& note);
 
