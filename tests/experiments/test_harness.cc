@@ -276,26 +276,37 @@ TEST(Study, ParetoFrontKeepsTheRunsNoOtherBeatsInBothErrorAndCost) {
   EXPECT_FALSE(rows[4].pareto);
 }
 
-TEST(Study, LaddersAgainstCvodeShowFirstOrderAndWriteTheirFiles) {
-  // A quick study of a small plate against CVODE (the spring model's exact trajectory):
-  // implicit Euler's error falls with dt at first order (the quick ladder divides dt by 4
-  // each time: a ratio of 4 (1 + O(dt/T)), asserted above 3), every row is measured against
-  // the same samples, and study.csv and study_plot.tex are written whole.
-  Scene s = parse_scene(test::pulled_plate(8, 2, R"(
+/// A 16-cell plate pulled at its right end, with a probe at the tip (the studies' scene).
+Scene small_study_plate() {
+  return parse_scene(test::pulled_plate(8, 2, R"(
 [[probe]]
 name = "tip"
 point = [0.2, 0.025]
 [solver]
 dt = 2e-3
 )",
-                                           "0.2, 0.1"),
-                        "plate.toml", ".");
-  s.duration = 0.2;
-  s.output_interval = 0.02;
+                                        "0.2, 0.1"),
+                     "plate.toml", ".");
+}
+
+/// A quick study of the full filter, implicit Euler and CVODE against CVODE's exact trajectory.
+harness::StudyOptions quick_study_against_cvode() {
   harness::StudyOptions o;
   o.solvers = {"filtered-full", "implicit-euler", "cvode"};
   o.reference = "cvode";
   o.quick = true;
+  return o;
+}
+
+TEST(Study, LaddersAgainstCvodeShowFirstOrderAndWriteTheirFiles) {
+  // A quick study of a small plate against CVODE (the spring model's exact trajectory):
+  // implicit Euler's error falls with dt at first order (the quick ladder divides dt by 4
+  // each time: a ratio of 4 (1 + O(dt/T)), asserted above 3), every row is measured against
+  // the same samples, and study.csv and study_plot.tex are written whole.
+  Scene s = small_study_plate();
+  s.duration = 0.2;
+  s.output_interval = 0.02;
+  harness::StudyOptions o = quick_study_against_cvode();
   const auto res = harness::run_study(s, o);
   ASSERT_EQ(res.rows.size(), 3u + 3u + 2u);
   std::vector<double> ie;
@@ -342,21 +353,10 @@ TEST(Study, ShardsMergeIntoTheSerialStudy) {
   // merged gives the serial study's rows: the same cells in the same order, and errors equal to
   // the bit (each cell is the same deterministic run measured against the same reference).
   // Timing columns, and so the Pareto marks, may differ. A missing or repeated part is refused.
-  Scene s = parse_scene(test::pulled_plate(8, 2, R"(
-[[probe]]
-name = "tip"
-point = [0.2, 0.025]
-[solver]
-dt = 2e-3
-)",
-                                           "0.2, 0.1"),
-                        "plate.toml", ".");
+  Scene s = small_study_plate();
   s.duration = 0.1;
   s.output_interval = 0.02;
-  harness::StudyOptions o;
-  o.solvers = {"filtered-full", "implicit-euler", "cvode"};
-  o.reference = "cvode";
-  o.quick = true;
+  harness::StudyOptions o = quick_study_against_cvode();
   const auto serial = harness::run_study(s, o);
   const test::FreshDir dir;
   std::string note;

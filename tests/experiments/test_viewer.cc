@@ -11,6 +11,7 @@
 #include <stb_image.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -201,6 +202,15 @@ TEST(Viewer, AnUnstableSolverIsReportedAndTheViewerCarriesOn) {
   EXPECT_GT(count_if(im, background), 100000) << "the window still draws";
 }
 
+/// |F| of the viewer's device line ("vtb view: device: ... |F| = X N ..."); NaN without one.
+double device_force(const std::string& text) {
+  const auto at = text.find("vtb view: device: ");
+  double force = std::nan("");
+  if (at == std::string::npos || std::sscanf(text.c_str() + text.find("|F| = ", at), "|F| = %lf", &force) != 1)
+    ADD_FAILURE() << "no device line in: " << text;
+  return force;
+}
+
 TEST(Viewer, DeviceModePressesTheSurfaceThroughTheProcatWithinItsLimit) {
   // The paper's interaction: the hand (the scripted drag) moves the ProCAT's handle 5 mm into
   // the top edge of the press scene's plate and holds. The proxy stays on the top edge, the
@@ -215,10 +225,7 @@ TEST(Viewer, DeviceModePressesTheSurfaceThroughTheProcatWithinItsLimit) {
   o.drag = viewer::parse_drag("0.05,0.08:0.05,0.045");
   std::string text;
   const Image pressed = shot(press, o, dir, "press.png", &text);
-  const auto at = text.find("vtb view: device: ");
-  ASSERT_NE(at, std::string::npos) << text;
-  double force = 0;
-  ASSERT_EQ(std::sscanf(text.c_str() + text.find("|F| = ", at), "|F| = %lf", &force), 1) << text;
+  const double force = device_force(text);
   EXPECT_GT(force, 0.03);
   EXPECT_LT(force, 4.0);
   EXPECT_NE(text.find("saturated 0, in contact"), std::string::npos) << text;
@@ -259,10 +266,7 @@ TEST(Viewer, DeviceModeIn3DPressesTheSlabInTheScenesPlane) {
   o.drag = viewer::parse_drag("0.1,0.025,0.05:0.1,0.025,0.015");
   std::string text;
   const Image pressed = shot(slab, o, dir, "press.png", &text);
-  const auto at = text.find("vtb view: device: ");
-  ASSERT_NE(at, std::string::npos) << text;
-  double force = 0;
-  ASSERT_EQ(std::sscanf(text.c_str() + text.find("|F| = ", at), "|F| = %lf", &force), 1) << text;
+  const double force = device_force(text);
   EXPECT_GT(force, 0.03) << text;
   EXPECT_LT(force, 2.0) << text;
   EXPECT_NE(text.find("saturated 0, in contact"), std::string::npos) << text;
