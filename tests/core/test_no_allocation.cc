@@ -108,6 +108,37 @@ int filtered_step_allocations(const Model<2>& model, const char* filter) {
   return g_allocations;
 }
 
+TEST(NoAllocation, TensorFilterCouplingsAllocateNothing) {
+  // Pulls taken into the tensor filter's solve (State::applied_stiffness): the coupled nodes
+  // change (Z made again), their stiffness changes (the capacitance factored again), and the
+  // factor itself changes when the transverse cover moves; none of it may allocate.
+  Model<2> model = test::model_from(test::plate_scene(12, 3, "[[fix]]\ngroup = \"left\"\n"));
+  IntegratorOptions o;
+  o.kind = "filtered";
+  o.filter = "tensor";
+  o.dt = 1e-2;
+  auto integ = make_integrator(model, o);
+  State<2> s = initial_state(model);
+  const auto n = model.num_nodes();
+  s.applied = Nodal<2>::Zero(2, n);
+  s.applied_stiffness = Eigen::VectorXd::Zero(n);
+  integ->step(s);
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 0; k < 60; ++k) {
+    s.applied_stiffness.setZero();
+    s.applied.setZero();
+    for (int c = 0; c < 1 + k / 20; ++c) { // one, two, then three pulled nodes
+      const auto node = n - 1 - c;
+      s.applied_stiffness[node] = 100.0 * (1 + k % 3);
+      s.applied.col(node) = Vec<2>(0.0, -0.01);
+    }
+    integ->step(s);
+  }
+  g_counting = false;
+  EXPECT_EQ(g_allocations, 0);
+}
+
 TEST(NoAllocation, MultigridFilterAllocatesNothing) {
   // 451 nodes: a hierarchy of three levels (the small plate above has none, as the filter
   // solves meshes below 64 free nodes directly).

@@ -102,7 +102,11 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     }
   // dv = dt W a.
   if (m_tensor) {
-    m_tensor->apply(s.u, m_force, dt, m_dv);
+    // The couplings' implicit part: their force's -dt k v term (their k joins H in the filter).
+    if (s.applied_stiffness.size() == m_force.cols())
+      for (Eigen::Index i = 0; i < m_force.cols(); ++i)
+        if (s.applied_stiffness[i] > 0) m_force.col(i) -= dt * s.applied_stiffness[i] * s.v.col(i);
+    m_tensor->apply(s.u, m_force, s.applied_stiffness, dt, m_dv);
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);

@@ -45,7 +45,9 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt)
 template <int dim>
 WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0)
     : m_model(model), m_h(H0), m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
-      m_rest_dir(dim, model.net.num_springs()), m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1) {
+      m_rest_dir(dim, model.net.num_springs()), m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1),
+      m_z(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, kMaxCoupled * dim),
+      m_capacitance(kMaxCoupled * dim) {
   if (!m_h.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
   // H(beta) = H(0) + beta (H(1) - H(0)) entry by entry: both have one pattern.
   const Eigen::SparseMatrix<double> H1 = tensor_filter_matrix(model, dt, 1.0);
@@ -93,6 +95,54 @@ template <int dim> void WarpedFilter<dim>::cover(double mismatch) {
   double* v = m_h.values();
   for (std::size_t k = 0; k < m_base.size(); ++k) v[k] = m_base[k] + m_beta * m_transverse[k];
   m_h.factorize(); // H(beta) is H(0) plus positive semidefinite terms: positive definite
+  ++m_factor_version;
+}
+
+template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& coupling, double dt) {
+  const auto& free = m_model.free_nodes;
+  const int nf = static_cast<int>(free.size());
+  int count = 0;
+  bool same = true;
+  std::array<double, kMaxCoupled> k{};
+  for (int a = 0; a < nf && count < kMaxCoupled && coupling.size() > 0; ++a) {
+    const double ka = coupling[free[static_cast<std::size_t>(a)]];
+    if (!(ka > 0) || !std::isfinite(ka)) continue;
+    same = same && count < m_coupled && m_coupled_node[static_cast<std::size_t>(count)] == a;
+    m_coupled_node[static_cast<std::size_t>(count)] = a;
+    k[static_cast<std::size_t>(count++)] = ka;
+  }
+  same = same && count == m_coupled;
+  const bool new_z = !same || m_z_version != m_factor_version;
+  if (same && !new_z && k == m_coupled_k) return;
+  m_coupled = count;
+  m_coupled_k = k;
+  if (count == 0) return;
+  const int m = count * dim;
+  if (new_z) { // Z = H^-1 U: one solve per coupled dof, in place in its column
+    for (int c = 0; c < m; ++c) {
+      auto z = m_z.col(c);
+      z.setZero();
+      z[m_h.ordered(m_coupled_node[static_cast<std::size_t>(c / dim)] * dim + c % dim)] = 1.0;
+      m_h.solve_in_place(z);
+    }
+    m_z_version = m_factor_version;
+  }
+  Small C(m, m);
+  for (int r = 0; r < m; ++r)
+    for (int c = 0; c < m; ++c)
+      C(r, c) = m_z(m_h.ordered(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim), c);
+  for (int r = 0; r < m; ++r) C(r, r) += 1.0 / (dt * dt * m_coupled_k[static_cast<std::size_t>(r / dim)]);
+  m_capacitance.compute(C);
+}
+
+template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd& y) const {
+  const int m = m_coupled * dim;
+  if (m == 0) return;
+  m_small.resize(m);
+  for (int r = 0; r < m; ++r)
+    m_small[r] = y(m_h.ordered(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim), 0);
+  m_small = m_capacitance.solve(m_small);
+  y.col(0).noalias() -= m_z.leftCols(m) * m_small;
 }
 
 template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
@@ -120,9 +170,11 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 }
 
 template <int dim>
-void WarpedFilter<dim>::apply(const Nodal<dim>& u, const Nodal<dim>& force, double dt, Nodal<dim>& dv) {
+void WarpedFilter<dim>::apply(const Nodal<dim>& u, const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt,
+                              Nodal<dim>& dv) {
   rotations(u);
   cover(direction_mismatch(u));
+  couple(coupling, dt);
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<int>(free.size());
   for (int a = 0; a < nf; ++a) {
@@ -131,6 +183,7 @@ void WarpedFilter<dim>::apply(const Nodal<dim>& u, const Nodal<dim>& force, doub
     for (int p = 0; p < dim; ++p) m_rhs(m_h.ordered(a * dim + p), 0) = f[p];
   }
   m_h.solve_in_place(m_rhs);
+  correct_for_couplings(m_rhs);
   for (int a = 0; a < nf; ++a) {
     Vec<dim> x;
     for (int p = 0; p < dim; ++p) x[p] = m_rhs(m_h.ordered(a * dim + p), 0);

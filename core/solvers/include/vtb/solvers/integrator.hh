@@ -19,6 +19,12 @@ template <int dim> struct State {
   /// Forces applied from outside the scene during the run (the haptic probe's contact),
   /// added to the scene's loads when sized like u; empty otherwise.
   Nodal<dim> applied;
+  /// The stiffness (N/m, isotropic) of the couplings whose forces `applied` holds (a user's
+  /// pull: k (target - x) at its node), per node; empty or zero where there is none. An
+  /// integrator that can solves them implicitly, as it does its springs (the tensor filter:
+  /// without it a pull 4x a spring's stiffness diverged at dt = 10 ms); the others apply the
+  /// force alone.
+  Eigen::VectorXd applied_stiffness;
 };
 
 /// Initial state of a model: zero displacement, the scene's initial velocity, constraints.

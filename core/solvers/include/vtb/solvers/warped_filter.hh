@@ -23,10 +23,21 @@
 /// passes 2e-3, refactorised (no allocation) when the mismatch outgrows beta or falls 8x below
 /// it. Small deformations keep beta = 0 and no lag; a fixed beta of 0.05 would quadruple the
 /// cantilever's tip error.
+///
+/// Couplings from outside (a user's pull, State::applied_stiffness) are solved implicitly, as
+/// the springs are: k I at the coupled node joins H, H' = H + dt^2 U K U^T, applied without
+/// refactorising by Woodbury's identity, H'^-1 = H^-1 - Z (K^-1 / dt^2 + U^T Z)^-1 Z^T with
+/// Z = H^-1 U (dim solves per coupled node, made again only when the coupled nodes or H's factor
+/// change; isotropic, so the rotation R leaves it as it is). Treated explicitly, a pull of 4x
+/// the mean spring stiffness at the paper's plate's free corner diverged at dt = 10 ms: in the
+/// directions where the node's own springs are weak, H holds little more than its mass.
 
 #include "vtb/linalg/ordered_ldlt.hh"
 #include "vtb/springs/model.hh"
 
+#include <Eigen/Cholesky>
+
+#include <array>
 #include <vector>
 
 namespace vtb {
@@ -34,8 +45,13 @@ namespace vtb {
 template <int dim> class WarpedFilter {
 public:
   WarpedFilter(const Model<dim>& model, double dt);
-  /// dv (dim x free nodes) = dt R H_t^-1 R^T F at displacement u (F: dim x nodes).
-  void apply(const Nodal<dim>& u, const Nodal<dim>& force, double dt, Nodal<dim>& dv);
+  /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
+  static constexpr int kMaxCoupled = 8;
+  /// dv (dim x free nodes) = dt R H'^-1 R^T F at displacement u (F: dim x nodes, including the
+  /// couplings' forces and their -dt k v term), H' = H_t + dt^2 k I at each node with a
+  /// `coupling` stiffness k > 0 (per node; empty: none).
+  void apply(const Nodal<dim>& u, const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt,
+             Nodal<dim>& dv);
   /// The rotation of each node's neighbourhood at displacement u (identity at rest).
   void rotations(const Nodal<dim>& u);
   const std::vector<Mat<dim>>& rotation() const { return m_rotation; }
@@ -55,6 +71,19 @@ private:
   std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
   double m_beta = 0;
   Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
+  /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
+  void couple(const Eigen::VectorXd& coupling, double dt);
+  /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y in the ordered dofs).
+  void correct_for_couplings(Eigen::MatrixXd& y) const;
+  using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxCoupled * dim, kMaxCoupled * dim>;
+  using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxCoupled * dim, 1>;
+  long m_factor_version = 0, m_z_version = -1;
+  int m_coupled = 0;                                ///< how many nodes are coupled now
+  std::array<int, kMaxCoupled> m_coupled_node{};    ///< their free indices
+  std::array<double, kMaxCoupled> m_coupled_k{};    ///< and stiffnesses
+  Eigen::MatrixXd m_z;                              ///< ordered dofs x (dim per coupled node): H^-1 U
+  Eigen::LDLT<Small> m_capacitance;                 ///< K^-1 / dt^2 + U^T Z
+  mutable SmallVec m_small;
 };
 
 /// H_t on the free dofs (row dim a + p: free node a, axis p), both triangles stored, with
