@@ -13,7 +13,8 @@ int main(int argc, char** argv) {
   vtb::fem::MpiScope mpi(argc, argv); // only under mpirun
   // Under mpirun every rank parses the same command line; rank 0 alone prints (the output and
   // the one-line errors). study and sweep spread their cells over the ranks and run --solver
-  // fem its mesh; every other command runs on rank 0 alone, so that each prints and writes once.
+  // fem its mesh, reproduce its parts; every other command runs on rank 0 alone, so that each
+  // prints and writes once.
   const vtb::harness::Ranks world = vtb::harness::world();
   if (!world.root()) {
     std::cout.setstate(std::ios::failbit);
@@ -39,7 +40,8 @@ int main(int argc, char** argv) {
     return app.exit(e);
   }
   try {
-    if (!world.root() && !app.got_subcommand("run") && !app.got_subcommand("study") && !app.got_subcommand("sweep"))
+    if (!world.root() && !app.got_subcommand("run") && !app.got_subcommand("study") && !app.got_subcommand("sweep") &&
+        !app.got_subcommand("reproduce"))
       return 0;
     if (app.got_subcommand("run")) return run();
     if (app.got_subcommand("mesh")) return mesh();

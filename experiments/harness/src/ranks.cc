@@ -58,8 +58,8 @@ int end_all_ranks(int code) {
   return code;
 }
 
-CellQueue::CellQueue(long count) : m_count(count) {
-  if (world().size == 1) return;
+CellQueue::CellQueue(long count, bool across_ranks) : m_count(count) {
+  if (world().size == 1 || !across_ranks) return;
   MPI_Win win;
   const MPI_Aint bytes = world().root() ? static_cast<MPI_Aint>(sizeof(long)) : 0;
   MPI_Win_allocate(bytes, sizeof(long), MPI_INFO_NULL, MPI_COMM_WORLD, &m_counter, &win);
@@ -142,6 +142,10 @@ void Broadcast::wait() {
   }
   MPI_Wait(&m_pending->data, MPI_STATUS_IGNORE);
   m_done = true;
+}
+
+void barrier() {
+  if (world().size > 1) MPI_Barrier(MPI_COMM_WORLD);
 }
 
 std::vector<std::string> gather_on_root(const std::string& mine) {

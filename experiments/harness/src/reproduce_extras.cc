@@ -29,10 +29,10 @@ std::string cpu_model() {
 
 } // namespace
 
-void write_meta(const std::filesystem::path& out, bool quick, double duration) {
+void write_meta(const std::filesystem::path& out, bool quick, double duration, const std::string& binding) {
   std::ostringstream os;
   os << "key,value\nquick," << (quick ? "true" : "false") << "\nduration_s," << duration << "\ncores,"
-     << std::thread::hardware_concurrency() << "\ncpu,\"" << cpu_model() << "\"\n";
+     << std::thread::hardware_concurrency() << "\ncpu,\"" << cpu_model() << "\"\nbinding,\"" << binding << "\"\n";
   write_files_atomically(out, {{"meta.csv", os.str()}});
 }
 

@@ -15,7 +15,9 @@ namespace vtb::harness::parts {
 template <int dim> Nodal<dim> linear_static(const Model<dim>& model, double t);
 
 /// meta.csv: key,value rows: quick, duration_s, cores, cpu (what the title page states).
-void write_meta(const std::filesystem::path& out, bool quick, double duration);
+/// meta.csv: quick or not, the simulated duration, the machine, and where the reproduction ran
+/// (ranks.hh binding(): "serial, cpus ..." or rank 0's under mpirun).
+void write_meta(const std::filesystem::path& out, bool quick, double duration, const std::string& binding);
 
 /// creep.csv: the creep strip's tip displacement over time for filtered-full, implicit Euler
 /// and CVODE beside the Kelvin-Voigt law u_static (1 - exp(-t / tau)), u_static from the

@@ -53,7 +53,7 @@ std::pair<long, SweepCell> decode(const std::string& line) {
 template <int dim>
 std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, const std::vector<double>& dts,
                                   const std::vector<double>& scales, const std::vector<std::string>& solvers,
-                                  std::ostream* progress) {
+                                  std::ostream* progress, bool across_ranks) {
   std::vector<Task> tasks;
   for (std::size_t s = 0; s < scales.size(); ++s)
     for (const auto& solver : solvers)
@@ -67,7 +67,7 @@ std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, 
   RunReport rr;
   double courant = 0;
   std::string mine;
-  CellQueue queue(static_cast<long>(tasks.size()));
+  CellQueue queue(static_cast<long>(tasks.size()), across_ranks);
   for (long k; (k = queue.next()) >= 0;) {
     const Task& t = tasks[static_cast<std::size_t>(k)];
     if (t.scale != current) {
@@ -101,7 +101,7 @@ std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, 
   }
   // Every rank's cells to rank 0, in the serial order there.
   std::vector<std::pair<long, SweepCell>> all;
-  for (const std::string& part : gather_on_root(mine)) {
+  for (const std::string& part : across_ranks ? gather_on_root(mine) : std::vector<std::string>{mine}) {
     std::istringstream in(part);
     for (std::string line; std::getline(in, line);) all.push_back(decode(line));
   }
@@ -115,7 +115,7 @@ std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, 
 
 std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double>& dts,
                                  const std::vector<double>& scales, const std::vector<std::string>& solvers,
-                                 std::ostream* progress) {
+                                 std::ostream* progress, bool across_ranks) {
   if (dts.empty() || scales.empty()) throw InputError("vtb sweep: --dt and --stiffness-scale need at least one value");
   for (double dt : dts)
     if (!(dt > 0) || !std::isfinite(dt)) throw InputError("vtb sweep: --dt values must be > 0");
@@ -129,10 +129,10 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
       throw InputError("vtb sweep: \"" + s +
                        "\" has no fixed dt to sweep (it is the reference the sweep measures against)");
   }
-  if (!world().root()) progress = nullptr; // rank 0 alone prints
+  if (across_ranks && !world().root()) progress = nullptr; // rank 0 alone prints
   return with_mesh(scene_in, [&](auto& mesh) {
     constexpr int dim = std::decay_t<decltype(mesh)>::points_dim;
-    return sweep_impl<dim>(scene_in, mesh, dts, scales, solvers, progress);
+    return sweep_impl<dim>(scene_in, mesh, dts, scales, solvers, progress, across_ranks);
   });
 }
 

@@ -23,10 +23,11 @@ int end_all_ranks(int code);
 
 /// Hands out cell indices 0..count-1 to whichever rank asks first (MPI one-sided fetch-and-add
 /// on a counter that rank 0 holds; a plain counter on one rank). Cells are taken in index order,
-/// so list the costly ones first. Collective to make and to destroy.
+/// so list the costly ones first. Collective to make and to destroy, unless `across_ranks` is
+/// false: then this rank takes every cell (a part of a larger job that one rank runs).
 class CellQueue {
 public:
-  explicit CellQueue(long count);
+  explicit CellQueue(long count, bool across_ranks = true);
   ~CellQueue();
   CellQueue(const CellQueue&) = delete;
   CellQueue& operator=(const CellQueue&) = delete;
@@ -62,6 +63,9 @@ private:
   long m_size = -1;
   bool m_done = false;
 };
+
+/// Waits until every rank is here (nothing without MPI).
+void barrier();
 
 /// Every rank's string, in rank order, on rank 0 (empty elsewhere). Collective.
 std::vector<std::string> gather_on_root(const std::string& mine);

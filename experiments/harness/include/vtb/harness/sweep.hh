@@ -24,9 +24,12 @@ inline constexpr const char* kStabilityCriterion =
     "finite state every step and max spring strain <= 1000% at 20 samples over the run";
 
 /// Each requested dt is rounded down so that 1/20 of the duration is a whole number of steps
-/// (the cells' sample times then match CVODE's); the dt used is reported.
+/// (the cells' sample times then match CVODE's); the dt used is reported. Under mpirun, with
+/// `across_ranks`, every rank calls it and the cells are spread over the ranks (rank 0 gets all
+/// of them; ranks.hh); without, this rank runs the whole sweep (a part of a job it runs alone).
 std::vector<SweepCell> run_sweep(const Scene& scene, const std::vector<double>& dts, const std::vector<double>& scales,
-                                 const std::vector<std::string>& solvers, std::ostream* progress = nullptr);
+                                 const std::vector<std::string>& solvers, std::ostream* progress = nullptr,
+                                 bool across_ranks = true);
 
 void write_sweep(const std::vector<SweepCell>& cells, const std::filesystem::path& file);
 
