@@ -104,6 +104,19 @@ void timing(const std::filesystem::path& dir, Out& out) {
                  at(517, 1, solvers::kFilteredFull, "paper_fps_piii450"),
              2);
   out.number("vtbSmallFullStepUs", at(123, 1, solvers::kFilteredFull, "step_median_us"));
+  // The timing's spread: each step time is the median of several timed runs after a warm-up
+  // (timing_repeats); the largest max/min ratio of those runs over the table's rows. A
+  // reproduction made before the repetitions has none: one run, no spread to state.
+  double spread = 1;
+  int repeats = 1;
+  if (t.has_column("timing_repeats"))
+    for (std::size_t r = 0; r < t.rows(); ++r) {
+      if (t.number(r, "timing_repeats") < 2 || !(t.number(r, "step_min_us") > 0)) continue;
+      repeats = std::max(repeats, static_cast<int>(t.number(r, "timing_repeats")));
+      spread = std::max(spread, t.number(r, "step_max_us") / t.number(r, "step_min_us"));
+    }
+  out.number("vtbTimingRepeats", repeats);
+  out.number("vtbTimingSpread", spread, 3);
   out.macro("vtbNbStable",
             t.text(timing_row(t, 517, 1, solvers::kFilteredNeighbors), "stable") == "true" ? "stable" : "unstable");
 }

@@ -58,25 +58,26 @@ int end_all_ranks(int code) {
   return code;
 }
 
+struct CellQueue::Window {
+  MPI_Win win = MPI_WIN_NULL;
+  long* counter = nullptr; ///< on rank 0
+};
+
 CellQueue::CellQueue(long count, bool across_ranks) : m_count(count) {
   if (world().size == 1 || !across_ranks) return;
-  MPI_Win win;
+  m_window = std::make_unique<Window>();
   const MPI_Aint bytes = world().root() ? static_cast<MPI_Aint>(sizeof(long)) : 0;
-  MPI_Win_allocate(bytes, sizeof(long), MPI_INFO_NULL, MPI_COMM_WORLD, &m_counter, &win);
+  MPI_Win_allocate(bytes, sizeof(long), MPI_INFO_NULL, MPI_COMM_WORLD, &m_window->counter, &m_window->win);
   if (world().root()) {
-    MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, win);
-    *m_counter = 0;
-    MPI_Win_unlock(0, win);
+    MPI_Win_lock(MPI_LOCK_EXCLUSIVE, 0, 0, m_window->win);
+    *m_window->counter = 0;
+    MPI_Win_unlock(0, m_window->win);
   }
   MPI_Barrier(MPI_COMM_WORLD); // the counter is 0 before anyone takes a cell
-  m_window = new MPI_Win(win);
 }
 
 CellQueue::~CellQueue() {
-  if (!m_window) return;
-  auto* win = static_cast<MPI_Win*>(m_window);
-  MPI_Win_free(win);
-  delete win;
+  if (m_window) MPI_Win_free(&m_window->win);
 }
 
 long CellQueue::next() {
@@ -84,11 +85,10 @@ long CellQueue::next() {
   if (!m_window) {
     taken = m_local++;
   } else {
-    MPI_Win win = *static_cast<MPI_Win*>(m_window);
     const long one = 1;
-    MPI_Win_lock(MPI_LOCK_SHARED, 0, 0, win);
-    MPI_Fetch_and_op(&one, &taken, MPI_LONG, 0, 0, MPI_SUM, win);
-    MPI_Win_unlock(0, win);
+    MPI_Win_lock(MPI_LOCK_SHARED, 0, 0, m_window->win);
+    MPI_Fetch_and_op(&one, &taken, MPI_LONG, 0, 0, MPI_SUM, m_window->win);
+    MPI_Win_unlock(0, m_window->win);
   }
   return taken < m_count ? taken : -1;
 }
@@ -99,13 +99,12 @@ struct Broadcast::Pending {
 
 Broadcast::Broadcast() {
   if (world().size == 1) return;
-  m_pending = new Pending;
+  m_pending = std::make_unique<Pending>();
   if (!world().root()) MPI_Ibcast(&m_size, 1, MPI_LONG, 0, MPI_COMM_WORLD, &m_pending->size);
 }
 
 Broadcast::~Broadcast() {
   if (m_pending && !world().root() && !m_done) wait();
-  delete m_pending;
 }
 
 void Broadcast::send(std::vector<double> data) {

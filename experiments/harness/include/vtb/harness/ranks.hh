@@ -5,6 +5,7 @@
 /// to them, the reference sent to all, the rows gathered on rank 0; and the static split of a
 /// study into the parts of a job array (`--shard K/N`). Rank 0 alone prints and writes.
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -37,8 +38,8 @@ public:
 private:
   long m_count;
   long m_local = 0; ///< without MPI
-  void* m_window = nullptr;
-  long* m_counter = nullptr;
+  struct Window;    ///< the MPI window holding the counter (ranks.cc: no MPI in this header)
+  std::unique_ptr<Window> m_window;
 };
 
 /// A vector of doubles sent from rank 0 to every rank without making the others wait for it:
@@ -57,8 +58,8 @@ public:
   const std::vector<double>& data() const { return m_data; }
 
 private:
-  struct Pending;
-  Pending* m_pending = nullptr;
+  struct Pending; ///< the MPI requests under way
+  std::unique_ptr<Pending> m_pending;
   std::vector<double> m_data;
   long m_size = -1;
   bool m_done = false;
