@@ -140,6 +140,8 @@ const Model<3>& slab10k() {
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterMultigrid, filtered_multigrid)
 VTB_STEP_BENCH(slab10k, solvers::kImplicitEuler, "", implicit_euler)
+/// What a scene with no filter key runs (auto: the V-cycle at this size).
+VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
 #endif
 
 // The filtered step's kernels alone, on the 517-node plate and the 1701-node box: the spring

@@ -42,8 +42,12 @@ Action add_run(CLI::App& app) {
     const RunReport r = run.solver.kind == solvers::kFem      ? fem::run_scene(run, out, o->frames)
                         : run.solver.kind == solvers::kBullet ? harness::run_bullet_scene(run, out, o->frames)
                                                               : run_scene(run, out, o->frames);
-    std::cout << "vtb run: " << scene.name << " with " << r.solver << ", " << r.nodes << " nodes, " << r.springs
-              << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
+    std::string filter; // what a filtered run ran, and whether auto picked it
+    if (!r.filter.empty())
+      filter = " (" + r.filter +
+               (r.filter_requested != r.filter ? " filter, picked by " + r.filter_requested : " filter") + ")";
+    std::cout << "vtb run: " << scene.name << " with " << r.solver << filter << ", " << r.nodes << " nodes, "
+              << r.springs << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "
               << r.step_seconds.p99 * 1e6 << " us; max strain " << r.max_strain << "; outputs in " << out.string()
               << "\n";

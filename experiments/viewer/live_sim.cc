@@ -108,7 +108,8 @@ template <int dim> void LiveSim<dim>::check() {
   const double strain = finite ? max_strain(m_model->net, m_state.u) : INFINITY;
   if (!finite || !(strain <= kRunawayStrain)) {
     std::ostringstream os;
-    os << m_controls.solver << (m_controls.solver == solvers::kFiltered ? " (" + m_controls.filter + ")" : "")
+    os << m_controls.solver
+       << (m_controls.solver == solvers::kFiltered ? " (" + chosen_filter(*m_model, m_controls.filter) + ")" : "")
        << " went unstable at t = " << m_state.t << " s (dt = " << m_controls.dt
        << " s): " << (finite ? "runaway strain" : "non-finite state");
     m_failure = os.str();

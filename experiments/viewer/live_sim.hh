@@ -22,14 +22,14 @@ namespace vtb::viewer {
 inline std::vector<std::string> interactive_solvers() {
   return solvers::names(solvers::is_stepper);
 }
-using solvers::kFilters;
+using solvers::kFilterChoices;
 /// The spring calibrations ([solver].springs); "fitted" fits once per mesh and material (cached).
 inline constexpr std::array<const char*, 3> kSprings = {"lloyd", "van-gelder", "fitted"};
 
 /// What the panel controls; applying it rebuilds the model and the integrator.
 struct SimControls {
   std::string solver = solvers::kFiltered;
-  std::string filter = solvers::kFilterFull;
+  std::string filter = solvers::kFilterAuto;
   double dt = 1e-3;
   double stiffness_scale = 1.0;
   std::string springs = "lloyd"; ///< the calibration

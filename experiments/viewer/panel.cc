@@ -26,7 +26,7 @@ template <int dim> void App<dim>::draw_solver_controls() {
     ImGui::EndCombo();
   }
   if (m_edit.solver == solvers::kFiltered && ImGui::BeginCombo("filter", m_edit.filter.c_str())) {
-    for (const char* f : kFilters)
+    for (const char* f : kFilterChoices)
       if (ImGui::Selectable(f, m_edit.filter == f)) {
         m_edit.filter = f;
         changed = true;

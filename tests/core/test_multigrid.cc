@@ -135,5 +135,33 @@ TEST(MultigridFilter, LinearisedStepNeverAmplifiesAtAnyStep) {
     }
 }
 
+TEST(MultigridFilter, AutoPicksTheVCycleOnLarge3DMeshesAndTheFactorBelow) {
+  // The default filter: the factor's exact H^-1 where its n^(4/3) fill is small, the V-cycle
+  // from kLargeFreeNodes3D free nodes in 3D (docs/performance.md); a named filter is kept.
+  const Model<3> large = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "20, 14, 14");
+  ASSERT_GE(large.free_nodes.size(), kLargeFreeNodes3D);
+  const Model<3> small = box_model("[[fix]]\ngroup = \"left\"\n");
+  ASSERT_LT(small.free_nodes.size(), kLargeFreeNodes3D);
+  const Model<2> plate = test::model_from(test::plate_scene(70, 60, ""));
+  ASSERT_GE(plate.free_nodes.size(), kLargeFreeNodes3D);
+  EXPECT_EQ(chosen_filter(large, solvers::kFilterAuto), solvers::kFilterMultigrid);
+  EXPECT_EQ(chosen_filter(small, solvers::kFilterAuto), solvers::kFilterFull);
+  EXPECT_EQ(chosen_filter(plate, solvers::kFilterAuto), solvers::kFilterFull) << "2D fill grows like n log n";
+  EXPECT_EQ(chosen_filter(large, solvers::kFilterTensor), solvers::kFilterTensor);
+
+  // The integrator runs what was picked, and its step moves the loaded box.
+  IntegratorOptions o;
+  o.kind = solvers::kFiltered;
+  o.dt = 1e-2;
+  const Model<3> pulled = box_model(
+      "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.0, 0.0, -0.5]\n", 0.05, "20, 14, 14");
+  FilteredImplicit<3> f(pulled, o);
+  EXPECT_EQ(f.filter(), solvers::kFilterMultigrid);
+  State<3> s = initial_state(pulled);
+  f.step(s);
+  EXPECT_TRUE(s.u.allFinite());
+  EXPECT_GT(s.u.norm(), 0.0);
+}
+
 } // namespace
 } // namespace vtb

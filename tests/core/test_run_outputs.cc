@@ -64,20 +64,32 @@ dt = 2e-3
   EXPECT_FALSE(std::filesystem::exists(dir / "summary.json.part"));
 }
 
+/// A plate clamped on the left and pulled on the right by 0.3 N, run with `solver` (the
+/// [solver] table's lines) into dir; returns the report and summary.json.
+std::pair<RunReport, nlohmann::json> run_pulled_plate(const std::string& solver, const std::filesystem::path& dir) {
+  const std::string text = test::plate_scene(
+      8, 2, "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.3, 0.0]\n[solver]\n" + solver);
+  const RunReport r = run_scene(parse_scene(text, "plate.toml", "."), dir);
+  return {r, nlohmann::json::parse(test::read_text(dir / "summary.json"))};
+}
+
 TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
-  const std::string text = test::plate_scene(8, 2,
-                                             "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = "
-                                             "[0.3, 0.0]\n[solver]\nkind = \"explicit\"\ndt = 1e-3\n");
-  const Scene scene = parse_scene(text, "plate.toml", ".");
   const test::FreshDir fresh;
-  const auto dir = fresh / "out";
-  const RunReport r = run_scene(scene, dir);
+  const auto [r, j] = run_pulled_plate("kind = \"explicit\"\ndt = 1e-3\n", fresh / "out");
   EXPECT_FALSE(r.stable);
   // The explicit scheme's failure names its stability limit (the user's next step).
   EXPECT_NE(r.failure.find("times the explicit scheme's stability limit"), std::string::npos) << r.failure;
-  const auto j = nlohmann::json::parse(test::read_text(dir / "summary.json"));
   EXPECT_EQ(j["stable"], false);
   EXPECT_LT(j["steps"].get<long>(), 1000);
+}
+
+TEST(RunOutputs, SummarySaysWhichFilterAutoPicked) {
+  // No filter key: the scene's default `auto`; on a 2D plate it runs the full filter.
+  const test::FreshDir fresh;
+  const auto [r, j] = run_pulled_plate("kind = \"filtered\"\ndt = 1e-2\n", fresh / "out");
+  ASSERT_TRUE(r.stable);
+  EXPECT_EQ(j["filter"], "full");
+  EXPECT_EQ(j["filter_requested"], "auto");
 }
 
 } // namespace

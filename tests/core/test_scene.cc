@@ -53,7 +53,7 @@ std::string error_of(const std::string& text) {
 TEST(Scene, GoodSceneParses) {
   const Scene s = parse_scene(kGood, "good.toml", ".");
   EXPECT_EQ(s.name, "plate");
-  EXPECT_EQ(s.solver.filter, "full");
+  EXPECT_EQ(s.solver.filter, "auto"); // the design's default: the integrator picks the filter
   EXPECT_EQ(s.solver.strain_limit, 0.0);
   EXPECT_EQ(error_of(kGood), "");
 }
@@ -176,7 +176,7 @@ INSTANTIATE_TEST_SUITE_P(
                 "[initial].angular_velocity must be a number in 2D"},
         BadCase{"[[probe]]", "[initial]\nspin = 1.0\n[[probe]]", "[initial].spin: unknown key"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nfilter = \"partial\"",
-                "[solver].filter: = \"partial\": must be one of neighbors full"},
+                "[solver].filter: = \"partial\": must be one of auto neighbors full"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nsprings = \"hooke\"",
                 "[solver].springs: = \"hooke\": must be one of lloyd van-gelder fitted"},
         BadCase{"kind = \"filtered\"", "kind = \"fem\"\nkinematics = \"large\"",

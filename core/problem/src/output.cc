@@ -58,6 +58,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   }
   if (r.solver == solvers::kFiltered) {
     j["filter"] = r.filter;
+    if (!r.filter_requested.empty()) j["filter_requested"] = r.filter_requested;
     j["momentum_correction"] = r.momentum_correction;
     j["strain_limit"] = r.strain_limit;
   }

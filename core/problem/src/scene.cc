@@ -195,7 +195,8 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
       if (e.scene_kind) kinds.emplace_back(e.name);
     s.solver.kind = r.string("kind", solvers::kFiltered, kinds);
     s.solver.dt = r.number("dt", 1e-3, positive);
-    s.solver.filter = r.string("filter", solvers::kFilterFull, {solvers::kFilters.begin(), solvers::kFilters.end()});
+    s.solver.filter =
+        r.string("filter", solvers::kFilterAuto, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
     s.solver.momentum_correction = r.boolean("momentum_correction", true);
     s.solver.strain_limit = r.number("strain_limit", 0.0, non_negative);
     s.solver.springs = r.string("springs", "lloyd", {"lloyd", "van-gelder", "fitted"});

@@ -55,16 +55,17 @@ Eigen::SparseMatrix<double, Eigen::RowMajor> filter_matrix_neighbors(const Model
 
 template <int dim>
 FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const IntegratorOptions& o)
-    : Integrator<dim>(o.dt), m_model(model),
-      m_full(o.filter == solvers::kFilterFull || o.filter == solvers::kFilterMultigrid),
+    : Integrator<dim>(o.dt), m_model(model), m_filter(chosen_filter(model, o.filter)),
+      m_full(m_filter == solvers::kFilterFull || m_filter == solvers::kFilterMultigrid),
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
-  if (std::find(solvers::kFilters.begin(), solvers::kFilters.end(), o.filter) == solvers::kFilters.end())
-    throw InputError("[solver].filter = \"" + o.filter + "\": must be neighbors, full, tensor or multigrid");
+  if (std::find(solvers::kFilters.begin(), solvers::kFilters.end(), m_filter) == solvers::kFilters.end())
+    throw InputError("[solver].filter = \"" + o.filter + "\": must be " + solvers::kFilterAuto +
+                     ", neighbors, full, tensor or multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
-  if (o.filter == solvers::kFilterTensor) {
+  if (m_filter == solvers::kFilterTensor) {
     m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
-  } else if (o.filter == solvers::kFilterMultigrid) {
+  } else if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
     m_rhs.resize(dim, nf);
   } else if (m_full) {

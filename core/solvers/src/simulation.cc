@@ -71,7 +71,8 @@ template <int dim> RunReport report_header(const Model<dim>& model, const Integr
   RunReport rep = spring_report(model, o.kind);
   rep.dt = o.dt;
   if (o.kind == solvers::kFiltered) {
-    rep.filter = o.filter;
+    rep.filter = chosen_filter(model, o.filter);
+    rep.filter_requested = o.filter;
     rep.momentum_correction = o.momentum_correction && !model.has_constraints();
     rep.strain_limit = o.strain_limit;
   }

@@ -49,7 +49,8 @@ struct RunReport {
   double calibration_seconds = 0;  ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
   bool calibration_cached = false; ///< "fitted": read from the fit cache instead of fitted
   double effective_poisson_ratio = 0;
-  std::string filter;
+  std::string filter;           ///< filtered: the filter it ran
+  std::string filter_requested; ///< filtered: the scene's [solver].filter (auto, or the filter itself)
   bool momentum_correction = false;
   double strain_limit = 0;
   /// Solver-specific figures for summary.json (e.g. the FEM's cells, dofs, phase times).

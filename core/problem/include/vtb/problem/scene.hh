@@ -72,7 +72,9 @@ struct MeshDesc {
 struct SolverDesc {
   std::string kind = solvers::kFiltered; ///< explicit | filtered | implicit-euler | cvode | fem
   double dt = 1e-3;
-  std::string filter = solvers::kFilterFull; ///< full (default, stable) | neighbors (the paper, conditionally stable)
+  /// auto (default: full, or multigrid on large 3D meshes) | full | neighbors (the paper,
+  /// conditionally stable) | tensor | multigrid
+  std::string filter = solvers::kFilterAuto;
   bool momentum_correction = true;
   double strain_limit = 0.0;     ///< 0 = off (the default: it changes the physics)
   std::string springs = "lloyd"; ///< lloyd | van-gelder | fitted

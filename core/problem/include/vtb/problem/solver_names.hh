@@ -22,7 +22,12 @@ inline constexpr const char* kFilterFull = "full";
 inline constexpr const char* kFilterNeighbors = "neighbors";
 inline constexpr const char* kFilterTensor = "tensor";
 inline constexpr const char* kFilterMultigrid = "multigrid"; ///< full, H^-1 by one V-cycle
-/// Every filter, in the order the scene parser, the integrator's check and the viewer list them.
+/// The default: the integrator picks one of the filters for the model (chosen_filter, integrator.hh).
+inline constexpr const char* kFilterAuto = "auto";
+/// Every filter, in the order the integrator's check and the study list them.
 inline constexpr std::array<const char*, 4> kFilters = {kFilterNeighbors, kFilterFull, kFilterTensor, kFilterMultigrid};
+/// What [solver].filter accepts and the viewer offers: auto, then every filter.
+inline constexpr std::array<const char*, 5> kFilterChoices = {kFilterAuto, kFilterNeighbors, kFilterFull, kFilterTensor,
+                                                              kFilterMultigrid};
 
 } // namespace vtb::solvers

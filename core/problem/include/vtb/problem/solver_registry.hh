@@ -34,8 +34,9 @@ struct Entry {
 inline constexpr Entry kEntries[] = {
     {kExplicit, "symplectic Euler; stable below the Courant limit only", kExplicit, "", "dt, strain_limit", true, true,
      true, true},
-    {kFiltered, "the paper's filtered implicit scheme with the scene's filter", kFiltered, "",
-     "dt, filter, momentum_correction, strain_limit", true, true, true, true},
+    {kFiltered,
+     "the paper's filtered implicit scheme with the scene's filter (auto: full, multigrid on large 3D meshes)",
+     kFiltered, "", "dt, filter, momentum_correction, strain_limit", true, true, true, true},
     {kFilteredFull, "the filtered scheme with the full inverse W (stable at any dt)", kFiltered, kFilterFull,
      "dt, momentum_correction, strain_limit", false, true, true, false},
     {kFilteredNeighbors, "the filtered scheme truncated to mesh neighbours (the paper's)", kFiltered, kFilterNeighbors,

@@ -55,6 +55,7 @@ public:
   FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
+  const std::string& filter() const { return m_filter; }
 
 private:
   void finish_step(State<dim>& s);
@@ -62,6 +63,7 @@ private:
   void limit_strain(State<dim>& s) const;
 
   const Model<dim>& m_model;
+  std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
   bool m_correct;

@@ -6,7 +6,9 @@
 #include "vtb/problem/solver_names.hh"
 #include "vtb/springs/model.hh"
 
+#include <cstddef>
 #include <memory>
+#include <string>
 #include <string_view>
 
 namespace vtb {
@@ -50,7 +52,7 @@ private:
 struct IntegratorOptions {
   std::string kind = solvers::kFiltered;
   double dt = 1e-3;
-  std::string filter = solvers::kFilterFull;
+  std::string filter = solvers::kFilterAuto; ///< filtered: a filter of kFilterChoices
   bool momentum_correction = true;
   double strain_limit = 0.0;
   double rtol = 1e-8, atol = 1e-12; ///< cvode
@@ -58,6 +60,17 @@ struct IntegratorOptions {
   std::string linear_solver = "auto";
   double cg_tolerance = 1e-8; ///< implicit-euler with cg: |r| <= tol |b|
 };
+
+/// From this many free nodes a 3D system is solved by the multigrid V-cycle rather than a
+/// sparse factor, whose fill grows like n^(4/3) there (docs/performance.md): the `auto`
+/// filter's and implicit Euler's `auto` linear solver's threshold.
+inline constexpr std::size_t kLargeFreeNodes3D = 4000;
+
+/// The filter `filtered` runs for `filter` on this model: `filter` itself, or for `auto` the
+/// full filter (the exact H^-1 by the factor), the multigrid filter on 3D meshes of
+/// kLargeFreeNodes3D free nodes and more. The tensor filter is not picked yet: it still
+/// diverges under hard pulls (docs/method.md).
+template <int dim> std::string chosen_filter(const Model<dim>& model, const std::string& filter);
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
 template <int dim>

@@ -46,7 +46,7 @@ struct StudyRow {
 
 struct StudyResult {
   std::string scene, reference;
-  std::string filter = solvers::kFilterFull; ///< the scene's filter: what the solver `filtered` means
+  std::string filter = solvers::kFilterFull; ///< the filter `filtered` ran (the scene's, auto resolved)
   int nodes = 0;
   double duration = 0;
   std::string reference_note; ///< what the reference run was
