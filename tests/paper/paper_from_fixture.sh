@@ -3,7 +3,8 @@
 # real `vtb reproduce --quick`) and read back with pdftotext:
 #  1. a timing changed in the fixture's CSV is the number the PDF prints (numbers come from data),
 #     and so is the spread of a row's repeated timings;
-#     The same for the CGAL slab table: the 10k-node multigrid step set to 4321 us prints 4.32 ms;
+#     The same for the CGAL slab table: the 10k-node multigrid step set to 4321 us prints 4.32 ms,
+#     and the default filter's mark (auto_pick) is where the data puts it;
 #  2. a case name full of TeX specials (_ % & # $ \ { } ~ ^ and an \input) prints literally;
 #  3. pdflatex ran with shell escape off (not even the restricted default);
 #  4. every figure exists as a non-empty PDF and PNG, the PNG is not blank, and it changes
@@ -44,6 +45,9 @@ for r in rows[1:]:
     if r[h.index('family')] == 'cgal-slab' and r[h.index('solver')] == 'filtered-multigrid' and int(r[h.index('nodes')]) > 5000:
         r[h.index('step_median_us')] = '4321'
         hits += 1
+    # the default's mark follows the data: on the 2k slab it is moved from the factor to the V-cycle
+    if r[h.index('family')] == 'cgal-slab' and int(r[h.index('nodes')]) < 5000 and r[h.index('solver')].startswith('filtered-'):
+        r[h.index('auto_pick')] = 'true' if r[h.index('solver')] == 'filtered-multigrid' else 'false'
 assert hits == 1, "the fixture has one 10k-node multigrid slab row"
 csv.writer(open(sys.argv[1], 'w', newline=''), lineterminator='\n').writerows(rows)
 PY
@@ -54,7 +58,10 @@ grep -q 'takes 86\.4 .s per step' "$tmp/vtb.txt" || fail "the changed timing (86
 tr '\n' ' ' < "$tmp/vtb.txt" | tr -s ' ' | grep -q 'at most 3\.21 times its fastest' ||
   fail "the timing's spread (a row's runs 3.21x apart) is not the paper's"
 grep -qF "$weird" "$tmp/vtb.txt" || fail "the case name with TeX specials did not print literally"
-grep -Eq 'filtered-multigrid +4\.32 ' "$tmp/vtb.txt" || fail "the changed slab step (4321 us) is not the slab table's 4.32 ms"
+grep -Eq 'filtered-multigrid† +4\.32 ' "$tmp/vtb.txt" || fail "the changed slab step (4321 us) is not the slab table's 4.32 ms, marked as the default"
+# The default (filter = auto) is marked where the data says, and only there.
+[ "$(grep -cE '(^| )(1907|9982) +filtered-[a-z]+†' "$tmp/vtb.txt")" = 2 ] || fail "the slab table does not mark two defaults"
+grep -Eq '1907 +filtered-multigrid†' "$tmp/vtb.txt" || fail "the moved default mark (2k slab, multigrid) is not in the table"
 # pdflatex logs "\write18 enabled" (or "restricted \write18 enabled") whenever shell escape is on.
 grep -q 'write18 enabled' "$tmp/paper/vtb.log" && fail "pdflatex ran with shell escape"
 grep -q 'Quick reproduction' "$tmp/vtb.txt" || fail "a --quick reproduction's paper does not say so"

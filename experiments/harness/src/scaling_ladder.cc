@@ -7,6 +7,7 @@
 
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/solvers/integrator.hh"
 
 #include <chrono>
 #include <cmath>
@@ -75,8 +76,11 @@ template <int dim> std::string scaling_rows(const Scene& scene, const char* fami
           time_solver(scene, model, solver, steps, pre, median, bytes);
         }
         const double error = r.stable ? compare(tr, ref).displacement_max : std::nan("");
+        // auto_pick: this row is what a scene with no filter key runs on this mesh (filter = auto).
+        const bool picked = solver == "filtered-" + chosen_filter(model, solvers::kFilterAuto);
         os << family << ',' << dim << ',' << model.num_nodes() << ',' << model.net.num_springs() << ',' << solver << ','
-           << std::setprecision(6) << pre * 1e3 << ',' << median * 1e6 << ',' << bytes / 1.0e6 << ',' << error << '\n';
+           << std::setprecision(6) << pre * 1e3 << ',' << median * 1e6 << ',' << bytes / 1.0e6 << ',' << error << ','
+           << (picked ? "true" : "false") << '\n';
       }
     }
   });
@@ -110,7 +114,7 @@ std::string structured(int dim, int n) {
 
 void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* log) {
   std::ostringstream os;
-  os << "family,dim,nodes,springs,solver,precompute_ms,step_median_us,heap_mb,error_vs_fem\n";
+  os << "family,dim,nodes,springs,solver,precompute_ms,step_median_us,heap_mb,error_vs_fem,auto_pick\n";
   const std::vector<int> ladder2 = quick ? std::vector<int>{4, 8, 16, 32} : std::vector<int>{4, 8, 16, 32, 64};
   const std::vector<int> ladder3 = quick ? std::vector<int>{2, 3, 4, 6} : std::vector<int>{2, 3, 4, 6, 8, 12};
   const std::vector<int> slabs = quick ? std::vector<int>{2000, 10000} : std::vector<int>{2000, 10000, 50000};
