@@ -65,6 +65,7 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (m_filter == solvers::kFilterTensor) {
     m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+    m_coupling = Eigen::VectorXd::Zero(n);
   } else if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
     m_rhs.resize(dim, nf);
@@ -103,11 +104,15 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     }
   // dv = dt W a.
   if (m_tensor) {
-    // The couplings' implicit part: their force's -dt k v term (their k joins H in the filter).
-    if (s.applied_stiffness.size() == m_force.cols())
-      for (Eigen::Index i = 0; i < m_force.cols(); ++i)
-        if (s.applied_stiffness[i] > 0) m_force.col(i) -= dt * s.applied_stiffness[i] * s.v.col(i);
-    m_tensor->apply(s.u, m_force, s.applied_stiffness, dt, m_dv);
+    // The couplings' implicit part: their force's -dt k v term, and dt^2 k + dt c joining H
+    // (the filter takes it as a stiffness: k + c / dt).
+    const bool coupled = s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols();
+    if (coupled)
+      for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
+        m_force.col(i) += coupling_force_correction(s, i, dt);
+        m_coupling[i] = coupling_diagonal(s, i, dt) / (dt * dt);
+      }
+    m_tensor->apply(s.u, m_force, coupled ? m_coupling : s.applied_stiffness, dt, m_dv);
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);

@@ -72,13 +72,16 @@ template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {
   std::fill(A, A + m_solver.nonzeros(), 0.0);
   const auto nf = static_cast<int>(m_model.free_nodes.size());
   for (int a = 0; a < nf; ++a) {
-    const double m = net.mass[m_model.free_nodes[static_cast<std::size_t>(a)]] * (1.0 + dt * net.mass_damping);
+    const int i = m_model.free_nodes[static_cast<std::size_t>(a)];
+    // The mass, and the couplings' dt^2 k + dt c (a pull, a haptic contact) solved with it.
+    const double m = net.mass[i] * (1.0 + dt * net.mass_damping) + coupling_diagonal(s, i, dt);
     for (int p = 0; p < dim; ++p) A[m_diag_slot[static_cast<std::size_t>(a * dim + p)]] += m;
   }
   // Right-hand side dt (f + f_ext + dt K v) and the matrix, spring by spring.
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force);
+  for (int i : m_model.free_nodes) m_force.col(i) += coupling_force_correction(s, i, dt);
   // The matrix M + dt^2 K + dt D in stiffness signs: each block of the shared assembly enters
   // with -sign (df_i/du_i = -K_s). The upper triangle is stored: diagonal blocks through
   // slots 0 and 1, the off-diagonal pair once, at the (i, j) block.

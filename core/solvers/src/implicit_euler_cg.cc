@@ -18,6 +18,7 @@ ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double
   m_mass = model.net.mass * (1.0 + dt * model.net.mass_damping);
   for (int i = 0; i < n; ++i)
     if (model.constrained[static_cast<std::size_t>(i)]) m_mass[i] = 0;
+  m_diag = m_mass;
   m_block.assign(static_cast<std::size_t>(model.net.num_springs()), Mat<dim>::Zero());
   m_inv_diag.assign(static_cast<std::size_t>(n), Mat<dim>::Zero());
   for (auto* v : {&m_force, &m_b, &m_x, &m_r, &m_z, &m_p, &m_ap, &m_prev, &m_prev2}) *v = Nodal<dim>::Zero(dim, n);
@@ -36,7 +37,13 @@ template <int dim> void ImplicitEulerCG<dim>::assemble(const State<dim>& s) {
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force);
-  for (int i = 0; i < net.num_nodes(); ++i) m_inv_diag[static_cast<std::size_t>(i)] = m_mass[i] * Mat<dim>::Identity();
+  // The mass and the couplings' dt^2 k + dt c (a pull, a haptic contact), solved with it.
+  for (int i = 0; i < net.num_nodes(); ++i) {
+    const bool fixed = m_model.constrained[static_cast<std::size_t>(i)];
+    m_diag[i] = fixed ? 0.0 : m_mass[i] + coupling_diagonal(s, i, dt);
+    if (!fixed) m_force.col(i) += coupling_force_correction(s, i, dt);
+    m_inv_diag[static_cast<std::size_t>(i)] = m_diag[i] * Mat<dim>::Identity();
+  }
   // The shared assembly: the (i, j) block of each spring is K_s = df_i/dx_j, D_s = df_i/dv_j.
   for_each_jacobian_block(net, s.u, true, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
     if (sign < 0 || i != net.edge[static_cast<std::size_t>(sp)][0]) return;
@@ -57,7 +64,7 @@ template <int dim> void ImplicitEulerCG<dim>::assemble(const State<dim>& s) {
 
 template <int dim> void ImplicitEulerCG<dim>::apply(const Nodal<dim>& x, Nodal<dim>& y) const {
   const auto& net = m_model.net;
-  y = x * m_mass.asDiagonal();
+  y = x * m_diag.asDiagonal();
   for (int sp = 0; sp < net.num_springs(); ++sp) {
     const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];
     const Vec<dim> f = m_block[static_cast<std::size_t>(sp)] * (x.col(i) - x.col(j));

@@ -66,6 +66,7 @@ private:
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
+  Eigen::VectorXd m_coupling;                  ///< tensor: the couplings' k + c / dt per node
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H

@@ -22,12 +22,33 @@ template <int dim> struct State {
   /// added to the scene's loads when sized like u; empty otherwise.
   Nodal<dim> applied;
   /// The stiffness (N/m, isotropic) of the couplings whose forces `applied` holds (a user's
-  /// pull: k (target - x) at its node), per node; empty or zero where there is none. An
-  /// integrator that can solves them implicitly, as it does its springs (the tensor filter:
-  /// without it a pull 4x a spring's stiffness diverged at dt = 10 ms); the others apply the
-  /// force alone.
+  /// pull: k (target - x) at its node; a haptic contact: the virtual coupling's k shared by
+  /// the touched facet's weights), per node; empty or zero where there is none. The tensor
+  /// filter and implicit Euler solve them implicitly, as they do their springs (without it a
+  /// pull 4x a spring's stiffness diverged at dt = 10 ms); the scalar filters apply the force
+  /// alone (their extra mass holds it).
   Eigen::VectorXd applied_stiffness;
+  /// The damping (N s/m, isotropic) of the same couplings (a contact's -c (v - v_handle)),
+  /// per node; empty or zero where there is none. Solved implicitly with the stiffness.
+  Eigen::VectorXd applied_damping;
 };
+
+/// What node i's couplings add to the diagonal of an implicit step's system M + dt C + dt^2 K:
+/// dt^2 k + dt c (0 without couplings).
+template <int dim> double coupling_diagonal(const State<dim>& s, Eigen::Index i, double dt) {
+  double d = 0;
+  if (i < s.applied_stiffness.size()) d += dt * dt * s.applied_stiffness[i];
+  if (i < s.applied_damping.size()) d += dt * s.applied_damping[i];
+  return d;
+}
+
+/// The couplings' force over the step that the implicit system expects on its right-hand side
+/// (as a spring's dt K v): -dt k v at node i; the damping has none (its force is at v already).
+template <int dim> Vec<dim> coupling_force_correction(const State<dim>& s, Eigen::Index i, double dt) {
+  if (i < s.applied_stiffness.size() && s.applied_stiffness[i] > 0)
+    return -dt * s.applied_stiffness[i] * s.v.col(i);
+  return Vec<dim>::Zero();
+}
 
 /// Initial state of a model: zero displacement, the scene's initial velocity, constraints.
 template <int dim> State<dim> initial_state(const Model<dim>& model);
