@@ -108,29 +108,36 @@ int filtered_step_allocations(const Model<2>& model, const char* filter) {
   return g_allocations;
 }
 
-TEST(NoAllocation, TensorFilterCouplingsAllocateNothing) {
-  // Pulls taken into the tensor filter's solve (State::applied_stiffness): the coupled nodes
-  // change (Z made again), their stiffness changes (the capacitance factored again), and the
-  // factor itself changes when the transverse cover moves; none of it may allocate.
+class CouplingsAllocateNothing : public ::testing::TestWithParam<std::pair<const char*, const char*>> {};
+
+TEST_P(CouplingsAllocateNothing, WhileTheCoupledNodesAndTheirStiffnessChange) {
+  // Pulls and contacts taken into the solve (State::applied_stiffness, applied_damping): the
+  // coupled nodes change (Z made again), their stiffness changes (the capacitance factored
+  // again), and the tensor filter's factor itself changes when the transverse cover moves;
+  // none of it may allocate.
+  const auto [kind, filter] = GetParam();
   Model<2> model = test::model_from(test::plate_scene(12, 3, "[[fix]]\ngroup = \"left\"\n"));
   IntegratorOptions o;
-  o.kind = "filtered";
-  o.filter = "tensor";
+  o.kind = kind;
+  o.filter = filter;
   o.dt = 1e-2;
   auto integ = make_integrator(model, o);
   State<2> s = initial_state(model);
   const auto n = model.num_nodes();
   s.applied = Nodal<2>::Zero(2, n);
   s.applied_stiffness = Eigen::VectorXd::Zero(n);
+  s.applied_damping = Eigen::VectorXd::Zero(n);
   integ->step(s);
   g_allocations = 0;
   g_counting = true;
   for (int k = 0; k < 60; ++k) {
     s.applied_stiffness.setZero();
+    s.applied_damping.setZero();
     s.applied.setZero();
-    for (int c = 0; c < 1 + k / 20; ++c) { // one, two, then three pulled nodes
+    for (int c = 0; c < 1 + k / 20; ++c) { // one, two, then three coupled nodes
       const auto node = n - 1 - c;
       s.applied_stiffness[node] = 100.0 * (1 + k % 3);
+      s.applied_damping[node] = 0.5 * (k % 2);
       s.applied.col(node) = Vec<2>(0.0, -0.01);
     }
     integ->step(s);
@@ -138,6 +145,14 @@ TEST(NoAllocation, TensorFilterCouplingsAllocateNothing) {
   g_counting = false;
   EXPECT_EQ(g_allocations, 0);
 }
+
+INSTANTIATE_TEST_SUITE_P(ImplicitSolvers, CouplingsAllocateNothing,
+                         ::testing::Values(std::pair{"filtered", "tensor"}, std::pair{"filtered", "full"},
+                                           std::pair{"implicit-euler", "auto"}),
+                         [](const auto& pinfo) {
+                           return std::string(pinfo.param.first == std::string("filtered") ? pinfo.param.second
+                                                                                           : "implicit_euler");
+                         });
 
 TEST(NoAllocation, MultigridFilterAllocatesNothing) {
   // 451 nodes: a hierarchy of three levels (the small plate above has none, as the filter

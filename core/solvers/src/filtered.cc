@@ -74,9 +74,15 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
     m_node_of_row.resize(static_cast<std::size_t>(nf));
-    for (int a = 0; a < static_cast<int>(nf); ++a)
-      m_node_of_row[static_cast<std::size_t>(factor.ordered(a))] = model.free_nodes[static_cast<std::size_t>(a)];
+    m_row_of_node.assign(static_cast<std::size_t>(n), -1);
+    for (int a = 0; a < static_cast<int>(nf); ++a) {
+      const int node = model.free_nodes[static_cast<std::size_t>(a)];
+      m_node_of_row[static_cast<std::size_t>(factor.ordered(a))] = node;
+      m_row_of_node[static_cast<std::size_t>(node)] = factor.ordered(a);
+    }
     m_rhs.resize(dim, nf);
+    m_couplings = std::make_unique<ScalarCouplings>(*m_h, nf);
+    m_coupling = Eigen::VectorXd::Zero(n);
   } else {
     m_sparse = filter_matrix_neighbors(model, o.dt);
   }
@@ -119,8 +125,19 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_mg->apply(m_rhs, m_dv);
     m_dv *= dt;
   } else if (m_full) {
+    // The couplings' implicit part, as in the tensor filter: -dt k v in the force, dt^2 k + dt b
+    // joining H (Woodbury on the factor).
+    const bool coupled = s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols();
+    if (coupled) {
+      for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
+        m_force.col(i) += coupling_force_correction(s, i, dt);
+        m_coupling[i] = coupling_diagonal(s, i, dt);
+      }
+      m_couplings->set(m_coupling, m_row_of_node);
+    }
     // W a = H^-1 M a = H^-1 F_node.
     m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
+    if (coupled) m_couplings->correct(m_rhs);
     if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
       for (Eigen::Index r = 0; r < nf; ++r) {
         const int i = m_node_of_row[static_cast<std::size_t>(r)];

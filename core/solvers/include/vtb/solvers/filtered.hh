@@ -34,6 +34,7 @@
 #include "vtb/linalg/nodal_solve.hh"
 #include "vtb/problem/solver_names.hh"
 #include "vtb/solvers/integrator.hh"
+#include "vtb/solvers/scalar_couplings.hh"
 #include "vtb/solvers/warped_filter.hh"
 
 #include <Eigen/SparseCore>
@@ -66,12 +67,14 @@ private:
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
-  Eigen::VectorXd m_coupling;                  ///< tensor: the couplings' k + c / dt per node
+  Eigen::VectorXd m_coupling;                  ///< tensor: the couplings' k + c / dt per node; full: dt^2 k + dt c
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
   std::vector<int> m_node_of_row;                        ///< full: factor row -> node
+  std::vector<int> m_row_of_node;                        ///< full: node -> factor row (-1: fixed)
+  std::unique_ptr<ScalarCouplings> m_couplings;          ///< full: pulls and contacts in the solve
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node
   Nodal<dim> m_acc, m_dv;                                ///< per free node
