@@ -25,8 +25,7 @@ DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene)
       m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_plane(device_plane(scene, mesh)),
       m_hand(still_hand(scene)), m_contact(mesh, 1), m_shaper(m_params), m_x(mesh.points) {}
 
-template <int dim>
-void DeviceMode<dim>::before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) {
+template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, State<dim>& s, double dt) {
   // The ticks that fall in [t, t + dt): at least one per step.
   const int n = std::max(1, static_cast<int>(std::lround(dt / m_period)));
   const double h = dt / n;
@@ -70,11 +69,18 @@ void DeviceMode<dim>::before_step(const Model<dim>& model, const State<dim>& s, 
     m_head = (m_head + 1) % kTrace;
     m_count = std::min(m_count + 1, kTrace);
   }
-  // The step's force on the body: the ticks' mean, on the last touched facet's nodes.
+  // The step's force on the body: the ticks' mean, on the last touched facet's nodes, with the
+  // coupling's stiffness and damping by the same weights for the solvers that take them
+  // implicitly (as vtb haptics does: docs/haptics.md).
   if (facet >= 0) {
     const auto& e = m_contact.facets()[static_cast<std::size_t>(facet)];
-    for (int k = 0; k < dim; ++k)
-      applied.col(e[static_cast<std::size_t>(k)]) += weights[static_cast<std::size_t>(k)] * on_body_sum / n;
+    for (int k = 0; k < dim; ++k) {
+      const int node = e[static_cast<std::size_t>(k)];
+      const double w = weights[static_cast<std::size_t>(k)];
+      s.applied.col(node) += w * on_body_sum / n;
+      if (node < s.applied_stiffness.size()) s.applied_stiffness[node] += w * m_k;
+      if (node < s.applied_damping.size()) s.applied_damping[node] += w * m_b;
+    }
   }
 }
 

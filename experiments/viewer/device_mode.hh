@@ -26,7 +26,7 @@ public:
   /// The scene's [haptics] settings when it has them, else the defaults of DESIGN.md §2.
   DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
-  void before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) override;
+  void before_step(const Model<dim>& model, State<dim>& s, double dt) override;
 
   /// Where the user's hand holds the handle: a body point, taken to the device's plane.
   void set_hand(const Vec<dim>& p) { m_hand_device = m_plane.to_device(p); }

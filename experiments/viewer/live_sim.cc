@@ -47,6 +47,7 @@ template <int dim> void LiveSim<dim>::rebuild() {
   }
   m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
   m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
+  m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
   const double tau = m_model->net.stiffness.size() ? m_model->net.damping[0] / m_model->net.stiffness[0] : 0.0;
   m_courant_dt = explicit_critical_dt(max_omega_squared(*m_model, false), tau, m_model->net.mass_damping);
   m_probe_node = m_model->probes.empty() ? -1 : m_model->probes.front().second;
@@ -68,6 +69,7 @@ template <int dim> void LiveSim<dim>::reset() {
   m_state = initial_state(*m_model);
   m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
   m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
+  m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
   m_failure.clear();
   m_stats = SimStats{};
   m_trace_count = m_trace_head = 0;
@@ -83,12 +85,13 @@ template <int dim> void LiveSim<dim>::step_once() {
   using clock = std::chrono::steady_clock;
   m_state.applied.setZero();
   m_state.applied_stiffness.setZero(); // each pull's spring, for the solvers that take it implicitly
+  m_state.applied_damping.setZero();
   for (int k = 0; k < m_num_pulls; ++k) {
     const int node = m_pulls[static_cast<std::size_t>(k)].node;
     m_state.applied.col(node) += pull_force(k);
     m_state.applied_stiffness[node] += coupling_stiffness;
   }
-  if (m_hook) m_hook->before_step(*m_model, m_state, m_controls.dt, m_state.applied);
+  if (m_hook) m_hook->before_step(*m_model, m_state, m_controls.dt);
   const auto a = clock::now();
   m_integ->step(m_state);
   const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();

@@ -52,12 +52,13 @@ struct SimStats {
   long steps = 0;
 };
 
-/// Called before every step with the state and the forces about to be applied (pulls already
-/// in): adds its own, e.g. the device's contact force. Must not allocate.
+/// Called before every step with the state whose applied forces (and their couplings'
+/// stiffness and damping, State::applied_stiffness, applied_damping) already hold the pulls:
+/// adds its own, e.g. the device's contact force and coupling. Must not allocate.
 template <int dim> class StepHook {
 public:
   virtual ~StepHook() = default;
-  virtual void before_step(const Model<dim>& model, const State<dim>& s, double dt, Nodal<dim>& applied) = 0;
+  virtual void before_step(const Model<dim>& model, State<dim>& s, double dt) = 0;
 };
 
 template <int dim> class LiveSim {
