@@ -1,5 +1,6 @@
 #include "live_sim.hh"
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/filtered.hh"
 
 #include "vtb/meshes/input_error.hh"
 #include "vtb/solvers/explicit_euler.hh"
@@ -144,6 +145,8 @@ template <int dim> void LiveSim<dim>::advance(double sim_seconds, double wall_bu
   if (m_failure.empty()) {
     m_stats.energy = elastic_energy(m_model->net, m_state.u) + kinetic_energy(m_model->net, m_state.v);
     m_stats.max_strain = max_strain(m_model->net, m_state.u);
+    if (const auto* f = dynamic_cast<const FilteredImplicit<dim>*>(m_integ.get()))
+      m_stats.fallback_steps = f->fallback_steps();
   }
 }
 

@@ -63,13 +63,11 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
                      ", neighbors, full, tensor or multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
-  if (m_filter == solvers::kFilterTensor) {
-    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
-    m_coupling = Eigen::VectorXd::Zero(n);
-  } else if (m_filter == solvers::kFilterMultigrid) {
+  if (m_filter == solvers::kFilterTensor) m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+  if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
     m_rhs.resize(dim, nf);
-  } else if (m_full) {
+  } else if (m_full || m_tensor) { // the tensor filter's fallback is the full filter
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
@@ -101,6 +99,15 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
   add_internal_forces(net, s.u, s.v, m_force, dt);
+  // The couplings' implicit part, for the filters with a factor (tensor, full): their force's
+  // -dt k v term here, their dt^2 k + dt c joining H through Woodbury's identity.
+  const bool coupled =
+      (m_tensor || m_h) && (s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols());
+  if (coupled)
+    for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
+      m_force.col(i) += coupling_force_correction(s, i, dt);
+      m_coupling[i] = coupling_diagonal(s, i, dt);
+    }
   // The accelerations M^-1 F: what the neighbour filter multiplies and the momentum correction
   // compares with; the full and tensor filters solve with F itself.
   if ((!m_full && !m_tensor) || m_correct)
@@ -108,33 +115,24 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
       const int i = free[static_cast<std::size_t>(a)];
       m_acc.col(a) = m_force.col(i) / net.mass[i];
     }
-  // dv = dt W a.
+  // The tensor filter where its warped rest Jacobian is trusted; past that distortion the
+  // scalar full filter takes the step (entered beyond kTrustedMismatch, left below 0.7 of it).
   if (m_tensor) {
-    // The couplings' implicit part: their force's -dt k v term, and dt^2 k + dt c joining H
-    // (the filter takes it as a stiffness: k + c / dt).
-    const bool coupled = s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols();
-    if (coupled)
-      for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
-        m_force.col(i) += coupling_force_correction(s, i, dt);
-        m_coupling[i] = coupling_diagonal(s, i, dt) / (dt * dt);
-      }
-    m_tensor->apply(s.u, m_force, coupled ? m_coupling : s.applied_stiffness, dt, m_dv);
+    const double mismatch = m_tensor->prepare(s.u);
+    const double limit = WarpedFilter<dim>::kTrustedMismatch * (m_fallback ? 0.7 : 1.0);
+    m_fallback = !(mismatch <= limit);
+    m_fallback_steps += m_fallback;
+  }
+  // dv = dt W a.
+  if (m_tensor && !m_fallback) {
+    m_tensor->solve(m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);
     m_mg->apply(m_rhs, m_dv);
     m_dv *= dt;
-  } else if (m_full) {
-    // The couplings' implicit part, as in the tensor filter: -dt k v in the force, dt^2 k + dt b
-    // joining H (Woodbury on the factor).
-    const bool coupled = s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols();
-    if (coupled) {
-      for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
-        m_force.col(i) += coupling_force_correction(s, i, dt);
-        m_coupling[i] = coupling_diagonal(s, i, dt);
-      }
-      m_couplings->set(m_coupling, m_row_of_node);
-    }
+  } else if (m_h) {
+    if (coupled) m_couplings->set(m_coupling, m_row_of_node);
     // W a = H^-1 M a = H^-1 F_node.
     m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
     if (coupled) m_couplings->correct(m_rhs);

@@ -98,12 +98,12 @@ template <int dim> void WarpedFilter<dim>::cover(double mismatch) {
   ++m_factor_version;
 }
 
-template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& coupling, double dt) {
+template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& coupling) {
   const auto& free = m_model.free_nodes;
   const int nf = static_cast<int>(free.size());
   int count = 0;
   bool same = true;
-  std::array<double, kMaxCoupled> k{};
+  std::array<double, kMaxCoupled> k{}; // dt^2 k + dt c per coupled node
   for (int a = 0; a < nf && count < kMaxCoupled && coupling.size() > 0; ++a) {
     const double ka = coupling[free[static_cast<std::size_t>(a)]];
     if (!(ka > 0) || !std::isfinite(ka)) continue;
@@ -131,7 +131,7 @@ template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& couplin
   for (int r = 0; r < m; ++r)
     for (int c = 0; c < m; ++c)
       C(r, c) = m_z(m_h.ordered(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim), c);
-  for (int r = 0; r < m; ++r) C(r, r) += 1.0 / (dt * dt * m_coupled_k[static_cast<std::size_t>(r / dim)]);
+  for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
   m_capacitance.compute(C);
 }
 
@@ -169,12 +169,16 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   }
 }
 
-template <int dim>
-void WarpedFilter<dim>::apply(const Nodal<dim>& u, const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt,
-                              Nodal<dim>& dv) {
+template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {
   rotations(u);
-  cover(direction_mismatch(u));
-  couple(coupling, dt);
+  const double mismatch = direction_mismatch(u);
+  if (mismatch <= kTrustedMismatch) cover(mismatch);
+  return mismatch;
+}
+
+template <int dim>
+void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv) {
+  couple(coupling);
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<int>(free.size());
   for (int a = 0; a < nf; ++a) {

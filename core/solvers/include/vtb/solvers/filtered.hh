@@ -57,6 +57,9 @@ public:
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
   const std::string& filter() const { return m_filter; }
+  /// Tensor filter: the steps taken by the full filter because the distortion passed what the
+  /// warped rest Jacobian is trusted with (WarpedFilter::kTrustedMismatch).
+  long fallback_steps() const { return m_fallback_steps; }
 
 private:
   void finish_step(State<dim>& s);
@@ -67,7 +70,10 @@ private:
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
-  Eigen::VectorXd m_coupling;                  ///< tensor: the couplings' k + c / dt per node; full: dt^2 k + dt c
+  Eigen::VectorXd m_coupling;                  ///< tensor, full: the couplings' dt^2 k + dt c per node
+  Eigen::VectorXd m_no_coupling;               ///< empty: no couplings
+  bool m_fallback = false;                     ///< tensor: this step is the full filter's
+  long m_fallback_steps = 0;
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H

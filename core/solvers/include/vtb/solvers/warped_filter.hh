@@ -47,11 +47,17 @@ public:
   WarpedFilter(const Model<dim>& model, double dt);
   /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
   static constexpr int kMaxCoupled = 8;
-  /// dv (dim x free nodes) = dt R H'^-1 R^T F at displacement u (F: dim x nodes, including the
-  /// couplings' forces and their -dt k v term), H' = H_t + dt^2 k I at each node with a
-  /// `coupling` stiffness k > 0 (per node; empty: none).
-  void apply(const Nodal<dim>& u, const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt,
-             Nodal<dim>& dv);
+  /// Beyond this direction mismatch the warped rest Jacobian is not trusted (the cover would
+  /// pass the springs' whole transverse stiffness): the filtered step then falls back to the
+  /// scalar full filter, stable at any dt (docs/method.md).
+  static constexpr double kTrustedMismatch = 0.5;
+  /// The rotations at displacement u and the largest direction mismatch, which it returns; the
+  /// cover follows it while it is trusted.
+  double prepare(const Nodal<dim>& u);
+  /// dv (dim x free nodes) = dt R H'^-1 R^T F at the prepared displacement (F: dim x nodes,
+  /// including the couplings' forces and their -dt k v term), H' = H_t + c I at each node with
+  /// a `coupling` coefficient c = dt^2 k + dt b > 0 (per node; empty: none).
+  void solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv);
   /// The rotation of each node's neighbourhood at displacement u (identity at rest).
   void rotations(const Nodal<dim>& u);
   const std::vector<Mat<dim>>& rotation() const { return m_rotation; }
@@ -72,17 +78,17 @@ private:
   double m_beta = 0;
   Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
   /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
-  void couple(const Eigen::VectorXd& coupling, double dt);
+  void couple(const Eigen::VectorXd& coupling);
   /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y in the ordered dofs).
   void correct_for_couplings(Eigen::MatrixXd& y) const;
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxCoupled * dim, kMaxCoupled * dim>;
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxCoupled * dim, 1>;
   long m_factor_version = 0, m_z_version = -1;
-  int m_coupled = 0;                                ///< how many nodes are coupled now
-  std::array<int, kMaxCoupled> m_coupled_node{};    ///< their free indices
-  std::array<double, kMaxCoupled> m_coupled_k{};    ///< and stiffnesses
-  Eigen::MatrixXd m_z;                              ///< ordered dofs x (dim per coupled node): H^-1 U
-  Eigen::LDLT<Small> m_capacitance;                 ///< K^-1 / dt^2 + U^T Z
+  int m_coupled = 0;                             ///< how many nodes are coupled now
+  std::array<int, kMaxCoupled> m_coupled_node{}; ///< their free indices
+  std::array<double, kMaxCoupled> m_coupled_k{}; ///< and their dt^2 k + dt c
+  Eigen::MatrixXd m_z;                           ///< ordered dofs x (dim per coupled node): H^-1 U
+  Eigen::LDLT<Small> m_capacitance;              ///< C^-1 + U^T Z
   mutable SmallVec m_small;
 };
 
