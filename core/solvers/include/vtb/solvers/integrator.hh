@@ -23,10 +23,10 @@ template <int dim> struct State {
   Nodal<dim> applied;
   /// The stiffness (N/m, isotropic) of the couplings whose forces `applied` holds (a user's
   /// pull: k (target - x) at its node; a haptic contact: the virtual coupling's k shared by
-  /// the touched facet's weights), per node; empty or zero where there is none. The tensor
-  /// filter and implicit Euler solve them implicitly, as they do their springs (without it a
-  /// pull 4x a spring's stiffness diverged at dt = 10 ms); the scalar filters apply the force
-  /// alone (their extra mass holds it).
+  /// the touched facet's weights), per node; empty or zero where there is none. The tensor and
+  /// full filters and implicit Euler solve them implicitly, as they do their springs (without
+  /// it a pull 4x a spring's stiffness diverged at dt = 10 ms); the multigrid and neighbour
+  /// filters apply the force alone.
   Eigen::VectorXd applied_stiffness;
   /// The damping (N s/m, isotropic) of the same couplings (a contact's -c (v - v_handle)),
   /// per node; empty or zero where there is none. Solved implicitly with the stiffness.
