@@ -46,8 +46,12 @@ Action add_run(CLI::App& app) {
     if (!r.filter.empty())
       filter = " (" + r.filter +
                (r.filter_requested != r.filter ? " filter, picked by " + r.filter_requested : " filter") + ")";
+    std::string springs; // which constants, and what auto or the fit's guard chose
+    if (!r.calibration.empty())
+      springs = " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
+    if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
     std::cout << "vtb run: " << scene.name << " with " << r.solver << filter << ", " << r.nodes << " nodes, "
-              << r.springs << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
+              << r.springs << springs << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
               << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "
               << r.step_seconds.p99 * 1e6 << " us; max strain " << r.max_strain << "; outputs in " << out.string()
               << "\n";

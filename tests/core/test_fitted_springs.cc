@@ -1,6 +1,7 @@
 // springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
 // static cases that the fit never saw (its training loads are the free mesh's modes).
 #include "support/fresh_dir.hh"
+#include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
@@ -13,7 +14,9 @@
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <iostream>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -152,30 +155,87 @@ TEST(FittedSprings, BringAnUnstructured3DSlabWithinFivePercentOfTheFem) {
   }
 }
 
-TEST(FittedSprings, AreCachedPerMeshAndMaterial) {
+/// The clamped block's static answer, springs against P1: `bottom` clamped, `load` spread over
+/// `top`, relative L2 error over all nodes.
+double block_error(const Mesh3& m, const Eigen::VectorXd& k, double E, double nu, const std::vector<bool>& fixed,
+                   const Eigen::VectorXd& f) {
+  const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(m, E, nu, 1.0), f, fixed, 3);
+  const Eigen::VectorXd us = clamped_solve(spring_matrix(m, k), f, fixed, 3);
+  return (us - ufem).norm() / ufem.norm();
+}
+
+TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
+  // The held-out case of issue #25: a CGAL Mesh_3 block clamped at its bottom, its top sheared,
+  // pressed and twisted, nu 0.3 (off the Cauchy value, so no network is exact). The free-body
+  // fit was worse than Lloyd here; trained on the clamped body's modes (the scene's supports)
+  // the fitted network is held to the issue's 5 % goal on each load and to half Lloyd's error.
+  // No load below is a training mode: training sees the lowest clamped modes, not these
+  // tractions.
+  const Mesh3 m = mesh_box({0.04, 0.04, 0.04}, 500);
+  const double E = 5.0e4, nu = 0.3;
+  std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()), false);
+  for (int v : m.groups.at("bottom").nodes) fixed[static_cast<std::size_t>(v)] = true;
+  FitOptions o;
+  o.supports = m.groups.at("bottom").nodes;
+  std::sort(o.supports.begin(), o.supports.end());
+  FitReport rep;
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, 1.0, o, &rep);
+  const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, 1.0);
+  EXPECT_EQ(rep.chosen, "fitted") << "the guard keeps the fit where it validates better";
+  const std::vector<int>& top = m.groups.at("top").nodes;
+  const auto load = [&](auto&& per_node) {
+    Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * m.num_nodes());
+    for (int v : top) f.segment<3>(3 * v) = per_node(m.points.col(v));
+    return f;
+  };
+  const Eigen::Vector3d centre(0.02, 0.02, 0.04);
+  const std::pair<const char*, Eigen::VectorXd> loads[] = {
+      {"shear", load([](const Eigen::Vector3d&) { return Eigen::Vector3d(1e-3, 0, 0); })},
+      {"press", load([](const Eigen::Vector3d&) { return Eigen::Vector3d(0, 0, -1e-3); })},
+      {"twist", load([&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+         const Eigen::Vector3d r = x - centre;
+         return 0.05 * Eigen::Vector3d(-r.y(), r.x(), 0);
+       })}};
+  for (const auto& [name, f] : loads) {
+    const double fitted = block_error(m, k, E, nu, fixed, f), before = block_error(m, lloyd, E, nu, fixed, f);
+    EXPECT_LT(fitted, 0.05) << name << ", lloyd " << before;
+    EXPECT_LT(fitted, 0.5 * before) << name;
+    std::cout << name << ": lloyd " << before << ", fitted " << fitted << "\n";
+  }
+}
+
+TEST(FittedSprings, AreCachedPerMeshMaterialAndSupports) {
   // The first fit writes the cache, a second call on the same mesh and material reads the same
-  // constants back; another material misses; a damaged file is refitted and replaced; an
-  // empty VTB_CACHE_DIR turns the cache off.
+  // constants back; another material or other supports miss; a damaged file is refitted and
+  // replaced; an empty VTB_CACHE_DIR turns the cache off.
   const test::FreshDir dir;
   ::setenv("VTB_CACHE_DIR", dir.path().c_str(), 1);
   const Mesh2 m = generate_rectangle({0.1, 0.02}, {10, 2});
-  bool hit = true;
-  const Eigen::VectorXd a = cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit);
-  EXPECT_FALSE(hit);
-  EXPECT_EQ(a, fitted_stiffness(m, 1.0e4, 0.3, 0.01));
-  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
-  EXPECT_TRUE(hit);
-  cached_fitted_stiffness(m, 2.0e4, 0.3, 0.01, &hit);
-  EXPECT_FALSE(hit) << "another material";
+  CachedFit info;
+  info.hit = true;
+  const Eigen::VectorXd a = cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info);
+  EXPECT_FALSE(info.hit);
+  FitReport rep;
+  EXPECT_EQ(a, fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &rep));
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
+  EXPECT_TRUE(info.hit);
+  EXPECT_EQ(info.chosen, rep.chosen) << "the cache keeps what the guard chose";
+  EXPECT_EQ(info.validation, rep.validation()) << "and its validation error";
+  cached_fitted_stiffness(m, 2.0e4, 0.3, 0.01, {}, &info);
+  EXPECT_FALSE(info.hit) << "another material";
+  const std::vector<int> left = m.groups.at("left").nodes;
+  const Eigen::VectorXd clamped = cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, left, &info);
+  EXPECT_FALSE(info.hit) << "other supports";
+  EXPECT_NE(clamped, a) << "the supported body's modes train other springs";
   for (const auto& f : std::filesystem::directory_iterator(dir.path())) std::filesystem::resize_file(f.path(), 20);
-  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
-  EXPECT_FALSE(hit) << "a damaged file is refitted";
-  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit), a);
-  EXPECT_TRUE(hit) << "and replaced";
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
+  EXPECT_FALSE(info.hit) << "a damaged file is refitted";
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
+  EXPECT_TRUE(info.hit) << "and replaced";
   ::setenv("VTB_CACHE_DIR", "", 1);
   EXPECT_TRUE(fit_cache_dir().empty());
-  cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, &hit);
-  EXPECT_FALSE(hit);
+  cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info);
+  EXPECT_FALSE(info.hit);
   ::unsetenv("VTB_CACHE_DIR");
 }
 

@@ -178,7 +178,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nfilter = \"partial\"",
                 "[solver].filter: = \"partial\": must be one of auto neighbors full"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nsprings = \"hooke\"",
-                "[solver].springs: = \"hooke\": must be one of lloyd van-gelder fitted"},
+                "[solver].springs: = \"hooke\": must be one of auto lloyd van-gelder fitted"},
         BadCase{"kind = \"filtered\"", "kind = \"fem\"\nkinematics = \"large\"",
                 "[solver].kinematics: = \"large\": must be one of linear nonlinear"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nstrain_limit = -0.1",

@@ -43,8 +43,13 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   if (r.solver != solvers::kFem) {
     j["courant_dt_estimate"] = r.courant_dt;
     j["calibration"] = r.calibration;
+    j["calibration_requested"] = r.calibration_requested;
     j["calibration_seconds"] = r.calibration_seconds;
-    if (r.calibration == "fitted") j["calibration_cached"] = r.calibration_cached;
+    if (std::isfinite(r.calibration_validation)) { // a fit ran (or was read from the cache)
+      j["calibration_cached"] = r.calibration_cached;
+      j["calibration_validation_error"] = r.calibration_validation;
+    }
+    if (!r.calibration_note.empty()) j["calibration_note"] = r.calibration_note;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }
   // Counts (cells, dofs, steps, iterations, degree...) print as integers, not 600.0; times,

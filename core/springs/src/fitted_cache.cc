@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '4', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '5', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -24,7 +24,8 @@ struct Fnv {
   void add(double x) { add(&x, sizeof x); }
 };
 
-template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double E, double nu, double t) {
+template <int dim>
+std::uint64_t key(const Mesh<dim>& mesh, double E, double nu, double t, const std::vector<int>& supports) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
@@ -32,20 +33,33 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double E, double nu,
   f.add(mesh.points.data(), sizeof(double) * static_cast<std::size_t>(mesh.points.size()));
   for (const auto& c : mesh.cells) f.add(c.data(), sizeof(int) * c.size());
   for (const double x : {E, nu, dim == 2 ? t : 1.0}) f.add(x);
+  const auto count = supports.size();
+  f.add(&count, sizeof count);
+  f.add(supports.data(), sizeof(int) * count);
   const FitOptions o;
-  for (const double x :
-       {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, double(o.cg_iterations)})
+  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting,
+                         double(o.cg_iterations), double(o.holdout)})
     f.add(x);
   return f.h;
 }
 
-bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k) {
+constexpr const char* kChosen[3] = {"fitted", "lloyd", "van-gelder"};
+
+/// The file: the magic, which constants were chosen (an index into kChosen) and their
+/// validation error (two doubles), then the constants.
+bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k, CachedFit& info) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return false;
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::size_t want = sizeof kMagic + sizeof(double) * static_cast<std::size_t>(k.size());
+  const std::size_t head = sizeof kMagic + 2 * sizeof(double);
+  const std::size_t want = head + sizeof(double) * static_cast<std::size_t>(k.size());
   if (bytes.size() != want || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) return false;
-  std::memcpy(k.data(), bytes.data() + sizeof kMagic, want - sizeof kMagic);
+  double meta[2];
+  std::memcpy(meta, bytes.data() + sizeof kMagic, sizeof meta);
+  std::memcpy(k.data(), bytes.data() + head, want - head);
+  if (!(meta[0] == 0 || meta[0] == 1 || meta[0] == 2)) return false;
+  info.chosen = kChosen[static_cast<int>(meta[0])];
+  info.validation = meta[1];
   return k.allFinite() && (k.array() >= 0).all();
 }
 
@@ -59,28 +73,41 @@ std::filesystem::path fit_cache_dir() {
 }
 
 template <int dim>
-Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t, bool* hit) {
+Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
+                                        const std::vector<int>& supports, CachedFit* info) {
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
-  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, E, nu, t)));
+  std::snprintf(name, sizeof name, "fitted-%016llx.bin",
+                static_cast<unsigned long long>(key(mesh, E, nu, t, supports)));
   Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
-  const bool found = !dir.empty() && read_cache(dir / name, k);
-  if (hit) *hit = found;
-  if (found) return k;
-  k = fitted_stiffness(mesh, E, nu, t);
-  if (dir.empty()) return k;
-  try {
-    ensure_directory(dir);
-    write_file_atomically(dir / name, [&](std::ostream& os) {
-      os.write(kMagic, sizeof kMagic);
-      os.write(reinterpret_cast<const char*>(k.data()), static_cast<std::streamsize>(sizeof(double) * k.size()));
-    });
-  } catch (const std::exception&) { // best effort: a read-only or full cache is passed over
+  CachedFit got;
+  got.hit = !dir.empty() && read_cache(dir / name, k, got);
+  if (!got.hit) {
+    FitOptions options;
+    options.supports = supports;
+    FitReport report;
+    k = fitted_stiffness(mesh, E, nu, t, options, &report);
+    got.chosen = report.chosen;
+    got.validation = report.validation();
+    if (!dir.empty()) try {
+        ensure_directory(dir);
+        const double meta[2] = {report.chosen == "lloyd" ? 1.0 : report.chosen == "van-gelder" ? 2.0 : 0.0,
+                                got.validation};
+        write_file_atomically(dir / name, [&](std::ostream& os) {
+          os.write(kMagic, sizeof kMagic);
+          os.write(reinterpret_cast<const char*>(meta), sizeof meta);
+          os.write(reinterpret_cast<const char*>(k.data()), static_cast<std::streamsize>(sizeof(double) * k.size()));
+        });
+      } catch (const std::exception&) { // best effort: a read-only or full cache is passed over
+      }
   }
+  if (info) *info = got;
   return k;
 }
 
-template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, bool*);
-template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, bool*);
+template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,
+                                                    CachedFit*);
+template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, const std::vector<int>&,
+                                                    CachedFit*);
 
 } // namespace vtb

@@ -1,5 +1,6 @@
 #include "vtb/springs/fitted_springs.hh"
 
+#include "vtb/linalg/batched_ldlt.hh"
 #include "vtb/linalg/nodal.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/springs/calibration.hh"
@@ -11,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 
 namespace vtb {
@@ -22,6 +24,7 @@ using Eigen::VectorXd;
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
 /// Rigid motions of the mesh: dim translations and the rotations about the centroid.
+/// (The lowest modes below take R with no columns for a supported body.)
 template <int dim> MatrixXd rigid_modes(const Mesh<dim>& mesh) {
   const int n = mesh.num_nodes();
   constexpr int r = dim == 2 ? 3 : 6;
@@ -94,9 +97,7 @@ public:
       }
     SpMat A(m_size, m_size);
     A.setFromTriplets(kept.begin(), kept.end());
-    if (!m_analysed) m_ldlt.analyzePattern(A), m_analysed = true;
-    m_ldlt.factorize(A);
-    if (m_ldlt.info() != Eigen::Success)
+    if (!m_ldlt.factorize(A))
       throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
                        "pinned (is the mesh in one piece?)");
   }
@@ -104,7 +105,7 @@ public:
     MatrixXd reduced(m_size, rhs.cols());
     for (Eigen::Index d = 0; d < rhs.rows(); ++d)
       if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) reduced.row(r) = rhs.row(d);
-    const MatrixXd x = m_ldlt.solve(reduced);
+    const MatrixXd x = m_ldlt.solve(reduced); // all columns in one sweep of the factor
     MatrixXd out = MatrixXd::Zero(rhs.rows(), rhs.cols());
     for (Eigen::Index d = 0; d < rhs.rows(); ++d)
       if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) out.row(d) = x.row(r);
@@ -114,8 +115,7 @@ public:
 private:
   std::vector<int> m_reduced;
   int m_size = 0;
-  bool m_analysed = false;
-  Eigen::SimplicialLDLT<SpMat> m_ldlt;
+  BatchedLDLT m_ldlt;
 };
 
 /// The lowest `count` non-rigid modes of K phi = lambda M phi (M diagonal) by subspace
@@ -128,7 +128,9 @@ MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass
   const int block = count + std::max(8, count / 2);
   const MatrixXd RtMR = R.transpose() * mass.asDiagonal() * R;
   const Eigen::LLT<MatrixXd> rtmr(RtMR);
-  auto project = [&](MatrixXd& Y) { Y -= R * rtmr.solve(R.transpose() * (mass.asDiagonal() * Y)); };
+  auto project = [&](MatrixXd& Y) {
+    if (R.cols() > 0) Y -= R * rtmr.solve(R.transpose() * (mass.asDiagonal() * Y));
+  };
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   MatrixXd X(N, block);
@@ -164,12 +166,28 @@ template <int dim> void rest_stiffness_triplets(const SpringNetwork<dim>& net, c
 }
 
 /// The training set: M-orthonormal lowest non-rigid modes of the free mesh, projected off the
-/// rigid motions and scaled to unit norm (targets T), their loads F = K_fem T, the orthonormal
-/// rigid basis Q, and the pins that make the free stiffnesses invertible.
+/// rigid motions (or of the supported body), scaled (targets T), their loads F = K_fem T, the
+/// orthonormal rigid basis Q (no columns for a supported body), and the pins that make the
+/// stiffnesses invertible (the supports' dofs, or a statically determinate set). Tv and Fv
+/// are the held-out modes and their loads (the validation).
 struct Training {
-  MatrixXd Q, T, F;
+  MatrixXd Q, T, F, Tv, Fv;
   std::vector<int> pins;
+  bool supported = false;
 };
+
+/// Whether holding the supports' nodes removes every rigid motion (R restricted to their dofs
+/// has full column rank); otherwise the free body's modes are the training set.
+template <int dim> bool supports_hold(const Mesh<dim>& mesh, const std::vector<int>& supports) {
+  if (supports.empty()) return false;
+  const MatrixXd R = rigid_modes(mesh);
+  MatrixXd Rs(dim * static_cast<Eigen::Index>(supports.size()), R.cols());
+  for (std::size_t a = 0; a < supports.size(); ++a)
+    Rs.middleRows(dim * static_cast<Eigen::Index>(a), dim) = R.middleRows(dim * supports[a], dim);
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(Rs);
+  qr.setThreshold(1e-8);
+  return qr.rank() == R.cols();
+}
 
 /// The fit's state at one x: the network's answers U to the training loads, the residual
 /// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
@@ -264,24 +282,42 @@ VectorXd normal_cg(const Fit<dim>& fit, double shift, const VectorXd& b, int max
 }
 
 template <int dim>
-Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, double weighting) {
+Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, const FitOptions& o) {
   const int n = mesh.num_nodes(), N = dim * n;
   Training tr;
   const SpMat K = fem_stiffness_matrix(mesh, E, nu, thickness);
-  tr.pins = pinned_dofs(mesh);
+  tr.supported = supports_hold(mesh, o.supports);
+  if (tr.supported) {
+    for (const int v : o.supports)
+      for (int i = 0; i < dim; ++i) tr.pins.push_back(dim * v + i);
+  } else {
+    tr.pins = pinned_dofs(mesh);
+  }
   PinnedSolver fem_solver(N, tr.pins);
   fem_solver.factorize(K);
   VectorXd mass(N);
   const VectorXd m_nodes = lumped_masses(mesh, 1.0, thickness);
   for (int v = 0; v < n; ++v) mass.template segment<dim>(dim * v).setConstant(m_nodes[v]);
-  const MatrixXd R = rigid_modes(mesh);
-  tr.Q = Eigen::HouseholderQR<MatrixXd>(R).householderQ() * MatrixXd::Identity(N, R.cols());
+  const MatrixXd R = tr.supported ? MatrixXd(N, 0) : rigid_modes(mesh);
+  tr.Q = tr.supported ? MatrixXd(N, 0)
+                      : MatrixXd(Eigen::HouseholderQR<MatrixXd>(R).householderQ() * MatrixXd::Identity(N, R.cols()));
+  // modes to train on and, every holdout-th, one more held out.
+  const int total = o.holdout > 1 ? modes + modes / (o.holdout - 1) : modes;
   VectorXd lambda;
-  tr.T = lowest_modes(K, fem_solver, mass, R, modes, lambda);
-  tr.T -= tr.Q * (tr.Q.transpose() * tr.T);
-  tr.T.colwise().normalize();
-  for (int m = 0; m < modes; ++m) tr.T.col(m) *= std::pow(lambda[0] / lambda[m], weighting);
+  MatrixXd all = lowest_modes(K, fem_solver, mass, R, total, lambda);
+  all -= tr.Q * (tr.Q.transpose() * all);
+  all.colwise().normalize();
+  for (int m = 0; m < total; ++m) all.col(m) *= std::pow(lambda[0] / lambda[m], o.weighting);
+  const int held = total - modes;
+  tr.T.resize(N, modes);
+  tr.Tv.resize(N, held);
+  for (int m = 0, a = 0, b = 0; m < total; ++m)
+    if (held > 0 && m % o.holdout == o.holdout - 1 && b < held)
+      tr.Tv.col(b++) = all.col(m);
+    else
+      tr.T.col(a++) = all.col(m);
   tr.F = K * tr.T;
+  tr.Fv = K * tr.Tv;
   return tr;
 }
 
@@ -329,16 +365,16 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   const SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
   const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());
-  if (N - (dim == 2 ? 3 : 6) < modes + 8)
-    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) +
-                     " nodes; the fit needs at least " +
-                     std::to_string((modes + 8 + (dim == 2 ? 3 : 6) + dim - 1) / dim));
+  const int held_dofs = fit_pinned_dofs(mesh, options.supports), need = fit_dofs_needed<dim>(options);
+  if (N - held_dofs < need)
+    throw InputError("[solver].springs = \"fitted\": the mesh has " + std::to_string(n) + " nodes, " +
+                     std::to_string(N - held_dofs) + " dofs free; the fit needs at least " + std::to_string(need));
   Nodal<dim> dir(dim, ns);
   for (Eigen::Index s = 0; s < ns; ++s)
     dir.col(s) = (mesh.points.col(edges[static_cast<std::size_t>(s)][1]) -
                   mesh.points.col(edges[static_cast<std::size_t>(s)][0]))
                      .normalized();
-  const Training tr = training_set(mesh, E, nu, thickness, modes, options.weighting);
+  const Training tr = training_set(mesh, E, nu, thickness, modes, options);
   PinnedSolver solver(N, tr.pins);
   // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
   // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
@@ -359,8 +395,57 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   fit.evaluate(x);
   x = levenberg_marquardt(fit, x, options, rep);
   rep.fitted_residual = std::sqrt(fit.residual().squaredNorm() / modes);
+  VectorXd k = prior.array() * x.array().exp();
+  // The guard: the held-out modes' answers with each candidate; the best one is returned.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  rep.validation_lloyd = rep.validation_van_gelder = rep.validation_fitted = nan;
+  if (tr.Tv.cols() > 0) {
+    const Training held{tr.Q, tr.Tv, tr.Fv, {}, {}, tr.pins, tr.supported};
+    const double norm = tr.Tv.norm();
+    auto validation = [&](const VectorXd& springs) {
+      return std::sqrt(2 * Fit<dim>(net, dir, springs, held, solver).evaluate(zero)) / norm;
+    };
+    rep.validation_fitted = validation(k);
+    rep.validation_lloyd = validation(lloyd);
+    rep.validation_van_gelder = validation(vg);
+    if (rep.validation_lloyd < rep.validation_fitted && rep.validation_lloyd <= rep.validation_van_gelder)
+      k = lloyd, rep.chosen = "lloyd";
+    else if (rep.validation_van_gelder < rep.validation_fitted)
+      k = vg, rep.chosen = "van-gelder";
+  }
   if (report) *report = rep;
-  return prior.array() * x.array().exp();
+  return k;
+}
+
+template <int dim> int fit_dofs_needed(const FitOptions& options) {
+  const int modes = options.modes > 0 ? options.modes : (dim == 2 ? 16 : 24);
+  const int total = options.holdout > 1 ? modes + modes / (options.holdout - 1) : modes;
+  return total + std::max(8, total / 2);
+}
+
+template <int dim> int fit_pinned_dofs(const Mesh<dim>& mesh, const std::vector<int>& supports) {
+  return supports_hold(mesh, supports) ? dim * static_cast<int>(supports.size()) : (dim == 2 ? 3 : 6);
+}
+
+template <int dim> std::string fit_affordable(const Mesh<dim>& mesh, const std::vector<int>& supports) {
+  const int n = mesh.num_nodes(), budget = dim == 2 ? kAutoFitNodes2D : kAutoFitNodes3D;
+  if (n > budget)
+    return "a fit of " + std::to_string(n) + " nodes is beyond auto's budget (" + std::to_string(budget) + " in " +
+           std::to_string(dim) + "D; springs = \"fitted\" fits anyway)";
+  if (dim * n - fit_pinned_dofs(mesh, supports) < fit_dofs_needed<dim>())
+    return "the mesh is too small to fit (" + std::to_string(n) + " nodes)";
+  return {};
+}
+
+template int fit_dofs_needed<2>(const FitOptions&);
+template int fit_dofs_needed<3>(const FitOptions&);
+template int fit_pinned_dofs<2>(const Mesh<2>&, const std::vector<int>&);
+template int fit_pinned_dofs<3>(const Mesh<3>&, const std::vector<int>&);
+template std::string fit_affordable<2>(const Mesh<2>&, const std::vector<int>&);
+template std::string fit_affordable<3>(const Mesh<3>&, const std::vector<int>&);
+
+double FitReport::validation() const {
+  return chosen == "lloyd" ? validation_lloyd : chosen == "van-gelder" ? validation_van_gelder : validation_fitted;
 }
 
 template Eigen::VectorXd fitted_stiffness<2>(const Mesh<2>&, double, double, double, const FitOptions&, FitReport*);

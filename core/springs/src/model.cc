@@ -7,7 +7,10 @@ namespace vtb {
 template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh) {
   Model<dim> model;
   static_cast<Problem<dim>&>(model) = build_problem<dim>(scene, std::move(mesh));
-  model.net = build_network(model.mesh, scene.material, scene.solver.springs);
+  std::vector<int> supports; // the fit trains on the body as the scene holds it
+  for (int v = 0; v < model.num_nodes(); ++v)
+    if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
+  model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports);
   return model;
 }
 
@@ -20,6 +23,9 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
   rep.free_nodes = static_cast<int>(model.free_nodes.size());
   rep.duration = model.duration;
   rep.calibration = model.net.calibration;
+  rep.calibration_requested = model.net.calibration_requested;
+  rep.calibration_validation = model.net.calibration_validation;
+  rep.calibration_note = model.net.calibration_note;
   rep.calibration_seconds = model.net.calibration_seconds;
   rep.calibration_cached = model.net.calibration_cached;
   rep.effective_poisson_ratio = spring_poisson_ratio(dim);

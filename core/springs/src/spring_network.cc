@@ -2,6 +2,7 @@
 
 #include "vtb/springs/calibration.hh"
 #include "vtb/springs/fitted_cache.hh"
+#include "vtb/springs/fitted_springs.hh"
 
 #include <algorithm>
 #include <chrono>
@@ -10,22 +11,46 @@
 namespace vtb {
 
 template <int dim>
-SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat, std::string_view calibration) {
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat, std::string_view calibration,
+                                 const std::vector<int>& supports) {
   SpringNetwork<dim> net;
   net.rest = mesh.points;
   net.mass = lumped_masses(mesh, mat.density, mat.thickness);
   net.edge = unique_edges(mesh);
-  net.calibration = std::string(calibration);
+  net.calibration_requested = std::string(calibration);
   const auto start = std::chrono::steady_clock::now();
+  if (calibration == "auto") {
+    const std::string why = fit_affordable(mesh, supports);
+    calibration = why.empty() ? "fitted" : "lloyd";
+    if (!why.empty()) net.calibration_note = "springs = \"auto\" uses lloyd: " + why;
+  }
+  net.calibration = std::string(calibration);
   if (calibration == "lloyd")
     net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
-  else if (calibration == "fitted")
-    net.stiffness =
-        cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, &net.calibration_cached);
-  else
-    throw InputError("[solver].springs = \"" + std::string(calibration) + "\": must be lloyd, van-gelder or fitted");
+  else if (calibration == "fitted") {
+    CachedFit fit;
+    try {
+      net.stiffness =
+          cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit);
+    } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
+      if (net.calibration_requested != "auto") throw;
+      net.calibration = "lloyd";
+      net.calibration_note = std::string("springs = \"auto\" uses lloyd: ") + e.what();
+      net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
+      fit.chosen = "lloyd";
+      fit.validation = std::numeric_limits<double>::quiet_NaN();
+    }
+    net.calibration_cached = fit.hit;
+    net.calibration_validation = fit.validation;
+    if (fit.chosen != "fitted" && net.calibration_note.empty()) {
+      net.calibration = fit.chosen;
+      net.calibration_note = "the fit kept " + fit.chosen + "'s constants: they answer its held-out modes better";
+    }
+  } else
+    throw InputError("[solver].springs = \"" + std::string(calibration) +
+                     "\": must be auto, lloyd, van-gelder or fitted");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;
@@ -81,7 +106,8 @@ template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const No
 }
 
 #define VTB_INSTANTIATE(D)                                                                                             \
-  template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view);                   \
+  template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view,                    \
+                                             const std::vector<int>&);                                               \
   template double max_strain<D>(const SpringNetwork<D>&, const Nodal<D>&);                                             \
   template double elastic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);                                         \
   template double kinetic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);

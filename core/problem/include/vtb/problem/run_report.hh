@@ -6,6 +6,7 @@
 #include "vtb/linalg/nodal.hh"
 
 #include <span>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -45,9 +46,12 @@ struct RunReport {
   double max_rotation = 0; ///< max over samples of the largest cell rotation, radians (max_rotation; the FEM's too)
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
-  std::string calibration;
-  double calibration_seconds = 0;  ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
-  bool calibration_cached = false; ///< "fitted": read from the fit cache instead of fitted
+  std::string calibration;           ///< spring solvers: the constants used (lloyd, van-gelder, fitted)
+  std::string calibration_requested; ///< the scene's [solver].springs (auto, or one of the above)
+  double calibration_seconds = 0;    ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
+  bool calibration_cached = false;   ///< a fit's constants read from the fit cache instead of fitted
+  double calibration_validation = std::numeric_limits<double>::quiet_NaN(); ///< the fit's held-out error, if one ran
+  std::string calibration_note; ///< why the constants are not what was asked for (auto's fallback, the fit's guard)
   double effective_poisson_ratio = 0;
   std::string filter;           ///< filtered: the filter it ran
   std::string filter_requested; ///< filtered: the scene's [solver].filter (auto, or the filter itself)

@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 
 #include <string>
+#include <vector>
 
 namespace vtb {
 
@@ -38,6 +39,14 @@ struct FitOptions {
   double weighting = 1;
   Eigen::VectorXd
       start; ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior
+  /// Nodes the scene holds (its fixes and drives), sorted: the training modes are then the
+  /// supported body's (K_ff phi = lambda M_ff phi), whose low modes and boundary layers are
+  /// what a clamped scene's answers are made of. Empty: the free body's modes.
+  std::vector<int> supports;
+  /// Every `holdout`-th training mode (of modes + modes / (holdout - 1) computed) is held out of
+  /// the fit and answers the validation: the fit returns whichever of itself, Lloyd and van
+  /// Gelder answers the held-out modes best. 0: nothing held out (the fit is returned).
+  int holdout = 5;
 };
 
 struct FitReport {
@@ -45,6 +54,13 @@ struct FitReport {
   double lloyd_residual = 0; ///< sqrt(sum_m ||P u_m - phi_m||^2 / modes) with Lloyd's springs
   std::string prior; ///< the start and the pull's centre: "lloyd" or "van-gelder", whichever fits the modes better
   double fitted_residual = 0; ///< the same with the fitted springs
+  /// Relative error ||P u_m - phi_m|| / ||phi_m|| over the held-out modes (the validation), per
+  /// candidate; NaN when nothing is held out.
+  double validation_lloyd = 0, validation_van_gelder = 0, validation_fitted = 0;
+  /// The constants returned: "fitted", or "lloyd" / "van-gelder" when a prior answers the
+  /// held-out modes better than the fit (the guard: never worse than the better prior).
+  std::string chosen = "fitted";
+  double validation() const; ///< the chosen constants' validation error
 };
 
 /// The fitted spring constants, per edge of unique_edges(mesh) (plane stress with thickness
@@ -52,5 +68,17 @@ struct FitReport {
 template <int dim>
 Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness,
                                  const FitOptions& options = {}, FitReport* report = nullptr);
+
+/// Free dofs the fit needs beyond its pins (modes, held-out modes and the subspace's margin),
+/// and the fit's pinned dofs with these supports; the fit refuses a mesh with fewer.
+template <int dim> int fit_dofs_needed(const FitOptions& options = {});
+template <int dim> int fit_pinned_dofs(const Mesh<dim>& mesh, const std::vector<int>& supports);
+
+/// Whether `springs = "auto"` fits this mesh: empty if so, else why not (one phrase). Its
+/// budget is a node count, not a clock, so that a scene gets the same springs on any machine:
+/// 3D meshes up to kAutoFitNodes3D nodes (the fit's cost grows with the 3D factor's fill:
+/// docs/fidelity.md's cost ladder), 2D up to kAutoFitNodes2D, and meshes large enough to fit.
+inline constexpr int kAutoFitNodes2D = 20000, kAutoFitNodes3D = 2500;
+template <int dim> std::string fit_affordable(const Mesh<dim>& mesh, const std::vector<int>& supports);
 
 } // namespace vtb

@@ -6,6 +6,10 @@
 #include "vtb/problem/scene.hh"
 #include "vtb/springs/spring_kernels.hh"
 
+#include <limits>
+#include <string>
+#include <vector>
+
 namespace vtb {
 
 template <int dim> struct SpringNetwork {
@@ -16,9 +20,16 @@ template <int dim> struct SpringNetwork {
   Eigen::VectorXd stiffness;            ///< k per spring, N/m
   Eigen::VectorXd damping;              ///< c = tau k per spring, N s/m
   double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
-  std::string calibration;              ///< "lloyd" | "van-gelder" | "fitted"
+  std::string calibration;              ///< the constants used: "lloyd" | "van-gelder" | "fitted"
+  std::string calibration_requested;    ///< the scene's [solver].springs: the above or "auto"
   double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
-  bool calibration_cached = false;      ///< "fitted": the constants came from the fit cache (fitted_cache.hh)
+  bool calibration_cached = false;      ///< the fit's constants came from the fit cache (fitted_cache.hh)
+  /// When a fit ran (or was read): the used constants' relative error on the fit's held-out
+  /// modes (FitReport::validation); NaN otherwise.
+  double calibration_validation = std::numeric_limits<double>::quiet_NaN();
+  /// One line when the constants are not what was asked for: auto beyond its budget, or the
+  /// fit's guard keeping a prior. Empty otherwise.
+  std::string calibration_note;
 
   /// Adjacency in CSR form: the springs at node i are adj_spring[adj_ptr[i] .. adj_ptr[i+1]),
   /// leading to adj_node[...] (sorted by neighbour).
@@ -28,9 +39,12 @@ template <int dim> struct SpringNetwork {
   int num_springs() const { return static_cast<int>(edge.size()); }
 };
 
-/// Builds the network of a mesh with the scene's material and calibration.
+/// Builds the network of a mesh with the scene's material and calibration ("lloyd",
+/// "van-gelder", "fitted" or "auto": fitted within auto's budget, fit_affordable, else Lloyd).
+/// `supports`: the nodes the scene holds (sorted), which the fit trains with.
 template <int dim>
-SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration);
+SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration,
+                                 const std::vector<int>& supports = {});
 
 /// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
 /// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt
