@@ -23,8 +23,9 @@ inline std::vector<std::string> interactive_solvers() {
   return solvers::names(solvers::is_stepper);
 }
 using solvers::kFilterChoices;
-/// The spring calibrations ([solver].springs); "fitted" fits once per mesh and material (cached).
-inline constexpr std::array<const char*, 3> kSprings = {"lloyd", "van-gelder", "fitted"};
+/// The spring calibrations ([solver].springs); "fitted" fits once per mesh, Poisson ratio and
+/// supports (cached); "auto" fits within its budget, else Lloyd.
+inline constexpr std::array<const char*, 4> kSprings = {"auto", "lloyd", "van-gelder", "fitted"};
 
 /// What the panel controls; applying it rebuilds the model and the integrator.
 struct SimControls {
@@ -32,7 +33,7 @@ struct SimControls {
   std::string filter = solvers::kFilterAuto;
   double dt = 1e-3;
   double stiffness_scale = 1.0;
-  std::string springs = "lloyd"; ///< the calibration
+  std::string springs = "auto"; ///< the calibration requested (the model's net says which it used)
 };
 
 /// A hand pull: the node is pulled toward `target` by a spring of stiffness k (N/m).

@@ -120,8 +120,18 @@ template <int dim> void App<dim>::draw_panel() {
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(330, ImGui::GetIO().DisplaySize.y));
   ImGui::Begin("vtb", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoCollapse);
-  ImGui::Text("%d nodes, %d springs, %s", sim.model().num_nodes(), sim.model().net.num_springs(),
+  const auto& net = sim.model().net;
+  ImGui::Text("%d nodes, %d springs, %s", sim.model().num_nodes(), net.num_springs(),
               dim == 2 ? "2D plate" : "3D solid");
+  if (std::isfinite(net.calibration_validation))
+    ImGui::Text("springs: %s, held-out error %.1f %%", net.calibration.c_str(), 100 * net.calibration_validation);
+  else
+    ImGui::Text("springs: %s", net.calibration.c_str());
+  if (!net.calibration_note.empty()) {
+    ImGui::PushTextWrapPos(320);
+    ImGui::TextDisabled("%s", net.calibration_note.c_str());
+    ImGui::PopTextWrapPos();
+  }
   ImGui::Separator();
   draw_solver_controls();
   ImGui::Separator();

@@ -199,7 +199,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
         r.string("filter", solvers::kFilterAuto, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
     s.solver.momentum_correction = r.boolean("momentum_correction", true);
     s.solver.strain_limit = r.number("strain_limit", 0.0, non_negative);
-    s.solver.springs = r.string("springs", "lloyd", {"auto", "lloyd", "van-gelder", "fitted"});
+    s.solver.springs = r.string("springs", "auto", {"auto", "lloyd", "van-gelder", "fitted"});
     s.solver.rtol = r.number("rtol", 1e-8, positive);
     s.solver.atol = r.number("atol", 1e-12, positive);
     s.solver.linear_solver = r.string("linear_solver", "auto", {"auto", "direct", "cg", "cg-multigrid"});

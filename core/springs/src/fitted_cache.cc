@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '5', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '6', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -24,15 +24,17 @@ struct Fnv {
   void add(double x) { add(&x, sizeof x); }
 };
 
-template <int dim>
-std::uint64_t key(const Mesh<dim>& mesh, double E, double nu, double t, const std::vector<int>& supports) {
+/// The fit is equivariant in E t (its FEM, its priors, its loads scale with E t, its answers
+/// do not), so the key holds nu and not E or t: one fit per mesh, Poisson ratio and supports,
+/// and a stiffness sweep or the viewer's stiffness slider reads it back scaled.
+template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
   f.add(&d, sizeof d);
   f.add(mesh.points.data(), sizeof(double) * static_cast<std::size_t>(mesh.points.size()));
   for (const auto& c : mesh.cells) f.add(c.data(), sizeof(int) * c.size());
-  for (const double x : {E, nu, dim == 2 ? t : 1.0}) f.add(x);
+  f.add(nu);
   const auto count = supports.size();
   f.add(&count, sizeof count);
   f.add(supports.data(), sizeof(int) * count);
@@ -78,7 +80,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
   std::snprintf(name, sizeof name, "fitted-%016llx.bin",
-                static_cast<unsigned long long>(key(mesh, E, nu, t, supports)));
+                static_cast<unsigned long long>(key(mesh, nu, supports)));
   Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);
@@ -86,7 +88,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     FitOptions options;
     options.supports = supports;
     FitReport report;
-    k = fitted_stiffness(mesh, E, nu, t, options, &report);
+    k = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report); // unit E t, scaled below
     got.chosen = report.chosen;
     got.validation = report.validation();
     if (!dir.empty()) try {
@@ -102,7 +104,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
       }
   }
   if (info) *info = got;
-  return k;
+  return k * (E * (dim == 2 ? t : 1.0));
 }
 
 template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,

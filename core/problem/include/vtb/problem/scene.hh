@@ -77,7 +77,7 @@ struct SolverDesc {
   std::string filter = solvers::kFilterAuto;
   bool momentum_correction = true;
   double strain_limit = 0.0;     ///< 0 = off (the default: it changes the physics)
-  std::string springs = "lloyd"; ///< lloyd | van-gelder | fitted | auto (fitted within its budget, else lloyd)
+  std::string springs = "auto"; ///< auto (fitted within its budget, else lloyd) | lloyd | van-gelder | fitted
   double rtol = 1e-8;
   std::string linear_solver = "auto"; ///< implicit-euler: auto (direct in 2D, cg in 3D) | direct | cg
   double cg_tolerance = 1e-8;

@@ -1,9 +1,9 @@
 #pragma once
 /// \file
-/// The fitted springs' cache: the fit depends only on the mesh, the material and the scene's
-/// supports (never on its loads), so its constants are kept on disk per mesh, material and
-/// supports, and a later run on the same ones reads them instead of fitting again (0.2 s at 517
-/// nodes in 2D, seconds to tens of seconds in 3D). Best effort: a cache that cannot be read or
+/// The fitted springs' cache: the fit depends only on the mesh, the Poisson ratio and the
+/// scene's supports (never on its loads; the constants scale with E t), so they are kept on
+/// disk per mesh, Poisson ratio and supports, and a later run on the same ones, at any
+/// stiffness, reads them instead of fitting again (0.2 s at 517 nodes in 2D, seconds in 3D). Best effort: a cache that cannot be read or
 /// written is passed over, never an error.
 
 #include "vtb/meshes/mesh.hh"
@@ -28,9 +28,10 @@ struct CachedFit {
 };
 
 /// fitted_stiffness(mesh, E, nu, t) with the default options and these supports (sorted
-/// nodes), through the cache: the file fitted-<key>.bin, key a 64-bit FNV-1a hash of the
-/// format version, the points, the cells, the material, the supports and the fit's options. A
-/// file of the wrong size or header is refitted and replaced (atomically).
+/// nodes), through the cache: the fit at unit E t, scaled by E t (the fit is equivariant in
+/// them, so this equals the direct fit to rounding), kept in the file fitted-<key>.bin, key a
+/// 64-bit FNV-1a hash of the format version, the points, the cells, nu, the supports and the
+/// fit's options. A file of the wrong size or header is refitted and replaced (atomically).
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
