@@ -169,8 +169,8 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
   // pressed and twisted, nu 0.3 (off the Cauchy value, so no network is exact). The free-body
   // fit was worse than Lloyd here; trained on the clamped body's modes (the scene's supports)
   // the fitted network is held to the issue's 5 % goal on each load and to half Lloyd's error.
-  // No load below is a training mode: training sees the lowest clamped modes, not these
-  // tractions.
+  // No load below is in the training set: it sees the lowest clamped modes and the uniform
+  // stress states' tractions on the whole boundary, not these patches.
   const Mesh3 m = mesh_box({0.04, 0.04, 0.04}, 500);
   const double E = 5.0e4, nu = 0.3;
   std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()), false);
@@ -201,6 +201,28 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
     EXPECT_LT(fitted, 0.05) << name << ", lloyd " << before;
     EXPECT_LT(fitted, 0.5 * before) << name;
     std::cout << name << ": lloyd " << before << ", fitted " << fitted << "\n";
+  }
+}
+
+TEST(FittedSprings, TrainOnTheScenesSupportsAndHoldAClampedStripInTensionAndBending) {
+  // Issue #25's first case: the union-jack strip clamped at its left end, where Lloyd is 23 %
+  // off in tension (lattice theory: 1.305x too stiff) and 17 % in bending. Trained on the
+  // clamped strip's modes alone the fit reached only 10 % in tension (a clamped strip's first
+  // stretching mode is its third, at 240 times the first eigenvalue); with the uniform stress
+  // answers in the training set it is held to the 5 % goal on both loads.
+  const Mesh2 m = generate_rectangle({0.2, 0.02}, {40, 4});
+  const double E = 5.0e4, nu = 1.0 / 3.0, t = 0.001;
+  FitOptions o;
+  o.supports = m.groups.at("left").nodes;
+  std::sort(o.supports.begin(), o.supports.end());
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, t, o);
+  const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, t);
+  for (const Vec<2>& force : {Vec<2>(1e-4, 0), Vec<2>(0, 1e-6)}) {
+    const double fitted = cantilever_error<2>(m, k, E, nu, t, force);
+    const double before = cantilever_error<2>(m, lloyd, E, nu, t, force);
+    EXPECT_LT(fitted, 0.05) << "load " << force.transpose() << ", lloyd " << before;
+    EXPECT_LT(fitted, 0.5 * before) << "load " << force.transpose();
+    std::cout << "load " << force.transpose() << ": lloyd " << before << ", fitted " << fitted << "\n";
   }
 }
 

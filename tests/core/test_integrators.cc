@@ -545,9 +545,13 @@ TEST_P(StrainLimit, LowersTheStretchOfAFastPull) {
   // 10 % cap is feasible): unlimited, the corner's springs reach about 20 %. One projection
   // pass per step cannot hold every spring at the cap (a later projection stretches an earlier
   // spring again through the node they share), so what is asserted is that the pass lowers
-  // the worst stretch, not that it removes the excess.
+  // the worst stretch, not that it removes the excess. Lloyd's springs, named: the 20 % and
+  // the pass's effect were measured on them (the fitted 8 x 2 plate, whose fit its 27 nodes
+  // barely determine, reaches 28 % free and the single pass does not lower it).
   const std::string filter = GetParam();
   Model<2> model = test::model_from(test::plate_scene(8, 2, R"(
+[solver]
+springs = "lloyd"
 [[fix]]
 group = "left"
 [[drive]]

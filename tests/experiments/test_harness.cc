@@ -211,7 +211,11 @@ TEST(Sampling, EverySolverRecordsAtTheScenesSampleTimesWhateverItsStep) {
   for (std::size_t k = 0; k < odd.size(); ++k) EXPECT_NEAR(odd[k], expect[k], 1e-15);
   EXPECT_EQ(odd.back(), 1.0) << "the last sample is at the duration exactly";
   EXPECT_EQ(sample_times(0.1, 0.05).size(), 3u);
+  // Lloyd's springs, named: the 10 % bound on the time error below was sized on them (the
+  // fitted plate creeps further, and at dt = 20 ms reached 10.9 %).
   Scene s = parse_scene(test::pulled_plate(8, 2, R"(
+[solver]
+springs = "lloyd"
 )"),
                         "plate.toml", ".");
   s.duration = 0.1;

@@ -281,6 +281,36 @@ VectorXd normal_cg(const Fit<dim>& fit, double shift, const VectorXd& b, int max
   return d;
 }
 
+/// The FEM's answers to its own uniform stress states: for each unit strain e_j (3 in 2D, 6
+/// in 3D) the affine field u_j = e_j (x - centroid), whose loads K u_j are the boundary
+/// tractions of a uniform stress, answered with the body's supports (or pins, then projected
+/// off the rigid motions: the free body's answer is u_j itself), scaled so that each load has
+/// `load_size`, the training modes' load size (loads of one size, as for the modes). These are the
+/// loads of a tension, shear or compression test, which the low modes of a slender or
+/// clamped body barely contain (a clamped strip's first axial mode is its third, at 240 times
+/// the first eigenvalue).
+template <int dim>
+MatrixXd uniform_stress_answers(const Mesh<dim>& mesh, const SpMat& K, const PinnedSolver& fem, const MatrixXd& Q,
+                                double load_size) {
+  constexpr int count = dim * (dim + 1) / 2;
+  const int n = mesh.num_nodes();
+  const Vec<dim> c = mesh.points.rowwise().mean();
+  MatrixXd U = MatrixXd::Zero(dim * n, count);
+  int j = 0;
+  for (int a = 0; a < dim; ++a)
+    for (int b = a; b < dim; ++b, ++j)
+      for (int v = 0; v < n; ++v) {
+        const Vec<dim> x = mesh.points.col(v) - c;
+        U(dim * v + a, j) += (a == b ? 1.0 : 0.5) * x[b];
+        if (a != b) U(dim * v + b, j) += 0.5 * x[a];
+      }
+  MatrixXd T = fem.solve(K * U);
+  T -= Q * (Q.transpose() * T);
+  const MatrixXd F = K * T;
+  for (Eigen::Index col = 0; col < T.cols(); ++col) T.col(col) *= load_size / F.col(col).norm();
+  return T;
+}
+
 template <int dim>
 Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickness, int modes, const FitOptions& o) {
   const int n = mesh.num_nodes(), N = dim * n;
@@ -309,13 +339,18 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
   all.colwise().normalize();
   for (int m = 0; m < total; ++m) all.col(m) *= std::pow(lambda[0] / lambda[m], o.weighting);
   const int held = total - modes;
-  tr.T.resize(N, modes);
+  const MatrixXd stress = tr.supported && o.uniform_stress > 0
+                              ? MatrixXd(uniform_stress_answers(mesh, K, fem_solver, tr.Q, (K * all.col(0)).norm()) *
+                                         o.uniform_stress)
+                              : MatrixXd(N, 0);
+  tr.T.resize(N, modes + stress.cols());
   tr.Tv.resize(N, held);
   for (int m = 0, a = 0, b = 0; m < total; ++m)
     if (held > 0 && m % o.holdout == o.holdout - 1 && b < held)
       tr.Tv.col(b++) = all.col(m);
     else
       tr.T.col(a++) = all.col(m);
+  tr.T.rightCols(stress.cols()) = stress;
   tr.F = K * tr.T;
   tr.Fv = K * tr.Tv;
   return tr;
