@@ -1,7 +1,9 @@
 // springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
 // static cases that the fit never saw (its training loads are the free mesh's modes).
 #include "support/fresh_dir.hh"
+#ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
+#endif
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
@@ -155,6 +157,7 @@ TEST(FittedSprings, BringAnUnstructured3DSlabWithinFivePercentOfTheFem) {
   }
 }
 
+#ifdef VTB_HAVE_CGAL_MESHERS // the block comes from CGAL Mesh_3 (VTB_WITH_CGAL=OFF skips it)
 /// The clamped block's static answer, springs against P1: `bottom` clamped, `load` spread over
 /// `top`, relative L2 error over all nodes.
 double block_error(const Mesh3& m, const Eigen::VectorXd& k, double E, double nu, const std::vector<bool>& fixed,
@@ -203,6 +206,7 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
     std::cout << name << ": lloyd " << before << ", fitted " << fitted << "\n";
   }
 }
+#endif
 
 TEST(FittedSprings, TrainOnTheScenesSupportsAndHoldAClampedStripInTensionAndBending) {
   // Issue #25's first case: the union-jack strip clamped at its left end, where Lloyd is 23 %
