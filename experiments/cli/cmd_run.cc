@@ -48,7 +48,8 @@ Action add_run(CLI::App& app) {
                (r.filter_requested != r.filter ? " filter, picked by " + r.filter_requested : " filter") + ")";
     std::string springs; // which constants, and what auto or the fit's guard chose
     if (!r.calibration.empty())
-      springs = " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
+      springs =
+          " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
     if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
     std::cout << "vtb run: " << scene.name << " with " << r.solver << filter << ", " << r.nodes << " nodes, "
               << r.springs << springs << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "

@@ -18,9 +18,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iostream>
 #include <cstdlib>
 #include <filesystem>
+#include <iostream>
 #include <random>
 
 namespace vtb {

@@ -39,8 +39,8 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std
   f.add(&count, sizeof count);
   f.add(supports.data(), sizeof(int) * count);
   const FitOptions o;
-  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, o.uniform_stress,
-                         double(o.cg_iterations), double(o.holdout)})
+  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting,
+                         o.uniform_stress, double(o.cg_iterations), double(o.holdout)})
     f.add(x);
   return f.h;
 }
@@ -79,8 +79,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
                                         const std::vector<int>& supports, CachedFit* info) {
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
-  std::snprintf(name, sizeof name, "fitted-%016llx.bin",
-                static_cast<unsigned long long>(key(mesh, nu, supports)));
+  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, nu, supports)));
   Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);
@@ -93,7 +92,9 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     got.validation = report.validation();
     if (!dir.empty()) try {
         ensure_directory(dir);
-        const double meta[2] = {report.chosen == "lloyd" ? 1.0 : report.chosen == "van-gelder" ? 2.0 : 0.0,
+        const double meta[2] = {report.chosen == "lloyd"        ? 1.0
+                                : report.chosen == "van-gelder" ? 2.0
+                                                                : 0.0,
                                 got.validation};
         write_file_atomically(dir / name, [&](std::ostream& os) {
           os.write(kMagic, sizeof kMagic);

@@ -339,10 +339,10 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
   all.colwise().normalize();
   for (int m = 0; m < total; ++m) all.col(m) *= std::pow(lambda[0] / lambda[m], o.weighting);
   const int held = total - modes;
-  const MatrixXd stress = tr.supported && o.uniform_stress > 0
-                              ? MatrixXd(uniform_stress_answers(mesh, K, fem_solver, tr.Q, (K * all.col(0)).norm()) *
-                                         o.uniform_stress)
-                              : MatrixXd(N, 0);
+  const MatrixXd stress =
+      tr.supported && o.uniform_stress > 0
+          ? MatrixXd(uniform_stress_answers(mesh, K, fem_solver, tr.Q, (K * all.col(0)).norm()) * o.uniform_stress)
+          : MatrixXd(N, 0);
   tr.T.resize(N, modes + stress.cols());
   tr.Tv.resize(N, held);
   for (int m = 0, a = 0, b = 0; m < total; ++m)

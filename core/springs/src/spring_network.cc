@@ -107,7 +107,7 @@ template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const No
 
 #define VTB_INSTANTIATE(D)                                                                                             \
   template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view,                    \
-                                             const std::vector<int>&);                                               \
+                                             const std::vector<int>&);                                                 \
   template double max_strain<D>(const SpringNetwork<D>&, const Nodal<D>&);                                             \
   template double elastic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);                                         \
   template double kinetic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);

@@ -5,8 +5,8 @@
 
 #include "vtb/linalg/nodal.hh"
 
-#include <span>
 #include <limits>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -46,7 +46,7 @@ struct RunReport {
   double max_rotation = 0; ///< max over samples of the largest cell rotation, radians (max_rotation; the FEM's too)
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
-  std::string calibration;           ///< spring solvers: the constants used (lloyd, van-gelder, fitted)
+  std::string calibration;      ///< spring solvers: the constants used (lloyd, van-gelder, fitted)
   std::string calibration_requested; ///< the scene's [solver].springs (auto, or one of the above)
   double calibration_seconds = 0;    ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
   bool calibration_cached = false;   ///< a fit's constants read from the fit cache instead of fitted

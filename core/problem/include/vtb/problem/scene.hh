@@ -76,7 +76,7 @@ struct SolverDesc {
   /// conditionally stable) | tensor | multigrid
   std::string filter = solvers::kFilterAuto;
   bool momentum_correction = true;
-  double strain_limit = 0.0;     ///< 0 = off (the default: it changes the physics)
+  double strain_limit = 0.0;    ///< 0 = off (the default: it changes the physics)
   std::string springs = "auto"; ///< auto (fitted within its budget, else lloyd) | lloyd | van-gelder | fitted
   double rtol = 1e-8;
   std::string linear_solver = "auto"; ///< implicit-euler: auto (direct in 2D, cg in 3D) | direct | cg

@@ -3,8 +3,8 @@
 /// The fitted springs' cache: the fit depends only on the mesh, the Poisson ratio and the
 /// scene's supports (never on its loads; the constants scale with E t), so they are kept on
 /// disk per mesh, Poisson ratio and supports, and a later run on the same ones, at any
-/// stiffness, reads them instead of fitting again (0.2 s at 517 nodes in 2D, seconds in 3D). Best effort: a cache that cannot be read or
-/// written is passed over, never an error.
+/// stiffness, reads them instead of fitting again (0.2 s at 517 nodes in 2D, seconds in 3D). Best effort: a cache that
+/// cannot be read or written is passed over, never an error.
 
 #include "vtb/meshes/mesh.hh"
 
@@ -22,9 +22,9 @@ std::filesystem::path fit_cache_dir();
 
 /// What a fit, fresh or cached, returned besides its constants (fitted_springs.hh FitReport).
 struct CachedFit {
-  bool hit = false;           ///< the constants came from the cache
-  std::string chosen;         ///< "fitted", or the prior the guard kept ("lloyd", "van-gelder")
-  double validation = 0;      ///< the chosen constants' relative error on the held-out modes
+  bool hit = false;      ///< the constants came from the cache
+  std::string chosen;    ///< "fitted", or the prior the guard kept ("lloyd", "van-gelder")
+  double validation = 0; ///< the chosen constants' relative error on the held-out modes
 };
 
 /// fitted_stiffness(mesh, E, nu, t) with the default options and these supports (sorted
