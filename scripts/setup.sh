@@ -11,7 +11,7 @@ VTB_BUILD=${VTB_BUILD:-$VTB_ROOT/build}
 VTB_PACKAGES=(
   g++ clang libclang-rt-14-dev cmake ninja-build pkg-config
   libeigen3-dev libtomlplusplus-dev nlohmann-json3-dev libcli11-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libsuitesparse-dev libopenblas0-serial
   libgmsh-dev libcgal-dev libsundials-dev libdeal.ii-dev openmpi-bin python3 libbullet-dev
   libglfw3-dev libimgui-dev libstb-dev libgl-dev xvfb xauth libgl1-mesa-dri zlib1g-dev
   texlive-latex-extra texlive-pictures texlive-latex-recommended texlive-fonts-recommended latexmk poppler-utils

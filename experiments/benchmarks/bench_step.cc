@@ -9,6 +9,7 @@
 #include "vtb/solvers/filtered.hh"
 #include "vtb/solvers/implicit_euler_cg.hh"
 #include "vtb/solvers/integrator.hh"
+#include "vtb/springs/fitted_springs.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif
@@ -142,6 +143,17 @@ VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterMultigrid, filtered_
 VTB_STEP_BENCH(slab10k, solvers::kImplicitEuler, "", implicit_euler)
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
+
+/// The spring fit (springs = "fitted", no cache) on the clamped slab, as a scene runs it: on
+/// its supports, the default options. One iteration: it takes tens of seconds.
+void BM_precompute_fit_springs_slab10k(benchmark::State& st) {
+  const Model<3>& m = slab10k();
+  FitOptions o;
+  for (int v = 0; v < m.num_nodes(); ++v)
+    if (m.constrained[static_cast<std::size_t>(v)]) o.supports.push_back(v);
+  for (auto _ : st) benchmark::DoNotOptimize(fitted_stiffness(m.mesh, 1.0, 0.25, 1.0, o));
+}
+BENCHMARK(BM_precompute_fit_springs_slab10k)->Unit(benchmark::kSecond)->Iterations(1);
 #endif
 
 // The filtered step's kernels alone, on the 517-node plate and the 1701-node box: the spring

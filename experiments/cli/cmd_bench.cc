@@ -17,7 +17,8 @@ Action add_bench(CLI::App& app) {
   bench->require_subcommand(1);
   CLI::App* scale = bench->add_subcommand(
       "scale", "Step time, precompute and heap of the spring solvers over a 2D and a 3D mesh ladder, with the fitted "
-               "exponent of each cost against nodes (scaling.csv, scaling_fit.csv)");
+               "exponent of each cost against nodes (scaling.csv, scaling_fit.csv), and the spring fit's cost on CGAL "
+               "slabs (spring_fit.csv)");
   scale->add_flag("--quick", o->quick, "The reproduction's small ladder (2D to 4,257 nodes, 3D to 1,225)");
   scale->add_option("--out", o->out, "Output folder (default: out/bench-scale)");
   return [o]() {

@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "fit_progress.hh"
 #include "overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
@@ -9,6 +10,7 @@
 
 #include <iostream>
 #include <memory>
+#include <unistd.h>
 
 namespace vtb::cli {
 
@@ -39,9 +41,10 @@ Action add_run(CLI::App& app) {
     const Scene run = with_overrides(scene, ov);
     // Under mpirun the FEM spreads its mesh over the ranks; a spring solver runs on rank 0 alone.
     if (run.solver.kind != solvers::kFem && !harness::world().root()) return 0;
-    const RunReport r = run.solver.kind == solvers::kFem      ? fem::run_scene(run, out, o->frames)
-                        : run.solver.kind == solvers::kBullet ? harness::run_bullet_scene(run, out, o->frames)
-                                                              : run_scene(run, out, o->frames);
+    const RunReport r = run.solver.kind == solvers::kFem ? fem::run_scene(run, out, o->frames)
+                        : run.solver.kind == solvers::kBullet
+                            ? harness::run_bullet_scene(run, out, o->frames)
+                            : run_scene(run, out, o->frames, fit_progress_line(std::cerr, isatty(2) != 0));
     std::string filter; // what a filtered run ran, and whether auto picked it
     if (!r.filter.empty())
       filter = " (" + r.filter +

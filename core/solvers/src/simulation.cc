@@ -169,16 +169,20 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
   return o;
 }
 
-RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames,
+                    const FitProgress& progress) {
   const IntegratorOptions o = integrator_options(scene.solver);
-  return with_model(scene, [&](const auto& model) {
-    constexpr int dim = std::decay_t<decltype(model)>::dimension;
-    Trajectory<dim> traj;
-    RunReport rep = simulate(model, o, traj, frames);
-    write_run_outputs(out_dir, model, traj, rep, scene.name);
-    if (frames) write_frames(model, traj, out_dir);
-    return rep;
-  });
+  return with_model(
+      scene,
+      [&](const auto& model) {
+        constexpr int dim = std::decay_t<decltype(model)>::dimension;
+        Trajectory<dim> traj;
+        RunReport rep = simulate(model, o, traj, frames);
+        write_run_outputs(out_dir, model, traj, rep, scene.name);
+        if (frames) write_frames(model, traj, out_dir);
+        return rep;
+      },
+      progress);
 }
 
 template <int dim>

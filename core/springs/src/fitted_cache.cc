@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '7', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '8', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -39,13 +39,21 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std
   f.add(&count, sizeof count);
   f.add(supports.data(), sizeof(int) * count);
   const FitOptions o;
-  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting,
-                         o.uniform_stress, double(o.cg_iterations), double(o.holdout)})
+  for (const double x :
+       {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, o.uniform_stress,
+        double(o.cg_iterations), double(o.holdout), double(o.patience), o.min_improvement})
     f.add(x);
   return f.h;
 }
 
 constexpr const char* kChosen[3] = {"fitted", "lloyd", "van-gelder"};
+
+/// The index of `chosen` in kChosen (0, "fitted", for anything else).
+int chosen_index(const std::string& chosen) {
+  for (int i = 0; i < 3; ++i)
+    if (chosen == kChosen[i]) return i;
+  return 0;
+}
 
 /// The file: the magic, which constants were chosen (an index into kChosen) and their
 /// validation error (two doubles), then the constants.
@@ -76,7 +84,8 @@ std::filesystem::path fit_cache_dir() {
 
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
-                                        const std::vector<int>& supports, CachedFit* info) {
+                                        const std::vector<int>& supports, CachedFit* info,
+                                        const FitProgress& progress) {
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
   std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, nu, supports)));
@@ -86,16 +95,14 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
   if (!got.hit) {
     FitOptions options;
     options.supports = supports;
+    options.progress = progress;
     FitReport report;
     k = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report); // unit E t, scaled below
     got.chosen = report.chosen;
     got.validation = report.validation();
     if (!dir.empty()) try {
         ensure_directory(dir);
-        const double meta[2] = {report.chosen == "lloyd"        ? 1.0
-                                : report.chosen == "van-gelder" ? 2.0
-                                                                : 0.0,
-                                got.validation};
+        const double meta[2] = {static_cast<double>(chosen_index(report.chosen)), got.validation};
         write_file_atomically(dir / name, [&](std::ostream& os) {
           os.write(kMagic, sizeof kMagic);
           os.write(reinterpret_cast<const char*>(meta), sizeof meta);
@@ -109,8 +116,8 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
 }
 
 template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*);
+                                                    CachedFit*, const FitProgress&);
 template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*);
+                                                    CachedFit*, const FitProgress&);
 
 } // namespace vtb

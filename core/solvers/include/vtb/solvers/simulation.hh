@@ -62,7 +62,9 @@ IntegratorOptions integrator_options(const Entry& entry, const SolverDesc& solve
 
 /// Everything `vtb run` does with a spring solver: load mesh, build model, simulate, write
 /// probes.csv, reactions.csv and summary.json into `out_dir` (all or nothing), and with
-/// `frames` frames.pvd + frames/frame_NNNN.vtu, one per sample. Returns the report.
-RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false);
+/// `frames` frames.pvd + frames/frame_NNNN.vtu, one per sample; `progress` is told how a
+/// spring fit advances. Returns the report.
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false,
+                    const FitProgress& progress = {});
 
 } // namespace vtb

@@ -7,6 +7,7 @@
 /// cannot be read or written is passed over, never an error.
 
 #include "vtb/meshes/mesh.hh"
+#include "vtb/springs/fitted_springs.hh"
 
 #include <Eigen/Core>
 
@@ -35,6 +36,6 @@ struct CachedFit {
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
-                                        CachedFit* info = nullptr);
+                                        CachedFit* info = nullptr, const FitProgress& progress = {});
 
 } // namespace vtb

@@ -10,8 +10,9 @@ namespace vtb {
 
 template <int dim> struct Model : Problem<dim> { SpringNetwork<dim> net; };
 
-/// The problem (build_problem) and its spring network ([solver].springs calibration).
-template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh);
+/// The problem (build_problem) and its spring network ([solver].springs calibration;
+/// `progress` is told how a fit advances).
+template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress = {});
 
 /// What every spring solver reports alike (the integrators and CVODE): the solver's name, the
 /// sizes, the duration and the calibration (its name, wall time, whether it came from the
@@ -20,11 +21,11 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
 
 /// Loads the scene's mesh, builds the model in the mesh's dimension and returns f(model); f
 /// takes a `Model<2>&` and a `Model<3>&` (a generic lambda; Model<dim>::dimension names dim)
-/// and may move the model away.
-template <class F> auto with_model(const Scene& scene, F&& f) {
+/// and may move the model away. `progress`: as build_model's.
+template <class F> auto with_model(const Scene& scene, F&& f, const FitProgress& progress = {}) {
   return with_mesh(scene, [&](auto& m) {
     constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-    Model<dim> model = build_model<dim>(scene, std::move(m));
+    Model<dim> model = build_model<dim>(scene, std::move(m), progress);
     return f(model);
   });
 }

@@ -4,6 +4,7 @@
 
 #include "vtb/meshes/mesh.hh"
 #include "vtb/problem/scene.hh"
+#include "vtb/springs/fitted_springs.hh"
 #include "vtb/springs/spring_kernels.hh"
 
 #include <limits>
@@ -41,10 +42,11 @@ template <int dim> struct SpringNetwork {
 
 /// Builds the network of a mesh with the scene's material and calibration ("lloyd",
 /// "van-gelder", "fitted" or "auto": fitted within auto's budget, fit_affordable, else Lloyd).
-/// `supports`: the nodes the scene holds (sorted), which the fit trains with.
+/// `supports`: the nodes the scene holds (sorted), which the fit trains with; `progress`: told
+/// how a fit advances (fitted_springs.hh).
 template <int dim>
 SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration,
-                                 const std::vector<int>& supports = {});
+                                 const std::vector<int>& supports = {}, const FitProgress& progress = {});
 
 /// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
 /// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt

@@ -12,7 +12,8 @@ namespace vtb::harness {
 
 /// Writes OUT/scaling.csv and OUT/scaling_fit.csv (family, dim, solver, nodes_min, nodes_max,
 /// step_exponent, precompute_exponent, heap_exponent: least-squares slopes of log cost against
-/// log nodes) and prints the fit as a table to `table`.
+/// log nodes) and OUT/spring_fit.csv (the spring fit's wall time, steps and held-out error on
+/// CGAL slabs of 1k to 10k nodes) and prints both to `table`.
 void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* progress, std::ostream& table);
 
 /// The fit of scaling.csv in `dir`, as scaling_fit.csv's text.
