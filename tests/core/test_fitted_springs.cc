@@ -157,17 +157,41 @@ TEST(FittedSprings, BringAnUnstructured3DSlabWithinFivePercentOfTheFem) {
   }
 }
 
+TEST(FittedSprings, HoldCooksMembraneOnItsClampWithinFivePercent) {
+  // Cook's membrane on a 16 x 16 union-jack grid mapped onto the trapezoid (triangles
+  // stretched up to 3:1 toward the loaded edge), clamped at x = 0, nu = 1/3: Lloyd's
+  // per-element fit leaves near-mechanisms there (110 %), van Gelder's is 13 % off. The fit,
+  // trained on the clamped body, is held to the 5 % goal under the shear that defines the
+  // benchmark, a load it never saw.
+  Mesh2 m = generate_rectangle({48.0, 44.0}, {16, 16});
+  for (Eigen::Index v = 0; v < m.points.cols(); ++v) {
+    const double x = m.points(0, v), y = m.points(1, v);
+    m.points(1, v) = 44.0 * x / 48.0 + y * (44.0 - 28.0 * x / 48.0) / 44.0;
+  }
+  const double E = 1.0, nu = 1.0 / 3.0;
+  FitOptions o;
+  o.supports = m.groups.at("left").nodes;
+  FitReport rep;
+  const Eigen::VectorXd k = fitted_stiffness(m, E, nu, 1.0, o, &rep);
+  const double fitted = cantilever_error<2>(m, k, E, nu, 1.0, Vec<2>(0, 1.0 / 17));
+  const double vg = cantilever_error<2>(m, van_gelder_stiffness(m, E, 1.0), E, nu, 1.0, Vec<2>(0, 1.0 / 17));
+  std::cout << "Cook: van Gelder " << vg << ", fitted " << fitted << " (" << rep.iterations << " steps, " << rep.chosen
+            << ")\n";
+  EXPECT_LT(fitted, 0.05);
+}
+
 TEST(FittedSprings, StopOnceTheHeldOutModesStopImprovingAndTellTheirProgress) {
-  // The early stop (FitOptions::patience) ends the fit when its held-out modes stop
-  // improving; run to the residual's tolerance instead (patience 0) the same fit takes more
-  // steps for a held-out error that the stop rule judged not worth them. The stopped fit must
-  // still meet the 5 % goal on the clamped slab's loads, which it never saw, and the progress
-  // callback hears the modes, the steps and one "done" at the end.
+  // The opt-in early stop (FitOptions::patience 2) ends the fit when its held-out modes and
+  // its residual stop improving; run to the residual's tolerance (the default) the same fit
+  // takes more steps. The stopped fit must still meet the 5 % goal on the clamped slab's
+  // loads, which it never saw, and the progress callback hears the modes, the steps and one
+  // "done" at the end.
   const auto mesh = read_msh(std::filesystem::path(VTB_SOURCE_DIR) / "meshes/data/slab_500.msh");
   const Mesh3& m = std::get<Mesh3>(mesh);
   const double E = 5.0e4, nu = 0.25;
   FitOptions early;
   early.supports = m.groups.at("left").nodes;
+  early.patience = 2;
   std::vector<std::string> stages;
   early.progress = [&](const char* stage, int step, int steps) {
     EXPECT_LE(step, steps);

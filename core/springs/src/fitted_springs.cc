@@ -371,9 +371,10 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
 
 /// Levenberg-Marquardt on 1/2 ||r(x)||^2 + mu/2 ||x||^2 from x (fit evaluated at x), with x
 /// held above log(floor); each step an inexact CG solve of the damped normal equations.
-/// With held-out loads (Tv, Fv) it stops early, at the `patience`-th accepted step that left
-/// the held-out error below the start's but did not lower it by `min_improvement` of its
-/// best, and returns the iterate with the best held-out error. Returns the x kept; fit is left evaluated there.
+/// With held-out loads (Tv, Fv) and patience > 0 it stops early, at the `patience`-th
+/// accepted step that left the held-out error below the start's but lowered neither it (from
+/// its best) nor the objective by `min_improvement`, and returns the best-held-out iterate. Returns the x kept; fit is
+/// left evaluated there.
 template <int dim>
 VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, const MatrixXd& Tv, const MatrixXd& Fv,
                              FitReport& rep) {
@@ -406,7 +407,8 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
       stop = gain < o.tolerance;
       if (early) {
         const double held = fit.held_out_error(Tv, Fv);
-        if (held < start_held && held >= (1 - o.min_improvement) * best_held) ++strikes;
+        if (held < start_held && held >= (1 - o.min_improvement) * best_held && gain < o.min_improvement) ++strikes;
+
         if (held < best_held) best_held = held, best = x;
         stop = stop || strikes >= o.patience;
       }
