@@ -9,6 +9,7 @@
 #include "vtb/solvers/filtered.hh"
 #include "vtb/solvers/implicit_euler_cg.hh"
 #include "vtb/solvers/integrator.hh"
+#include "vtb/solvers/warped_filter.hh"
 #include "vtb/springs/fitted_springs.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
@@ -128,6 +129,7 @@ VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(box275, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterFull, filtered_full)
+VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
 VTB_STEP_BENCH(box1701, solvers::kImplicitEuler, "", implicit_euler)
 
 #ifdef VTB_HAVE_CGAL_MESHERS
@@ -223,6 +225,42 @@ BENCHMARK(BM_kernel_solve_nodal_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_eigen_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_nodal_box1701)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_eigen_box1701)->Unit(benchmark::kMicrosecond);
+
+// The tensor filter's two per-step kernels on a mid-run state: prepare (each node's rotation
+// and the springs' direction mismatch) and the solve with its H (node-ordered factor, tile by
+// tile, with the rotations applied), beside the forces and the scalar solve above.
+template <int dim> void tensor_kernel(benchmark::State& st, const Model<dim>& model, bool prepare) {
+  const State<dim> s = midrun_state(model);
+  WarpedFilter<dim> filter(model, 1e-3);
+  filter.prepare(s.u);
+  const Nodal<dim> f = Nodal<dim>::Random(dim, model.num_nodes());
+  Nodal<dim> dv(dim, static_cast<Eigen::Index>(model.free_nodes.size()));
+  const Eigen::VectorXd none;
+  for (auto _ : st) {
+    if (prepare) {
+      benchmark::DoNotOptimize(filter.prepare(s.u));
+    } else {
+      filter.solve(f, none, 1e-3, dv);
+      benchmark::DoNotOptimize(dv.data());
+    }
+  }
+}
+void BM_kernel_tensor_prepare_plate517(benchmark::State& st) {
+  tensor_kernel(st, plate517(), true);
+}
+void BM_kernel_tensor_solve_plate517(benchmark::State& st) {
+  tensor_kernel(st, plate517(), false);
+}
+void BM_kernel_tensor_prepare_box1701(benchmark::State& st) {
+  tensor_kernel(st, box1701(), true);
+}
+void BM_kernel_tensor_solve_box1701(benchmark::State& st) {
+  tensor_kernel(st, box1701(), false);
+}
+BENCHMARK(BM_kernel_tensor_prepare_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_tensor_solve_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_tensor_prepare_box1701)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_tensor_solve_box1701)->Unit(benchmark::kMicrosecond);
 
 // CHOLMOD's supernodal Cholesky of the same H (Eigen's CholmodSupernodalLLT, CHOLMOD's own
 // ordering), against OrderedLDLT (Eigen's simplicial LDL^T, AMD) with the nodal solve: the

@@ -2,16 +2,40 @@
 
 #include <Eigen/OrderingMethods>
 #include <algorithm>
+#include <stdexcept>
 
 namespace vtb {
 
-OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A) {
+namespace {
+
+/// The pattern of A's block x block tiles (a tile with any entry is one entry).
+Eigen::SparseMatrix<double> block_graph(const Eigen::SparseMatrix<double>& A, int block) {
+  std::vector<Eigen::Triplet<double>> tiles;
+  tiles.reserve(static_cast<std::size_t>(A.nonZeros()));
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it)
+      tiles.emplace_back(static_cast<int>(it.row()) / block, c / block, 1.0);
+  Eigen::SparseMatrix<double> G(A.rows() / block, A.cols() / block);
+  G.setFromTriplets(tiles.begin(), tiles.end());
+  return G;
+}
+
+} // namespace
+
+OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A, int block) {
   const auto n = A.rows();
+  if (block < 1 || n % block != 0) throw std::invalid_argument("OrderedLDLT: rows not a multiple of the block");
   // AMD returns the inverse permutation (as Eigen's own Cholesky uses it).
   Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> Pinv;
-  Eigen::AMDOrdering<int>()(A, Pinv);
+  if (block == 1) {
+    Eigen::AMDOrdering<int>()(A, Pinv);
+  } else {
+    Eigen::AMDOrdering<int>()(block_graph(A, block), Pinv);
+  }
   const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P = Pinv.inverse();
-  m_perm.assign(P.indices().data(), P.indices().data() + n);
+  m_perm.resize(static_cast<std::size_t>(n));
+  for (Eigen::Index r = 0; r < n; ++r)
+    m_perm[static_cast<std::size_t>(r)] = P.indices()[r / block] * block + static_cast<int>(r % block);
   std::vector<Eigen::Triplet<double>> upper;
   upper.reserve(static_cast<std::size_t>(A.nonZeros()));
   for (int c = 0; c < A.outerSize(); ++c)

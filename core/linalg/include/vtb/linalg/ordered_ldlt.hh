@@ -12,7 +12,10 @@ namespace vtb {
 class OrderedLDLT {
 public:
   /// Takes the pattern (and values) of a symmetric matrix with both triangles stored.
-  explicit OrderedLDLT(const Eigen::SparseMatrix<double>& A);
+  /// block > 1: rows come in blocks of `block` (a node's coordinates, row block a + p); AMD
+  /// orders the blocks' graph and each block's rows stay consecutive and in their order, so
+  /// that L is made of block x block tiles (BlockSolve).
+  explicit OrderedLDLT(const Eigen::SparseMatrix<double>& A, int block = 1);
 
   /// Row of the ordered matrix that holds original row i.
   int ordered(int i) const { return m_perm[static_cast<std::size_t>(i)]; }

@@ -32,6 +32,7 @@
 /// the mean spring stiffness at the paper's plate's free corner diverged at dt = 10 ms: in the
 /// directions where the node's own springs are weak, H holds little more than its mass.
 
+#include "vtb/linalg/block_solve.hh"
 #include "vtb/linalg/ordered_ldlt.hh"
 #include "vtb/springs/model.hh"
 
@@ -71,9 +72,9 @@ private:
   void cover(double mismatch);
 
   const Model<dim>& m_model;
-  OrderedLDLT m_h;
+  OrderedLDLT m_h;                          ///< ordered by nodes (block = dim): L is made of dim x dim tiles
+  BlockSolve<dim> m_h_blocks;               ///< the step's solve with m_h, tile by tile
   std::vector<Mat<dim>> m_rotation;         ///< per node
-  Nodal<dim> m_rest_dir;                    ///< per spring, unit
   std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
   double m_beta = 0;
   Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
