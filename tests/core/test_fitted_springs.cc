@@ -288,6 +288,49 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndHoldAClampedStripInTensionAndBend
   }
 }
 
+TEST(FittedSprings, HoldTheClampedStripWithinFivePercentFromNuPointTwoToPointFourFive) {
+  // Issue 25's Poisson-ratio family, off the lattice's own 1/3 in 2D: the clamped union-jack
+  // strip in tension at nu 0.2 and 0.45 (fidelity.csv: Lloyd 17.8 / 29.7 %, fitted 0.75 /
+  // 4.7 %). Held to the issue's goal of 5 % and to less than half of Lloyd's error.
+  const Mesh2 m = generate_rectangle({0.2, 0.02}, {40, 4});
+  const double E = 5.0e4, t = 0.001;
+  for (const double nu : {0.2, 0.45}) {
+    FitOptions o;
+    o.supports = m.groups.at("left").nodes;
+    std::sort(o.supports.begin(), o.supports.end());
+    const double fitted = cantilever_error<2>(m, fitted_stiffness(m, E, nu, t, o), E, nu, t, Vec<2>(1e-4, 0));
+    const double lloyd = cantilever_error<2>(m, lloyd_stiffness(m, E, nu, t), E, nu, t, Vec<2>(1e-4, 0));
+    EXPECT_LT(fitted, 0.05) << "nu " << nu << ", lloyd " << lloyd;
+    EXPECT_LT(fitted, 0.5 * lloyd) << "nu " << nu;
+    std::cout << "nu " << nu << ": lloyd " << lloyd << ", fitted " << fitted << "\n";
+  }
+}
+
+#ifdef VTB_HAVE_CGAL_MESHERS
+TEST(FittedSprings, HoldTheClampedBlockInShearWithinFivePercentFromNuPointTwoToPointFourFive) {
+  // The same family in 3D, off the lattice's 1/4: the CGAL block clamped at its bottom, its top
+  // sheared, nu 0.2 and 0.45 (fidelity.csv, tractions lumped by area: Lloyd 12.1 / 62.1 %,
+  // fitted 2.0 / 4.2 %; these equal nodal forces: 12.6 / 61.9 % and 2.2 / 4.5 %; at 0.45
+  // Lloyd's springs are 2.6x too stiff). Held to 5 % and to half of Lloyd's error.
+  const Mesh3 m = mesh_box({0.04, 0.04, 0.04}, 500);
+  const double E = 5.0e4;
+  std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()), false);
+  for (int v : m.groups.at("bottom").nodes) fixed[static_cast<std::size_t>(v)] = true;
+  Eigen::VectorXd shear = Eigen::VectorXd::Zero(3 * m.num_nodes());
+  for (int v : m.groups.at("top").nodes) shear[3 * v] = 1e-3;
+  for (const double nu : {0.2, 0.45}) {
+    FitOptions o;
+    o.supports = m.groups.at("bottom").nodes;
+    std::sort(o.supports.begin(), o.supports.end());
+    const double fitted = block_error(m, fitted_stiffness(m, E, nu, 1.0, o), E, nu, fixed, shear);
+    const double lloyd = block_error(m, lloyd_stiffness(m, E, nu, 1.0), E, nu, fixed, shear);
+    EXPECT_LT(fitted, 0.05) << "nu " << nu << ", lloyd " << lloyd;
+    EXPECT_LT(fitted, 0.5 * lloyd) << "nu " << nu;
+    std::cout << "nu " << nu << ": lloyd " << lloyd << ", fitted " << fitted << "\n";
+  }
+}
+#endif
+
 TEST(FittedSprings, AreCachedPerMeshPoissonRatioAndSupports) {
   // The first fit writes the cache, a second call on the same mesh and material reads the same
   // constants back; another stiffness reads them scaled, another Poisson ratio or other
