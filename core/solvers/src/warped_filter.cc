@@ -1,7 +1,6 @@
 #include "vtb/solvers/warped_filter.hh"
 
 #include "vtb/springs/force_jacobian.hh"
-#include "vtb/springs/spring_kernels.hh"
 
 #include <Eigen/Geometry>
 #include <Eigen/LU>

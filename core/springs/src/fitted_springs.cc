@@ -373,8 +373,8 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
 /// held above log(floor); each step an inexact CG solve of the damped normal equations.
 /// With held-out loads (Tv, Fv) and patience > 0 it stops early, at the `patience`-th
 /// accepted step that left the held-out error below the start's but lowered neither it (from
-/// its best) nor the objective by `min_improvement`, and returns the best-held-out iterate. Returns the x kept; fit is
-/// left evaluated there.
+/// its best) nor the objective by `min_improvement`, and returns the best-held-out iterate.
+/// Returns the x kept; fit is left evaluated there.
 template <int dim>
 VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, const MatrixXd& Tv, const MatrixXd& Fv,
                              FitReport& rep) {
@@ -408,7 +408,6 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
       if (early) {
         const double held = fit.held_out_error(Tv, Fv);
         if (held < start_held && held >= (1 - o.min_improvement) * best_held && gain < o.min_improvement) ++strikes;
-
         if (held < best_held) best_held = held, best = x;
         stop = stop || strikes >= o.patience;
       }
