@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 namespace vtb {
 namespace {
@@ -184,6 +185,50 @@ TEST(Cvode, TensorFilterTracksACantileverStepAsWellAsImplicitEuler) {
     EXPECT_LE(tensor, 1.5 * ie) << "dt = " << dt;
     EXPECT_GT(full, 3 * tensor) << "the scalar filter's lag, which the tensor filter removes";
   }
+}
+
+/// The largest displacement error over a run's samples, relative to the reference's largest
+/// displacement (compare.csv's displacement_error_max).
+template <int dim> double field_error(const Trajectory<dim>& tr, const Trajectory<dim>& ref) {
+  double e = 0, peak = 0;
+  for (std::size_t k = 0; k < ref.field.size() && k < tr.field.size(); ++k) {
+    e = std::max(e, (tr.field[k] - ref.field[k]).colwise().norm().maxCoeff());
+    peak = std::max(peak, ref.field[k].colwise().norm().maxCoeff());
+  }
+  return tr.field.size() == ref.field.size() ? e / peak : std::numeric_limits<double>::infinity();
+}
+
+template <int dim> void expect_tensor_filter_within_implicit_eulers_error(const char* scene_file, double duration) {
+  Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes" / scene_file);
+  scene.duration = duration;
+  const Model<dim> model = build_model<dim>(scene, std::get<Mesh<dim>>(load_mesh(scene)));
+  Trajectory<dim> ref;
+  ASSERT_TRUE(simulate_cvode(model, CvodeOptions{1e-8, 1e-14}, ref, true).stable);
+  for (const double dt : {1e-3, 1e-2}) {
+    IntegratorOptions o;
+    o.dt = dt;
+    o.kind = "implicit-euler";
+    Trajectory<dim> ie, tensor;
+    ASSERT_TRUE(simulate(model, o, ie, true).stable);
+    o.kind = "filtered";
+    o.filter = "tensor";
+    ASSERT_TRUE(simulate(model, o, tensor, true).stable);
+    const double e_ie = field_error(ie, ref), e_tensor = field_error(tensor, ref);
+    std::cout << scene_file << " dt " << dt << ": tensor " << e_tensor << ", implicit Euler " << e_ie << "\n";
+    EXPECT_LE(e_tensor, 1.5 * e_ie) << scene_file << " dt = " << dt;
+  }
+}
+
+TEST(Cvode, TensorFilterTracksASlabPressAndThePapersPlateAsWellAsImplicitEuler) {
+  // Off the cantilever: the 3D slab pressed by a driven point (over its 0.5 s ramp and after)
+  // and the paper's 517-node plate under its step pull, against CVODE (rtol 1e-8, far below
+  // both fixed-step errors, which are first order: 0.05 % and 0.4 % at dt = 1 and 10 ms on the
+  // slab). Goal (issue 26): at most 1.5x implicit Euler's error. With one transverse cover for
+  // the whole mesh (the largest mismatch's, set by the driven point's neighbourhood) the slab
+  // was at 4.0x (the plate 1.6-1.7x): the cover's transverse damping slowed every spring's
+  // rotation. With each spring's own cover (warped_filter.hh) measured 1.1x and 1.03x.
+  expect_tensor_filter_within_implicit_eulers_error<3>("slab_press.toml", 0.8);
+  expect_tensor_filter_within_implicit_eulers_error<2>("plate517_step.toml", 1.0);
 }
 
 } // namespace

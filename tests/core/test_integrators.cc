@@ -723,16 +723,14 @@ TEST(Integrators, TensorFilterHoldsAStiffPullByTakingItsSpringIntoTheSolve) {
   // the factor) the tensor filter holds it by itself: no step handed over, the strain of a
   // 2 mm pull (the full filter's, which treats it explicitly but carries its extra mass, is the
   // yardstick: within 2x of it), and the corner settles within 1 mm of the target (a spring 4x
-  // the plate's own pulls it most of the way).
+  // the plate's own pulls it most of the way). (Since each spring has its own cover the
+  // explicit pull holds too on this plate, but nothing guarantees it: the implicit one is kept.)
   const Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/plate517_step.toml");
   const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
   const int corner = nearest_node(model.mesh, Vec<2>(0.2, 0.01)); // the viewer's --drag 0.2,0.01:0.2,0.008
   const Vec<2> target(0.2, 0.008);
   Vec<2> end;
   long fallback = 0;
-  const double explicit_pull =
-      pulled_run(model, opts("filtered", 0.01, "tensor", false), corner, target, 1.0, false, end, &fallback);
-  EXPECT_TRUE(!std::isfinite(explicit_pull) || fallback > 0) << "explicit, the pull breaks the tensor filter";
   const double tensor =
       pulled_run(model, opts("filtered", 0.01, "tensor", false), corner, target, 3.0, true, end, &fallback);
   ASSERT_TRUE(std::isfinite(tensor));

@@ -80,9 +80,10 @@ bool polar_rotation(const Mat<3>& A, Mat<3>& R) {
 struct MismatchTracker {
   double worst_sin2 = 0, worst = 0;
 
-  template <int dim> void add(const Vec<dim>& d, const Vec<dim>& t) {
+  /// Adds the pair; true when its sin^2 passes `trigger` (or it is at 90 degrees or more).
+  template <int dim> bool add(const Vec<dim>& d, const Vec<dim>& t, double trigger = 2.0) {
     const double dd = d.squaredNorm();
-    if (!(dd > 0)) return;
+    if (!(dd > 0)) return false;
     const double tt = t.squaredNorm();
     if (d.dot(t) > 0) {
       double cross2;
@@ -97,16 +98,25 @@ struct MismatchTracker {
         const double s2 = cross2 / (dd * tt);
         worst_sin2 = std::isnan(worst_sin2) ? worst_sin2 : s2;
       }
-    } else { // 90 degrees or more (at least sqrt(2)), or not finite: rare, directly
-      const double m = (d / std::sqrt(dd) - t / std::sqrt(tt)).norm();
-      if (!(m <= worst)) worst = m;
+      return cross2 > trigger * (dd * tt);
     }
+    // 90 degrees or more (at least sqrt(2)), or not finite: rare, directly
+    const double m = (d / std::sqrt(dd) - t / std::sqrt(tt)).norm();
+    if (!(m <= worst)) worst = m;
+    return true;
   }
+
+  /// The mismatch 2 sin(theta / 2) of a pair whose sin^2 theta is s2 (theta below 90 degrees).
+  static double from_sin2(double s2) {
+    s2 = std::min(s2, 1.0);
+    return std::sqrt(2 * s2 / (1 + std::sqrt(1 - s2)));
+  }
+  /// The sin^2 theta of a mismatch m = 2 sin(theta / 2) <= sqrt(2): m^2 (1 - m^2 / 4).
+  static double to_sin2(double m) { return m * m * (1 - m * m / 4); }
 
   double value() const {
     // 2 sin(theta / 2) = sqrt(2 - 2 cos theta) = sqrt(2 sin^2 / (1 + cos)), cos = sqrt(1 - sin^2).
-    const double s2 = std::min(worst_sin2, 1.0);
-    const double from_sin = std::sqrt(2 * s2 / (1 + std::sqrt(1 - s2)));
+    const double from_sin = from_sin2(worst_sin2);
     return std::isnan(worst_sin2) || std::isnan(worst) ? std::numeric_limits<double>::quiet_NaN()
                                                        : std::max(worst, from_sin);
   }
@@ -131,40 +141,83 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen:
       m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1),
       m_z(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, kMaxCoupled * dim),
       m_capacitance(kMaxCoupled * dim) {
-  // H(beta) = H(0) + beta (H(1) - H(0)) entry by entry: both have one pattern.
-  const Eigen::SparseMatrix<double> H1 = tensor_filter_matrix(model, dt, 1.0);
   m_base.assign(m_h.values(), m_h.values() + m_h.nonzeros());
-  m_transverse.assign(m_base.size(), 0.0);
-  for (int c = 0; c < H0.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it0(H0, c), it1(H1, c); it0; ++it0, ++it1) {
-      const int r = m_h.ordered(static_cast<int>(it0.row())), cc = m_h.ordered(c);
-      if (r <= cc) m_transverse[static_cast<std::size_t>(m_h.offset(r, cc))] += it1.value() - it0.value();
-    }
+  // Each spring's transverse blocks at beta = 1, (dt c + dt^2 k)(I - n n^T) with the signs of
+  // tensor_filter_matrix, as (offset, value) pairs into H's ordered upper values, so that H(beta)
+  // = H(0) + sum_s beta_s T_s is refilled spring by spring.
+  const auto& net = model.net;
+  const int ns = net.num_springs();
+  m_tptr.assign(static_cast<std::size_t>(ns) + 1, 0);
+  const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
+  for_each_jacobian_block(
+      net, rest, false, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+        const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
+        if (a >= 0 && b >= 0) {
+          const Mat<dim> I = Mat<dim>::Identity();
+          const Mat<dim> T = -sign * (dt * (D.trace() * I - D) + dt * dt * (K.trace() * I - K));
+          for (int p = 0; p < dim; ++p)
+            for (int q = 0; q < dim; ++q) {
+              const int r = m_h.ordered(a * dim + p), c = m_h.ordered(b * dim + q);
+              if (r > c || T(p, q) == 0) continue;
+              m_toff.push_back(static_cast<int>(m_h.offset(r, c)));
+              m_tval.push_back(T(p, q));
+            }
+        }
+        m_tptr[static_cast<std::size_t>(sp) + 1] = static_cast<int>(m_toff.size());
+      });
+  m_trigger.assign(static_cast<std::size_t>(ns), MismatchTracker::to_sin2(kCoverFloor));
 }
 
-template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>& u) const {
+template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
   const auto& net = m_model.net;
   MismatchTracker worst;
+  bool out = false;
   for (int s = 0; s < net.num_springs(); ++s) {
     const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
     const Vec<dim> D = net.rest.col(j) - net.rest.col(i);
-    worst.add<dim>(D + u.col(j) - u.col(i),
-                   (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D);
+    out |= worst.add<dim>(D + u.col(j) - u.col(i),
+                          (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D,
+                          m_trigger[static_cast<std::size_t>(s)]);
   }
+  if (outgrown) *outgrown = out;
   return worst.value();
 }
 
-template <int dim> void WarpedFilter<dim>::cover(double mismatch) {
-  // beta is set to twice the mismatch and kept while the mismatch stays between beta / 8 and
-  // beta (so it must grow 2x, or fall 16x, before the next refactorisation). Mismatches below
-  // 2e-3 get no cover (beta = 0: the lag-free filter). Measured (docs/method.md): half that
-  // cover diverges on the paper's plate at a tenth of its stiffness; twice it doubles the
-  // cantilever's error at dt = 40 ms.
-  const double wanted = mismatch < 2e-3 ? 0.0 : std::min(1.0, 2 * mismatch);
-  if (!std::isfinite(mismatch) || (mismatch <= m_beta && !(8 * mismatch < m_beta)) || wanted == m_beta) return;
-  m_beta = wanted;
+template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>& u) const {
+  return scan(u, nullptr);
+}
+
+template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
+  const auto [i, j] = m_model.net.edge[static_cast<std::size_t>(s)];
+  const Vec<dim> D = m_model.net.rest.col(j) - m_model.net.rest.col(i);
+  MismatchTracker one;
+  one.add<dim>(D + u.col(j) - u.col(i),
+               (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D);
+  return one.value();
+}
+
+template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mismatch) {
+  // Each spring's beta is twice its own mismatch while the largest, M, is at most
+  // kLocalCoverLimit; past it every spring gets the largest, 2 M. Kept until a spring outgrows
+  // its beta or M falls 8x below the largest; no cover at all while M < kCoverFloor (the
+  // lag-free filter). Measured (docs/method.md): half the cover diverges on the paper's plate at
+  // a tenth of its stiffness, twice it doubles the cantilever's error at 40 ms; one beta for the
+  // whole mesh at every M took a slab pressed at one point to 3.9x implicit Euler's error (each
+  // spring's own: 1.04x), each spring's own at every M folded the plate under four forces at a
+  // tenth of its stiffness (strains past 0.1 turn springs that had little mismatch within a step).
+  const auto& net = m_model.net;
+  const double global = mismatch < kCoverFloor ? 0.0 : std::min(1.0, 2 * mismatch);
   double* v = m_h.values();
-  for (std::size_t k = 0; k < m_base.size(); ++k) v[k] = m_base[k] + m_beta * m_transverse[k];
+  std::copy(m_base.begin(), m_base.end(), v);
+  for (int s = 0; s < net.num_springs(); ++s) {
+    const double b = global == 0                   ? 0.0
+                     : mismatch > kLocalCoverLimit ? global
+                                                   : std::min(global, 2 * spring_mismatch(s, u));
+    m_trigger[static_cast<std::size_t>(s)] = MismatchTracker::to_sin2(std::max(b, kCoverFloor));
+    for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k)
+      v[m_toff[static_cast<std::size_t>(k)]] += b * m_tval[static_cast<std::size_t>(k)];
+  }
+  m_beta_max = global;
   m_h.factorize(); // H(beta) is H(0) plus positive semidefinite terms: positive definite
   m_h_blocks.refresh();
   ++m_factor_version;
@@ -261,8 +314,10 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 
 template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {
   rotations(u);
-  const double mismatch = direction_mismatch(u);
-  if (mismatch <= kTrustedMismatch) cover(mismatch);
+  bool outgrown = false;
+  const double mismatch = scan(u, &outgrown);
+  if (!(mismatch <= kTrustedMismatch)) return mismatch;
+  if (outgrown || 8 * mismatch < m_beta_max) cover(u, mismatch);
   return mismatch;
 }
 

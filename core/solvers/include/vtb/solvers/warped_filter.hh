@@ -17,12 +17,13 @@
 /// direction now and its rest direction turned by its node's rotation (shear turns springs
 /// apart from their node's average rotation). Against the dashpots (c = tau k along the
 /// spring) that difference is a transverse force c |dn| per unit velocity, treated explicitly:
-/// on the paper's plate (tau = 2 s, strain 0.1) it diverged at dt = 10 ms. So H carries
-/// beta times the springs' transverse stiffness and damping, (dt c + dt^2 k)(I - n n^T), with
-/// beta = twice the largest mismatch |n - R n_0| (R: the mean of both ends' rotations) once it
-/// passes 2e-3, refactorised (no allocation) when the mismatch outgrows beta or falls 8x below
-/// it. Small deformations keep beta = 0 and no lag; a fixed beta of 0.05 would quadruple the
-/// cantilever's tip error.
+/// on the paper's plate (tau = 2 s, strain 0.1) it diverged at dt = 10 ms. So H carries, per
+/// spring, beta_s times its transverse stiffness and damping, (dt c + dt^2 k)(I - n n^T), with
+/// beta_s = twice the spring's mismatch |n - R n_0| (R: the mean of both ends' rotations), or
+/// twice the largest mismatch for every spring once that passes kLocalCoverLimit; refactorised
+/// (no allocation) when a spring outgrows its beta or the largest mismatch falls 8x below the
+/// largest beta. Small deformations keep beta = 0 and no lag (a fixed beta of 0.05 would
+/// quadruple the cantilever's tip error), and springs that do not turn are not damped across.
 ///
 /// Couplings from outside (a user's pull, State::applied_stiffness) are solved implicitly, as
 /// the springs are: k I at the coupled node joins H, H' = H + dt^2 U K U^T, applied without
@@ -68,16 +69,29 @@ public:
 
 private:
   WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0);
-  /// Sets beta for this mismatch (refactorising H when it changes).
-  void cover(double mismatch);
+  /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and refactorises.
+  void cover(const Nodal<dim>& u, double mismatch);
+  /// The largest mismatch at u; `outgrown` (if given): whether a spring passed its trigger.
+  double scan(const Nodal<dim>& u, bool* outgrown) const;
+  /// Spring s's mismatch at u.
+  double spring_mismatch(int s, const Nodal<dim>& u) const;
+  /// Below this largest mismatch no spring is covered.
+  static constexpr double kCoverFloor = 2e-3;
+  /// Past this largest mismatch every spring gets the largest cover (docs/method.md).
+  static constexpr double kLocalCoverLimit = 0.1;
 
   const Model<dim>& m_model;
-  OrderedLDLT m_h;                          ///< ordered by nodes (block = dim): L is made of dim x dim tiles
-  BlockSolve<dim> m_h_blocks;               ///< the step's solve with m_h, tile by tile
-  std::vector<Mat<dim>> m_rotation;         ///< per node
-  std::vector<double> m_base, m_transverse; ///< H(0)'s ordered upper values, and H(1) - H(0)'s
-  double m_beta = 0;
-  Eigen::MatrixXd m_rhs; ///< ordered dofs, one column
+  OrderedLDLT m_h;                  ///< ordered by nodes (block = dim): L is made of dim x dim tiles
+  BlockSolve<dim> m_h_blocks;       ///< the step's solve with m_h, tile by tile
+  std::vector<Mat<dim>> m_rotation; ///< per node
+  std::vector<double> m_base;       ///< H(0)'s ordered upper values
+  /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
+  /// k in [m_tptr[s], m_tptr[s + 1]).
+  std::vector<int> m_tptr, m_toff;
+  std::vector<double> m_tval;
+  std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
+  double m_beta_max = 0;         ///< twice the largest mismatch at the last refill
+  Eigen::MatrixXd m_rhs;         ///< ordered dofs, one column
   /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
   void couple(const Eigen::VectorXd& coupling);
   /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y in the ordered dofs).
