@@ -51,7 +51,7 @@ struct SimStats {
   double energy = 0;          ///< elastic + kinetic, J
   double max_strain = 0;      ///< max |l/L0 - 1|
   long steps = 0;
-  long fallback_steps = 0; ///< tensor filter: steps handed to the full filter (distortion past trust)
+  long fallback_steps = 0; ///< tensor filter: steps handed to implicit Euler (distortion past trust)
 };
 
 /// Called before every step with the state whose applied forces (and their couplings'

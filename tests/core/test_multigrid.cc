@@ -164,7 +164,7 @@ TEST(MultigridFilter, AutoPicksTheVCycleOnLarge3DMeshesAndTheFactorBelow) {
   ASSERT_GE(plate.free_nodes.size(), kLargeFreeNodes3D);
   EXPECT_EQ(chosen_filter(large, solvers::kFilterAuto), solvers::kFilterMultigrid);
   EXPECT_EQ(chosen_filter(small, solvers::kFilterAuto), solvers::kFilterFull);
-  EXPECT_EQ(chosen_filter(plate, solvers::kFilterAuto), solvers::kFilterFull) << "2D fill grows like n log n";
+  EXPECT_EQ(chosen_filter(plate, solvers::kFilterAuto), solvers::kFilterTensor) << "2D: the lag-free filter";
   EXPECT_EQ(chosen_filter(large, solvers::kFilterTensor), solvers::kFilterTensor);
 
   // The integrator runs what was picked, and its step moves the loaded box.

@@ -84,11 +84,11 @@ TEST(RunOutputs, UnstableRunIsReportedNotCrashed) {
 }
 
 TEST(RunOutputs, SummarySaysWhichFilterAutoPicked) {
-  // No filter key: the scene's default `auto`; on a 2D plate it runs the full filter.
+  // No filter key: the scene's default `auto`; on a 2D plate it runs the lag-free tensor filter.
   const test::FreshDir fresh;
   const auto [r, j] = run_pulled_plate("kind = \"filtered\"\ndt = 1e-2\n", fresh / "out");
   ASSERT_TRUE(r.stable);
-  EXPECT_EQ(j["filter"], "full");
+  EXPECT_EQ(j["filter"], "tensor");
   EXPECT_EQ(j["filter_requested"], "auto");
 }
 

@@ -63,11 +63,19 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
                      ", neighbors, full, tensor or multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
-  if (m_filter == solvers::kFilterTensor) m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+  if (m_filter == solvers::kFilterTensor) {
+    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
+    // Its fallback: implicit Euler with the current Jacobian, refactorised each step it runs.
+    IntegratorOptions ie = o;
+    ie.kind = solvers::kImplicitEuler;
+    ie.linear_solver = "direct";
+    m_fallback_ie = make_integrator(model, ie);
+    m_coupling = Eigen::VectorXd::Zero(n);
+  }
   if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
     m_rhs.resize(dim, nf);
-  } else if (m_full || m_tensor) { // the tensor filter's fallback is the full filter
+  } else if (m_full) {
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
     m_h = std::make_unique<NodalSolve>(factor);
@@ -95,6 +103,21 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<Eigen::Index>(free.size());
 
+  // The tensor filter where its warped rest Jacobian is trusted; past that distortion implicit
+  // Euler takes the step (entered beyond kTrustedMismatch, left below 0.7 of it): the current
+  // Jacobian, refactorised, where the rest one is no model of the state (docs/method.md).
+  if (m_tensor) {
+    const double mismatch = m_tensor->prepare(s.u);
+    const double limit = WarpedFilter<dim>::kTrustedMismatch * (m_fallback ? 0.7 : 1.0);
+    m_fallback = !(mismatch <= limit);
+    m_fallback_steps += m_fallback;
+    if (m_fallback) {
+      m_fallback_ie->step(s);
+      if (m_strain_limit > 0) limit_strain(s);
+      return;
+    }
+  }
+
   // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
   m_model.external_forces(s.t + dt, m_force);
   if (s.applied.cols() == m_force.cols()) m_force += s.applied;
@@ -115,14 +138,6 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
       const int i = free[static_cast<std::size_t>(a)];
       m_acc.col(a) = m_force.col(i) / net.mass[i];
     }
-  // The tensor filter where its warped rest Jacobian is trusted; past that distortion the
-  // scalar full filter takes the step (entered beyond kTrustedMismatch, left below 0.7 of it).
-  if (m_tensor) {
-    const double mismatch = m_tensor->prepare(s.u);
-    const double limit = WarpedFilter<dim>::kTrustedMismatch * (m_fallback ? 0.7 : 1.0);
-    m_fallback = !(mismatch <= limit);
-    m_fallback_steps += m_fallback;
-  }
   // dv = dt W a.
   if (m_tensor && !m_fallback) {
     m_tensor->solve(m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);

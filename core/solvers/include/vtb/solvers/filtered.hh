@@ -57,7 +57,7 @@ public:
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
   const std::string& filter() const { return m_filter; }
-  /// Tensor filter: the steps taken by the full filter because the distortion passed what the
+  /// Tensor filter: the steps taken by implicit Euler because the distortion passed what the
   /// warped rest Jacobian is trusted with (WarpedFilter::kTrustedMismatch).
   long fallback_steps() const { return m_fallback_steps; }
 
@@ -69,10 +69,11 @@ private:
   const Model<dim>& m_model;
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
-  std::unique_ptr<WarpedFilter<dim>> m_tensor; ///< tensor: the rest Jacobian's factor, warped
-  Eigen::VectorXd m_coupling;                  ///< tensor, full: the couplings' dt^2 k + dt c per node
-  Eigen::VectorXd m_no_coupling;               ///< empty: no couplings
-  bool m_fallback = false;                     ///< tensor: this step is the full filter's
+  std::unique_ptr<WarpedFilter<dim>> m_tensor;    ///< tensor: the rest Jacobian's factor, warped
+  std::unique_ptr<Integrator<dim>> m_fallback_ie; ///< tensor: implicit Euler, past the trusted distortion
+  Eigen::VectorXd m_coupling;                     ///< tensor, full: the couplings' dt^2 k + dt c per node
+  Eigen::VectorXd m_no_coupling;                  ///< empty: no couplings
+  bool m_fallback = false;                        ///< tensor: this step is implicit Euler's
   long m_fallback_steps = 0;
   bool m_correct;
   double m_strain_limit;

@@ -49,10 +49,9 @@ public:
   WarpedFilter(const Model<dim>& model, double dt);
   /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
   static constexpr int kMaxCoupled = 8;
-  /// Beyond this direction mismatch the warped rest Jacobian is not trusted (the cover would
-  /// pass the springs' whole transverse stiffness): the filtered step then falls back to the
-  /// scalar full filter, stable at any dt (docs/method.md).
-  static constexpr double kTrustedMismatch = 0.5;
+  /// Beyond this direction mismatch the warped rest Jacobian is not trusted: the filtered step
+  /// then falls back to implicit Euler, the current Jacobian refactorised (docs/method.md).
+  static constexpr double kTrustedMismatch = 0.2;
   /// The rotations at displacement u and the largest direction mismatch, which it returns; the
   /// cover follows it while it is trusted.
   double prepare(const Nodal<dim>& u);
