@@ -88,7 +88,7 @@ template <int dim> void App<dim>::draw_readouts() {
   ImGui::Text("energy %.4g J, max spring strain %.3g", st.energy, st.max_strain);
   ImGui::Text("pulls: %d (shift+release pins, C lets go)", sim.num_pulls());
   if (st.fallback_steps > 0)
-    ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "tensor: %ld steps by implicit Euler (distorted)", st.fallback_steps);
+    ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "tensor: %ld steps by implicit Euler", st.fallback_steps);
   if (st.behind && !m_paused) ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "behind real time: physics over budget");
   const int n = sim.probe_trace(m_trace);
   if (n > 0) {
