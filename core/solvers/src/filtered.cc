@@ -70,7 +70,6 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     ie.kind = solvers::kImplicitEuler;
     ie.linear_solver = "direct";
     m_fallback_ie = make_integrator(model, ie);
-    m_coupling = Eigen::VectorXd::Zero(n);
   }
   if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
@@ -88,10 +87,10 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     }
     m_rhs.resize(dim, nf);
     m_couplings = std::make_unique<ScalarCouplings>(*m_h, nf);
-    m_coupling = Eigen::VectorXd::Zero(n);
   } else {
     m_sparse = filter_matrix_neighbors(model, o.dt);
   }
+  if (m_tensor || m_h) m_coupling = Eigen::VectorXd::Zero(n); // the couplings' dt^2 k + dt c per node
   m_force.resize(dim, n);
   m_acc.resize(dim, nf);
   m_dv.resize(dim, nf);

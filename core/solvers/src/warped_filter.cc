@@ -13,6 +13,17 @@
 
 namespace vtb {
 
+namespace {
+
+/// A spring block's transverse parts at beta = 1 with H's sign: -sign (dt c + dt^2 k)(I - n n^T)
+/// from its stiffness and dashpot blocks K = k n n^T, D = c n n^T at rest.
+template <int dim> Mat<dim> transverse_block(double sign, const Mat<dim>& K, const Mat<dim>& D, double dt) {
+  const Mat<dim> I = Mat<dim>::Identity();
+  return -sign * (dt * (D.trace() * I - D) + dt * dt * (K.trace() * I - K));
+}
+
+} // namespace
+
 template <int dim>
 Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double dt, double transverse) {
   const auto& net = model.net;
@@ -29,9 +40,7 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
   for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
     const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
     if (a < 0 || b < 0) return;
-    const Mat<dim> I = Mat<dim>::Identity();
-    const Mat<dim> B =
-        -sign * (dt * (D + transverse * (D.trace() * I - D)) + dt * dt * (K + transverse * (K.trace() * I - K)));
+    const Mat<dim> B = -sign * (dt * D + dt * dt * K) + transverse * transverse_block<dim>(sign, K, D, dt);
     for (int p = 0; p < dim; ++p)
       for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, B(p, q));
   });
@@ -122,6 +131,17 @@ struct MismatchTracker {
   }
 };
 
+/// Adds spring s at displacement u to `tracker`: its vector now and its rest vector turned by
+/// both ends' rotations R. True when it passes `trigger` (MismatchTracker::add).
+template <int dim>
+bool add_spring(MismatchTracker& tracker, const SpringNetwork<dim>& net, const std::vector<Mat<dim>>& R, int s,
+                const Nodal<dim>& u, double trigger) {
+  const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+  const Vec<dim> D = net.rest.col(j) - net.rest.col(i);
+  return tracker.add<dim>(D + u.col(j) - u.col(i),
+                          (R[static_cast<std::size_t>(i)] + R[static_cast<std::size_t>(j)]) * D, trigger);
+}
+
 /// f, factorised.
 const OrderedLDLT& factorised(OrderedLDLT& f) {
   if (!f.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
@@ -153,8 +173,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen:
       net, rest, false, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
         const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
         if (a >= 0 && b >= 0) {
-          const Mat<dim> I = Mat<dim>::Identity();
-          const Mat<dim> T = -sign * (dt * (D.trace() * I - D) + dt * dt * (K.trace() * I - K));
+          const Mat<dim> T = transverse_block<dim>(sign, K, D, dt);
           for (int p = 0; p < dim; ++p)
             for (int q = 0; q < dim; ++q) {
               const int r = m_h.ordered(a * dim + p), c = m_h.ordered(b * dim + q);
@@ -172,13 +191,8 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
   const auto& net = m_model.net;
   MismatchTracker worst;
   bool out = false;
-  for (int s = 0; s < net.num_springs(); ++s) {
-    const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-    const Vec<dim> D = net.rest.col(j) - net.rest.col(i);
-    out |= worst.add<dim>(D + u.col(j) - u.col(i),
-                          (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D,
-                          m_trigger[static_cast<std::size_t>(s)]);
-  }
+  for (int s = 0; s < net.num_springs(); ++s)
+    out |= add_spring(worst, net, m_rotation, s, u, m_trigger[static_cast<std::size_t>(s)]);
   if (outgrown) *outgrown = out;
   return worst.value();
 }
@@ -188,11 +202,8 @@ template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>
 }
 
 template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
-  const auto [i, j] = m_model.net.edge[static_cast<std::size_t>(s)];
-  const Vec<dim> D = m_model.net.rest.col(j) - m_model.net.rest.col(i);
   MismatchTracker one;
-  one.add<dim>(D + u.col(j) - u.col(i),
-               (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D);
+  add_spring(one, m_model.net, m_rotation, s, u, 2.0);
   return one.value();
 }
 

@@ -180,13 +180,7 @@ void write_fidelity(const std::filesystem::path& out, const std::filesystem::pat
                                    {"strip-tension-nu0.45", strip("strip-tension-nu0.45", "[1.0e-4, 0.0]", "0.45")}};
   for (const auto& c : cases) {
     const Scene scene = parse_scene(c.scene, std::string(c.name) + ".toml", scenes_dir);
-    AnyMesh mesh_of_case;
-    try {
-      mesh_of_case = load_mesh(scene);
-    } catch (const InputError& e) { // the blocks' CGAL mesher, in a build without it
-      if (log) *log << "[fidelity] " << c.name << " skipped: " << e.what() << "\n";
-      continue;
-    }
+    AnyMesh mesh_of_case = load_mesh(scene);
     std::visit(
         [&](auto& mesh) {
           if constexpr (std::decay_t<decltype(mesh)>::points_dim == 2)
