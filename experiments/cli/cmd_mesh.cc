@@ -49,6 +49,7 @@ struct MeshOpts {
   std::vector<double> size;
   std::vector<int> divisions;
   int nodes = 0;
+  double hole = 0;
 };
 
 /// `vtb mesh convert IN OUT`: a .msh (2.2 or 4.x) to .msh 4.1 or .vtu.
@@ -78,12 +79,15 @@ void generate_mesh(const MeshOpts& o) {
     return;
   }
   const std::size_t d = o.shape == "rectangle" ? 2 : 3;
+  if (o.hole != 0 && (d != 2 || o.nodes <= 0))
+    throw InputError("vtb mesh generate " + o.shape + ": --hole is for an unstructured rectangle (--nodes)");
+  if (o.hole < 0) throw InputError("vtb mesh generate " + o.shape + ": --hole must be > 0");
   if (o.nodes > 0) { // unstructured (CGAL)
     if (o.size.size() != d || !o.divisions.empty())
       throw InputError("vtb mesh generate " + o.shape + " --nodes N: needs --size with " + std::to_string(d) +
                        " values and no --divisions");
     if (d == 2)
-      write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes), o.out);
+      write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes, o.hole), o.out);
     else
       write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes), o.out);
     return;
@@ -119,6 +123,8 @@ Action add_mesh(CLI::App& app) {
   gen->add_option("--nodes", o->nodes,
                   "Node count: exact for plate and an unstructured rectangle, approximate (15 %) for slab, sphere "
                   "and an unstructured box");
+  gen->add_option("--hole", o->hole,
+                  "Radius (m) of a circular hole at the centre of an unstructured rectangle (group \"hole\")");
   gen->add_option("-o,--out", o->out, "Output .msh file")->required();
   CLI::App* conv = cmd->add_subcommand("convert", "Convert a .msh (2.2 or 4.x) to .msh 4.1 or .vtu");
   conv->add_option("in", o->in, "Input .msh")->required();

@@ -25,30 +25,46 @@ using CDT = CGAL::Constrained_Delaunay_triangulation_2<K, Tds>;
 using Criteria = CGAL::Delaunay_mesh_size_criteria_2<CDT>;
 using Mesher = CGAL::Delaunay_mesher_2<CDT, Criteria>;
 
-void insert_polygon(CDT& cdt, const Polygon& poly) {
-  const auto n = poly.vertices.size();
+void insert_loop(CDT& cdt, const std::vector<Eigen::Vector2d>& loop) {
+  const auto n = loop.size();
   std::vector<CDT::Vertex_handle> v;
-  for (const auto& p : poly.vertices) v.push_back(cdt.insert(K::Point_2(p.x(), p.y())));
+  for (const auto& p : loop) v.push_back(cdt.insert(K::Point_2(p.x(), p.y())));
   for (std::size_t k = 0; k < n; ++k) cdt.insert_constraint(v[k], v[(k + 1) % n]);
 }
 
-/// Marks the faces inside the constrained polygon: those that cannot be reached from the
-/// infinite face without crossing a constraint. (A centroid test would misclassify the flat
-/// faces that round-off leaves between the hull and points inserted on a slanted edge.)
+void insert_polygon(CDT& cdt, const Polygon& poly) {
+  insert_loop(cdt, poly.vertices);
+  for (const auto& h : poly.holes) insert_loop(cdt, h.vertices);
+}
+
+/// Marks the faces inside the constrained polygon and outside its holes: a flood from the
+/// infinite face that counts the constraints crossed (odd: inside the polygon, even: outside
+/// it or inside a hole). A centroid test would misclassify the flat faces that round-off
+/// leaves between the hull and points inserted on a slanted edge.
 void mark_domain(CDT& cdt) {
-  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(true);
-  std::vector<CDT::Face_handle> stack{cdt.infinite_face()};
-  cdt.infinite_face()->set_in_domain(false);
-  while (!stack.empty()) {
-    const CDT::Face_handle f = stack.back();
-    stack.pop_back();
-    for (int i = 0; i < 3; ++i) {
-      const CDT::Face_handle n = f->neighbor(i);
-      if (n->is_in_domain() && !cdt.is_constrained(CDT::Edge(f, i))) {
-        n->set_in_domain(false);
-        stack.push_back(n);
+  std::map<CDT::Face_handle, int> level;
+  std::vector<CDT::Face_handle> frontier{cdt.infinite_face()}, next;
+  for (int depth = 0; !frontier.empty(); ++depth) {
+    next.clear();
+    std::vector<CDT::Face_handle> stack;
+    for (const auto& f0 : frontier)
+      if (level.emplace(f0, depth).second) stack.push_back(f0);
+    while (!stack.empty()) {
+      const CDT::Face_handle f = stack.back();
+      stack.pop_back();
+      f->set_in_domain(depth % 2 == 1);
+      for (int i = 0; i < 3; ++i) {
+        const CDT::Face_handle n = f->neighbor(i);
+        if (level.count(n)) continue;
+        if (cdt.is_constrained(CDT::Edge(f, i))) {
+          next.push_back(n);
+        } else {
+          level.emplace(n, depth);
+          stack.push_back(n);
+        }
       }
     }
+    std::swap(frontier, next);
   }
 }
 
@@ -61,6 +77,13 @@ int refine(CDT& cdt, const Polygon& poly, double size) {
   // whatever the heap held before (a test failed or passed with the build folder's path).
   insert_polygon(cdt, poly);
   Mesher mesher(cdt);
+  std::vector<K::Point_2> seeds; // one point inside each hole: its faces are not refined
+  for (const auto& h : poly.holes) {
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& p : h.vertices) c += p / static_cast<double>(h.vertices.size());
+    seeds.emplace_back(c.x(), c.y());
+  }
+  mesher.set_seeds(seeds.begin(), seeds.end(), false);
   mesher.set_criteria(Criteria(0.125, size)); // B = sin^2(20.7 deg)
   mesher.refine_mesh();
   return static_cast<int>(cdt.number_of_vertices());
@@ -132,6 +155,26 @@ Mesh2 to_mesh(const CDT& cdt, const Polygon& poly) {
     g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
     m.groups[name] = std::move(g);
   }
+  for (const auto& h : poly.holes) {
+    // The hole's edges: boundary facets both of whose nodes lie on the same hole edge.
+    auto on_hole_edge = [&](int node, std::size_t k) {
+      const Eigen::Vector2d a = h.vertices[k], b = h.vertices[(k + 1) % h.vertices.size()];
+      const Eigen::Vector2d p = m.points.col(node), d = b - a;
+      const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      return (a + t * d - p).norm() <= tol;
+    };
+    MeshGroup<2> g;
+    for (const auto& f : boundary)
+      for (std::size_t k = 0; k < h.vertices.size(); ++k)
+        if (on_hole_edge(f[0], k) && on_hole_edge(f[1], k)) {
+          g.facets.push_back(f);
+          g.nodes.insert(g.nodes.end(), f.begin(), f.end());
+          break;
+        }
+    std::sort(g.nodes.begin(), g.nodes.end());
+    g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+    m.groups[h.group] = std::move(g);
+  }
   return m;
 }
 
@@ -194,13 +237,31 @@ Polygon paper_plate() {
   return p;
 }
 
-Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes) {
+Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius) {
   if (!(size.array() > 0).all()) throw InputError("rectangle: the size must be > 0");
   Polygon p;
   p.vertices = {{0.0, 0.0}, {size.x(), 0.0}, {size.x(), size.y()}, {0.0, size.y()}};
   p.edge_groups = {{"bottom", {0}}, {"right", {1}}, {"top", {2}}, {"left", {3}}};
+  if (hole_radius > 0) {
+    const double shorter = size.minCoeff();
+    if (!(hole_radius <= 0.4 * shorter))
+      throw InputError("rectangle: hole radius " + std::to_string(hole_radius) +
+                       " leaves less than a tenth of the shorter side (" + std::to_string(shorter) +
+                       ") on each side; at most " + std::to_string(0.4 * shorter));
+    // Edges about as long as the mesh's (an equilateral mesh of `nodes` nodes over the area).
+    const double area = size.prod() - std::numbers::pi * hole_radius * hole_radius;
+    const double h = std::sqrt(2.0 * area / (std::sqrt(3.0) * nodes));
+    const int sides = std::max(16, static_cast<int>(std::ceil(2 * std::numbers::pi * hole_radius / h)));
+    Hole hole{{}, "hole"};
+    for (int k = 0; k < sides; ++k) {
+      const double a = 2 * std::numbers::pi * k / sides;
+      hole.vertices.emplace_back(size.x() / 2 + hole_radius * std::cos(a), size.y() / 2 + hole_radius * std::sin(a));
+    }
+    p.holes.push_back(std::move(hole));
+  }
   Mesh2 m = mesh_polygon(p, nodes);
-  m.source = "CGAL rectangle (" + std::to_string(m.num_nodes()) + " nodes)";
+  m.source = std::string(hole_radius > 0 ? "CGAL rectangle with a hole (" : "CGAL rectangle (") +
+             std::to_string(m.num_nodes()) + " nodes)";
   return m;
 }
 
@@ -212,6 +273,12 @@ Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
   for (std::size_t i = 0, j = poly.vertices.size() - 1; i < poly.vertices.size(); j = i++)
     area += poly.vertices[j].x() * poly.vertices[i].y() - poly.vertices[i].x() * poly.vertices[j].y();
   area = std::abs(area) / 2;
+  for (const auto& h : poly.holes) {
+    double a = 0;
+    for (std::size_t i = 0, j = h.vertices.size() - 1; i < h.vertices.size(); j = i++)
+      a += h.vertices[j].x() * h.vertices[i].y() - h.vertices[i].x() * h.vertices[j].y();
+    area -= std::abs(a) / 2;
+  }
   // Scan size bounds around the estimate h0 (equilateral cells of edge h have sqrt(3)/2 h^2
   // per node) and keep the candidates closest below the target.
   const double h0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * nodes));

@@ -157,8 +157,8 @@ TEST(Cvode, TensorFilterTracksACantileverStepAsWellAsImplicitEuler) {
   // dt (tau + dt)(K_L (x) I - K) and lags far behind; the tensor filter is backward Euler with
   // the Jacobian frozen at rest (exact for this small deflection up to O(rotation)), so its
   // error is implicit Euler's first-order one. Goal (the fidelity issue): at most 1.5x
-  // implicit Euler's at dt = 1, 10 and 40 ms. Measured (with the transverse cover of warped_filter.hh):
-  // 0.32/0.43, 2.8/4.1, 17.3/14.1 %; the full filter 16, 57, 92 %.
+  // implicit Euler's at dt = 1, 10 and 40 ms. Measured (with the per-spring transverse cover of
+  // warped_filter.hh): 0.30/0.42, 2.74/3.91, 8.66/13.6 %; the full filter 15, 59, 92 %.
   // The reproduction's transient.csv runs the same scene.
   const Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/cantilever_step.toml");
   const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));

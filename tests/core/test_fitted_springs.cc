@@ -181,9 +181,10 @@ TEST(FittedSprings, HoldCooksMembraneOnItsClampWithinFivePercent) {
 }
 
 TEST(FittedSprings, StopOnceTheHeldOutModesStopImprovingAndTellTheirProgress) {
-  // The opt-in early stop (FitOptions::patience 2) ends the fit when its held-out modes and
-  // its residual stop improving; run to the residual's tolerance (patience 0, the default)
-  // the same fit takes more steps (7 against 14 here). The stopped fit must still meet the 5 % goal on the clamped
+  // The early stop (FitOptions::patience 2, the default beyond kEarlyStopDofs free dofs) ends
+  // the fit when its held-out modes and its residual stop improving; run to the residual's
+  // tolerance (patience 0, the default on this 458-node slab) the same fit takes more steps
+  // (7 against 14 here). The stopped fit must still meet the 5 % goal on the clamped
   // slab's loads, which it never saw, and the progress callback hears the modes, the steps and one "done" at the end.
   const auto mesh = read_msh(std::filesystem::path(VTB_SOURCE_DIR) / "meshes/data/slab_500.msh");
   const Mesh3& m = std::get<Mesh3>(mesh);
@@ -213,6 +214,35 @@ TEST(FittedSprings, StopOnceTheHeldOutModesStopImprovingAndTellTheirProgress) {
   EXPECT_EQ(stages, (std::vector<std::string>{"modes", "fit", "done"}));
   for (const Vec<3>& force : {Vec<3>(1e-3, 0, 0), Vec<3>(0, 0, -1e-5), Vec<3>(0, 1e-5, 0)})
     EXPECT_LT(cantilever_error<3>(m, k, E, nu, 1.0, force), 0.05) << "load " << force.transpose();
+}
+
+TEST(FittedSprings, StopEarlyByDefaultOnlyWhereAStepCostsSeconds) {
+  // The default patience (kAutoPatience): run to the tolerance below kEarlyStopDofs free dofs
+  // (Cook's membrane, the strips, the 500-node blocks: where the held-out modes are too coarse
+  // to stop on), stop at the first step that improves neither the held-out error nor the
+  // objective by 15 % above it. A clamped 121 x 26 strip (6,292 free dofs): the default fit is
+  // the patience-1 fit, bit for bit, in fewer steps than the fit to tolerance.
+  const FitOptions defaults;
+  EXPECT_EQ(defaults.patience_for(FitOptions::kEarlyStopDofs), 0);
+  EXPECT_EQ(defaults.patience_for(FitOptions::kEarlyStopDofs + 1), 1);
+  FitOptions explicit_zero;
+  explicit_zero.patience = 0;
+  EXPECT_EQ(explicit_zero.patience_for(100000), 0) << "an explicit patience is kept";
+  const Mesh2 m = generate_rectangle({0.6, 0.125}, {120, 25});
+  FitOptions o;
+  o.supports = m.groups.at("left").nodes;
+  std::sort(o.supports.begin(), o.supports.end());
+  ASSERT_GT(2 * (m.num_nodes() - static_cast<int>(o.supports.size())), FitOptions::kEarlyStopDofs);
+  FitOptions one = o, zero = o;
+  one.patience = 1;
+  zero.patience = 0;
+  FitReport rep, rep_one, rep_zero;
+  const Eigen::VectorXd k = fitted_stiffness(m, 1.0, 0.3, 1.0, o, &rep);
+  EXPECT_EQ(k, fitted_stiffness(m, 1.0, 0.3, 1.0, one, &rep_one));
+  fitted_stiffness(m, 1.0, 0.3, 1.0, zero, &rep_zero);
+  std::cout << "steps: default " << rep.iterations << ", to tolerance " << rep_zero.iterations << "; held-out "
+            << rep.validation() << " vs " << rep_zero.validation() << "\n";
+  EXPECT_LT(rep.iterations, rep_zero.iterations);
 }
 
 #ifdef VTB_HAVE_CGAL_MESHERS // the block comes from CGAL Mesh_3 (VTB_WITH_CGAL=OFF skips it)
@@ -262,6 +292,39 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
     EXPECT_LT(fitted, 0.05) << name << ", lloyd " << before;
     EXPECT_LT(fitted, 0.5 * before) << name;
     std::cout << name << ": lloyd " << before << ", fitted " << fitted << "\n";
+  }
+}
+#endif
+
+#ifdef VTB_HAVE_CGAL_MESHERS
+TEST(FittedSprings, HoldAPlateWithAHoleInTensionAndShearFromNuPointTwoToPointFourFive) {
+  // Issue 25's plate with a hole: a CGAL plate of 10 x 5 cm with a central hole of radius
+  // 1.2 cm (Kirsch's problem: the hoop stress at the rim is 3x the far field in tension),
+  // clamped on its left edge, its right edge pulled (tension) or sheared. The fit trains on
+  // the clamped plate's modes and uniform stress states; the rim's stress concentration is in
+  // neither. Held to the issue's goal of 5 % and to never worse than Lloyd.
+  const Mesh2 m = mesh_rectangle({0.1, 0.05}, 600, 0.012);
+  const double E = 5.0e4, t = 0.001;
+  std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()), false);
+  for (int v : m.groups.at("left").nodes) fixed[static_cast<std::size_t>(v)] = true;
+  for (const double nu : {0.2, 0.3, 0.45}) {
+    FitOptions o;
+    o.supports = m.groups.at("left").nodes;
+    std::sort(o.supports.begin(), o.supports.end());
+    FitReport rep;
+    const Eigen::VectorXd k = fitted_stiffness(m, E, nu, t, o, &rep);
+    const Eigen::VectorXd lloyd = lloyd_stiffness(m, E, nu, t);
+    for (const Vec<2>& force : {Vec<2>(1e-4, 0), Vec<2>(0, 1e-5)}) {
+      Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * m.num_nodes());
+      for (int v : m.groups.at("right").nodes) f.segment<2>(2 * v) = force;
+      const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(m, E, nu, t), f, fixed, 2);
+      const double fitted = (clamped_solve(spring_matrix(m, k), f, fixed, 2) - ufem).norm() / ufem.norm();
+      const double before = (clamped_solve(spring_matrix(m, lloyd), f, fixed, 2) - ufem).norm() / ufem.norm();
+      std::cout << "nu " << nu << " load " << force.transpose() << ": lloyd " << before << ", fitted " << fitted << " ("
+                << rep.chosen << ", held-out " << rep.validation() << ")\n";
+      EXPECT_LT(fitted, 0.05) << "nu " << nu << " load " << force.transpose() << ", lloyd " << before;
+      EXPECT_LE(fitted, before) << "nu " << nu << " load " << force.transpose();
+    }
   }
 }
 #endif
@@ -393,7 +456,7 @@ TEST(FittedSprings, AreTheDefaultWithinAutosBudgetAndLloydBeyondIt) {
   const SpringNetwork<2> tiny = build_network(generate_rectangle({0.1, 0.02}, {2, 1}), mat, "auto");
   EXPECT_EQ(tiny.calibration, "lloyd");
   EXPECT_NE(tiny.calibration_note.find("too small to fit (6 nodes)"), std::string::npos) << tiny.calibration_note;
-  const Mesh3 big = generate_box({0.4, 0.1, 0.1}, {40, 16, 16}); // 11,849 nodes
+  const Mesh3 big = generate_box({0.4, 0.1, 0.1}, {48, 16, 16}); // 14,161 nodes
   ASSERT_GT(big.num_nodes(), kAutoFitNodes3D);
   const SpringNetwork<3> beyond = build_network(big, mat, "auto");
   EXPECT_EQ(beyond.calibration, "lloyd");

@@ -10,6 +10,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <sstream>
 
 namespace vtb {
@@ -59,6 +60,39 @@ TEST(Plate, RefusesImpossibleRequests) {
   Polygon line;
   line.vertices = {{0, 0}, {1, 0}};
   EXPECT_THROW(mesh_polygon(line, 10), InputError);
+}
+
+TEST(Plate, WithAHoleHasTheExactNodeCountQualityAndAnEmptyHole) {
+  // A 10 x 5 cm rectangle with a central hole of radius 1.2 cm (a polygon with edges as long as the
+  // mesh's, 26 here): exact node count, the refinement's angle bound, no cell in the hole, and the
+  // hole's rim as group "hole" at the radius (its polygon's vertices on the circle, the
+  // points the refinement puts on its sides inside it by at most r (1 - cos(pi / 16))).
+  const double r = 0.012;
+  const Mesh2 m = mesh_rectangle({0.1, 0.05}, 600, r);
+  EXPECT_EQ(m.num_nodes(), 600);
+  const MeshQuality q = mesh_quality(m);
+  EXPECT_GE(q.min_angle, 20.0);
+  EXPECT_EQ(q.inverted, 0);
+  const Eigen::Vector2d centre(0.05, 0.025);
+  double area = 0;
+  for (const auto& c : m.cells) {
+    area += signed_measure(m, c);
+    Eigen::Vector2d g = Eigen::Vector2d::Zero();
+    for (int v : c) g += m.points.col(v) / 3.0;
+    EXPECT_GT((g - centre).norm(), 0.99 * r * std::cos(std::numbers::pi / 16)) << "a cell inside the hole";
+  }
+  const auto& hole = m.groups.at("hole");
+  ASSERT_GE(hole.facets.size(), 16u);
+  for (int v : hole.nodes) {
+    EXPECT_LE((m.points.col(v) - centre).norm(), r * (1 + 1e-12));
+    EXPECT_GE((m.points.col(v) - centre).norm(), r * std::cos(std::numbers::pi / 16));
+  }
+  // The hole is a polygon of n >= 16 sides inscribed in the circle: its area is between the
+  // 16-gon's, 8 r^2 sin(pi / 8), and the circle's.
+  EXPECT_LT(area, 0.1 * 0.05 - 8 * r * r * std::sin(std::numbers::pi / 8));
+  EXPECT_GT(area, 0.1 * 0.05 - std::numbers::pi * r * r);
+  for (const char* g : {"left", "right", "top", "bottom"}) EXPECT_GE(m.groups.at(g).facets.size(), 3u) << g;
+  EXPECT_THROW(mesh_rectangle({0.1, 0.05}, 600, 0.021), InputError) << "a ligament under a tenth of the side";
 }
 
 TEST(Solid, SlabHasItsVolumeQualityAndFaceGroups) {

@@ -90,7 +90,7 @@ AnyMesh load_mesh(const Scene& scene) {
   if (m.mesher == "cgal") {
 #ifdef VTB_HAVE_CGAL_MESHERS
     try {
-      if (m.shape == "rectangle") return mesh_rectangle(m.size, m.nodes);
+      if (m.shape == "rectangle") return mesh_rectangle(m.size, m.nodes, m.hole);
       return mesh_box(m.size, m.nodes);
     } catch (const InputError& e) {
       throw InputError(scene.file.string() + ": [mesh].generate: " + e.what());

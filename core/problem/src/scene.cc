@@ -90,7 +90,7 @@ void read_mesh(const TableReader& top, const std::string& name, const std::files
       s.mesh.file = base_dir / r.string("file", std::nullopt);
     } else {
       const toml::table* g = r.table("generate");
-      const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions", "mesher", "nodes"});
+      const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions", "mesher", "nodes", "hole"});
       s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box"});
       const std::size_t d = s.mesh.shape == "rectangle" ? 2 : 3;
       s.mesh.size = gr.vector("size", d, d);
@@ -99,7 +99,15 @@ void read_mesh(const TableReader& top, const std::string& name, const std::files
       if (s.mesh.mesher == "cgal") {
         if (gr.has("divisions")) gr.fail("divisions", "is for mesher = \"structured\"; a CGAL mesh takes nodes");
         s.mesh.nodes = gr.integer("nodes", std::nullopt, d == 2 ? 4 : 50, 500'000);
+        if (gr.has("hole")) {
+          if (d != 2) gr.fail("hole", "is for shape = \"rectangle\" (a plate with a hole)");
+          s.mesh.hole = gr.number("hole", std::nullopt, positive);
+          if (s.mesh.hole > 0.4 * s.mesh.size.minCoeff())
+            gr.fail("hole", "must leave a tenth of the shorter side on each side: at most 0.4 x " +
+                                std::to_string(s.mesh.size.minCoeff()));
+        }
       } else {
+        if (gr.has("hole")) gr.fail("hole", "is for mesher = \"cgal\" (a structured mesh has no hole)");
         if (gr.has("nodes")) gr.fail("nodes", "is for mesher = \"cgal\"; a structured mesh takes divisions");
         const Eigen::VectorXd div = gr.vector("divisions", d, d);
         // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).

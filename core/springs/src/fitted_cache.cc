@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '8', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', '9', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -39,9 +39,9 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std
   f.add(&count, sizeof count);
   f.add(supports.data(), sizeof(int) * count);
   const FitOptions o;
-  for (const double x :
-       {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting, o.uniform_stress,
-        double(o.cg_iterations), double(o.holdout), double(o.patience), o.min_improvement})
+  for (const double x : {double(o.modes), o.pull, o.floor, double(o.max_iterations), o.tolerance, o.weighting,
+                         o.uniform_stress, double(o.cg_iterations), double(o.holdout), double(o.patience),
+                         o.min_improvement, double(FitOptions::kEarlyStopDofs)})
     f.add(x);
   return f.h;
 }

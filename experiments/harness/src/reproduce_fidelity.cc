@@ -86,6 +86,17 @@ std::string top_twist() {
          "[[load]]\nbox = [[0.03, 0.0, 0.04], [0.04, 0.04, 0.04]]\ntotal_force = [0.0, -0.05, 0.0]\n";
 }
 
+/// Issue 25's plate with a hole: a CGAL plate of 10 x 5 cm (600 nodes) with a central hole of
+/// radius 1.2 cm, clamped on its left edge and loaded on its right edge by `force` (the stress
+/// concentration of Kirsch's problem at the hole's rim), at Poisson ratio `nu`.
+std::string plate_hole(const char* name, const char* force, const char* nu = "0.3") {
+  return std::string("[scene]\nname = \"") + name +
+         "\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\ngenerate = { shape = \"rectangle\", size = [0.1, "
+         "0.05], mesher = \"cgal\", nodes = 600, hole = 0.012 }\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = " +
+         nu + "\ndensity = 1000.0\nthickness = 0.001\n[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\n" +
+         "total_force = " + force + "\n";
+}
+
 /// Cook's membrane on a structured 16 x 16 grid mapped onto the trapezoid (0,0) (48,44) (48,60)
 /// (0,44): clamped at x = 0, unit shear on x = 48, E = 1, nu = 1/3 (both linear, so the size of
 /// the load does not matter here).
@@ -177,7 +188,11 @@ void write_fidelity(const std::filesystem::path& out, const std::filesystem::pat
                                    {"block-shear-nu0.2", block("block-shear-nu0.2", top_shear(), "0.2")},
                                    {"block-shear-nu0.45", block("block-shear-nu0.45", top_shear(), "0.45")},
                                    {"strip-tension-nu0.2", strip("strip-tension-nu0.2", "[1.0e-4, 0.0]", "0.2")},
-                                   {"strip-tension-nu0.45", strip("strip-tension-nu0.45", "[1.0e-4, 0.0]", "0.45")}};
+                                   {"strip-tension-nu0.45", strip("strip-tension-nu0.45", "[1.0e-4, 0.0]", "0.45")},
+                                   {"hole-tension", plate_hole("hole-tension", "[1.0e-3, 0.0]")},
+                                   {"hole-shear", plate_hole("hole-shear", "[0.0, 1.0e-4]")},
+                                   {"hole-tension-nu0.2", plate_hole("hole-tension-nu0.2", "[1.0e-3, 0.0]", "0.2")},
+                                   {"hole-tension-nu0.45", plate_hole("hole-tension-nu0.45", "[1.0e-3, 0.0]", "0.45")}};
   for (const auto& c : cases) {
     const Scene scene = parse_scene(c.scene, std::string(c.name) + ".toml", scenes_dir);
     AnyMesh mesh_of_case = load_mesh(scene);

@@ -9,11 +9,19 @@
 
 namespace vtb {
 
+/// A hole in a polygon: a convex polygon strictly inside it (its vertex mean is inside the
+/// hole, which the mesher uses as the seed that keeps it empty); its edges form one group.
+struct Hole {
+  std::vector<Eigen::Vector2d> vertices;
+  std::string group;
+};
+
 /// A simple polygon (counter-clockwise) with named boundary edges: edge k runs from vertex
-/// k to vertex k + 1 (mod n).
+/// k to vertex k + 1 (mod n); optionally with holes.
 struct Polygon {
   std::vector<Eigen::Vector2d> vertices;
   std::map<std::string, std::vector<int>> edge_groups;
+  std::vector<Hole> holes;
 };
 
 /// The plate of the paper's Fig. 3 as vtb models it: a thin hexagonal plate 0.2 m x 0.05 m
@@ -32,8 +40,11 @@ Polygon paper_plate();
 Mesh2 mesh_polygon(const Polygon& polygon, int nodes, double min_angle_deg = 20.0);
 
 /// An unstructured rectangle [0, size]: mesh_polygon of its four corners, exactly `nodes`
-/// nodes; groups bottom, right, top, left (as the structured generator names them).
-Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes);
+/// nodes; groups bottom, right, top, left (as the structured generator names them). With
+/// hole_radius > 0, a circular hole of that radius at the centre (a polygon with edges about
+/// as long as the mesh's, at least 16), its boundary the group "hole"; the hole must leave a
+/// ligament of at least a tenth of the shorter side on each side (InputError otherwise).
+Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius = 0);
 
 /// An unstructured box [0, size] meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %),
 /// sharp edges protected; groups left/right/bottom/top/front/back. Deterministic.

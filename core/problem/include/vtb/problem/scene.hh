@@ -66,6 +66,7 @@ struct MeshDesc {
   Eigen::VectorXi divisions;         ///< structured
   std::string mesher = "structured"; ///< "structured" | "cgal" (unstructured, about `nodes` nodes)
   int nodes = 0;                     ///< cgal
+  double hole = 0;                   ///< m, radius of a central hole (cgal rectangle); 0: none
   bool generated() const { return !shape.empty(); }
 };
 

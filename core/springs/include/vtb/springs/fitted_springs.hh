@@ -61,15 +61,23 @@ struct FitOptions {
   /// the fit and answers the validation: the fit returns whichever of itself, Lloyd and van
   /// Gelder answers the held-out modes best. 0: nothing held out (the fit is returned).
   int holdout = 5;
-  /// Early stopping on the held-out modes (opt-in): with patience > 0 the fit stops at the
+  /// Early stopping on the held-out modes: with patience > 0 the fit stops at the
   /// `patience`-th accepted step that lowered neither the held-out error (while below the
   /// prior's) nor the objective by `min_improvement` (relative), and keeps its best-held-out
-  /// iterate. With 2, clamped CGAL slabs of 1,907 / 9,982 nodes stop after 4-5 steps at 1.15 /
-  /// 0.55 % held-out error (the 10k fit in 44-53 s instead of minutes). Not the default:
-  /// where the held-out modes are poorly represented their error is noisy and stops the fit
-  /// early: Cook's membrane on its clamp reaches 5.1 % (13 % with the held-out test alone)
-  /// where the fit to tolerance reaches 3.1 % (docs/fidelity.md). 0: stop on `tolerance`.
-  int patience = 0;
+  /// iterate. On small meshes the held-out modes are poorly represented, their error is noisy
+  /// and stops the fit early: Cook's membrane (578 dofs) on its clamp reaches 5.1 % with
+  /// patience 2 (13 % with the held-out test alone) where the fit to tolerance reaches 3.1 %
+  /// (docs/fidelity.md). 0: stop on `tolerance`. kAutoPatience (the default): 1 on meshes of
+  /// more than kEarlyStopDofs free dofs, where a step costs seconds (10 s at 10k nodes in 3D)
+  /// and the low held-out modes are resolved, else 0: the clamped 9,982-node slab then stops
+  /// after 4 steps at 0.55 % held-out error, the iterate patience 2 returns a step later.
+  int patience = kAutoPatience;
+  static constexpr int kAutoPatience = -1;
+  static constexpr int kEarlyStopDofs = 6000;
+  /// The patience a fit of `free_dofs` unknowns runs with.
+  int patience_for(int free_dofs) const {
+    return patience != kAutoPatience ? patience : free_dofs > kEarlyStopDofs ? 1 : 0;
+  }
   double min_improvement = 0.15;
   FitProgress progress; ///< empty: nothing is told (not part of the fit's result or cache key)
 };
@@ -102,8 +110,9 @@ template <int dim> int fit_pinned_dofs(const Mesh<dim>& mesh, const std::vector<
 /// Whether `springs = "auto"` fits this mesh: empty if so, else why not (one phrase). Its
 /// budget is a node count, not a clock, so that a scene gets the same springs on any machine:
 /// 3D meshes up to kAutoFitNodes3D nodes (the fit's cost grows with the 3D factor's fill:
-/// docs/fidelity.md's cost ladder), 2D up to kAutoFitNodes2D, and meshes large enough to fit.
-inline constexpr int kAutoFitNodes2D = 20000, kAutoFitNodes3D = 2500;
+/// docs/fidelity.md's cost ladder; with the early stop a 10k-node slab takes under a minute),
+/// 2D up to kAutoFitNodes2D, and meshes large enough to fit.
+inline constexpr int kAutoFitNodes2D = 20000, kAutoFitNodes3D = 12000;
 template <int dim> std::string fit_affordable(const Mesh<dim>& mesh, const std::vector<int>& supports);
 
 } // namespace vtb
