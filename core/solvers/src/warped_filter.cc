@@ -90,7 +90,7 @@ struct MismatchTracker {
   double worst_sin2 = 0, worst = 0;
 
   /// Adds the pair; true when its sin^2 passes `trigger` (or it is at 90 degrees or more).
-  template <int dim> bool add(const Vec<dim>& d, const Vec<dim>& t, double trigger = 2.0) {
+  template <int dim> [[gnu::always_inline]] bool add(const Vec<dim>& d, const Vec<dim>& t, double trigger = 2.0) {
     const double dd = d.squaredNorm();
     if (!(dd > 0)) return false;
     const double tt = t.squaredNorm();
@@ -134,10 +134,11 @@ struct MismatchTracker {
 /// Adds spring s at displacement u to `tracker`: its vector now and its rest vector turned by
 /// both ends' rotations R. True when it passes `trigger` (MismatchTracker::add).
 template <int dim>
-bool add_spring(MismatchTracker& tracker, const SpringNetwork<dim>& net, const std::vector<Mat<dim>>& R, int s,
-                const Nodal<dim>& u, double trigger) {
+[[gnu::always_inline]] inline bool add_spring(MismatchTracker& tracker, const SpringNetwork<dim>& net,
+                                              const Nodal<dim>& rest, const std::vector<Mat<dim>>& R, int s,
+                                              const Nodal<dim>& u, double trigger) {
   const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-  const Vec<dim> D = net.rest.col(j) - net.rest.col(i);
+  const Vec<dim> D = rest.col(s);
   return tracker.add<dim>(D + u.col(j) - u.col(i),
                           (R[static_cast<std::size_t>(i)] + R[static_cast<std::size_t>(j)]) * D, trigger);
 }
@@ -185,14 +186,36 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen:
         m_tptr[static_cast<std::size_t>(sp) + 1] = static_cast<int>(m_toff.size());
       });
   m_trigger.assign(static_cast<std::size_t>(ns), MismatchTracker::to_sin2(kCoverFloor));
+  m_spring_rest.resize(dim, ns);
+  for (int sp = 0; sp < ns; ++sp)
+    m_spring_rest.col(sp) = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
+                            net.rest.col(net.edge[static_cast<std::size_t>(sp)][0]);
+  m_adj_rest.resize(dim, static_cast<Eigen::Index>(net.adj_node.size()));
+  for (int i = 0; i < net.num_nodes(); ++i)
+    for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
+      m_adj_rest.col(p) = net.rest.col(net.adj_node[static_cast<std::size_t>(p)]) - net.rest.col(i);
+  if constexpr (dim == 2) m_polar.resize(2, net.num_nodes());
 }
 
 template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
   const auto& net = m_model.net;
   MismatchTracker worst;
   bool out = false;
-  for (int s = 0; s < net.num_springs(); ++s)
-    out |= add_spring(worst, net, m_rotation, s, u, m_trigger[static_cast<std::size_t>(s)]);
+  if constexpr (dim == 2) {
+    // The rotations as (cos, sin) (m_polar after rotations()): half the bytes per end of a
+    // 2 x 2 matrix; (R_i + R_j) D is D turned by (c_i + c_j, s_i + s_j), as add_spring makes it.
+    for (int s = 0; s < net.num_springs(); ++s) {
+      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+      const Vec<2> D = m_spring_rest.col(s);
+      const Vec<2> cs = m_polar.col(i) + m_polar.col(j);
+      out |= worst.add<2>(D + u.col(j) - u.col(i),
+                          Vec<2>(cs.x() * D.x() - cs.y() * D.y(), cs.y() * D.x() + cs.x() * D.y()),
+                          m_trigger[static_cast<std::size_t>(s)]);
+    }
+  } else {
+    for (int s = 0; s < net.num_springs(); ++s)
+      out |= add_spring(worst, net, m_spring_rest, m_rotation, s, u, m_trigger[static_cast<std::size_t>(s)]);
+  }
   if (outgrown) *outgrown = out;
   return worst.value();
 }
@@ -203,7 +226,7 @@ template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>
 
 template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
   MismatchTracker one;
-  add_spring(one, m_model.net, m_rotation, s, u, 2.0);
+  add_spring(one, m_model.net, m_spring_rest, m_rotation, s, u, 2.0);
   return one.value();
 }
 
@@ -285,41 +308,60 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   const auto& net = m_model.net;
   // A_i = sum over i's springs (x_j - x_i)(X_j - X_i)^T, gathered node by node so that the
   // sum stays in registers (scattered spring by spring, each add waited on the previous
-  // one's store to the same node). In 2D the rotation needs only A00 + A11 = sum d . D and
-  // A10 - A01 = sum D x d, kept in A's first column.
+  // one's store to the same node); the rest vectors X_j - X_i are read in order (m_adj_rest).
+  // In 2D the rotation needs only a = A00 + A11 = sum d . D and b = A10 - A01 = sum D x d:
+  // gathered in a first pass, normalised in a second, so that the square roots and divisions
+  // of successive nodes overlap instead of each waiting at the end of its node's gather.
   for (int i = 0; i < net.num_nodes(); ++i) {
     const auto ui = u.col(i);
-    const auto Xi = net.rest.col(i);
-    Mat<dim> A = Mat<dim>::Zero();
-    for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p) {
-      const int j = net.adj_node[static_cast<std::size_t>(p)];
-      const Vec<dim> D = net.rest.col(j) - Xi;
-      const Vec<dim> d = D + u.col(j) - ui;
-      if constexpr (dim == 2) {
-        A(0, 0) += d.dot(D);
-        A(1, 0) += D.x() * d.y() - D.y() * d.x();
-      } else {
+    const int begin = net.adj_ptr[static_cast<std::size_t>(i)], end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
+    if constexpr (dim == 2) {
+      // (d . D, D x d) summed in two interleaved partial sums: one chain of dependent adds
+      // per entry made the loop wait on the adder's latency.
+      Vec<2> even = Vec<2>::Zero(), odd = Vec<2>::Zero();
+      auto term = [&](int p) {
+        const Vec<2> D = m_adj_rest.col(p);
+        const Vec<2> d = D + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
+        return Vec<2>(d.dot(D), D.x() * d.y() - D.y() * d.x());
+      };
+      int p = begin;
+      for (; p + 1 < end; p += 2) {
+        even += term(p);
+        odd += term(p + 1);
+      }
+      if (p < end) even += term(p);
+      m_polar.col(i) = even + odd;
+    } else {
+      Mat<dim> A = Mat<dim>::Zero();
+      for (int p = begin; p < end; ++p) {
+        const Vec<dim> D = m_adj_rest.col(p);
+        const Vec<dim> d = D + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
         A.noalias() += d * D.transpose();
       }
-    }
-    Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
-    if constexpr (dim == 2) {
-      // The rotation nearest to A (polar part) in closed form: its angle is that of
-      // (a, b) = (A00 + A11, A10 - A01), so (cos, sin) = (a, b) / |(a, b)| (no atan2).
-      const double a = A(0, 0), b = A(1, 0), r2 = a * a + b * b;
-      if (r2 > 0) {
-        const double inv = 1 / std::sqrt(r2);
-        R << a * inv, -b * inv, b * inv, a * inv;
-      } else {
-        R.setIdentity();
+      Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
+      if (!polar_rotation(A, R)) { // an inverted or flat neighbourhood: the SVD decides
+        const Eigen::JacobiSVD<Mat<dim>> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
+        Mat<dim> U = svd.matrixU();
+        if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(dim - 1) *= -1;
+        R = U * svd.matrixV().transpose();
       }
-    } else if (!polar_rotation(A, R)) { // an inverted or flat neighbourhood: the SVD decides
-      const Eigen::JacobiSVD<Mat<dim>> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Mat<dim> U = svd.matrixU();
-      if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(dim - 1) *= -1;
-      R = U * svd.matrixV().transpose();
+      if (!R.allFinite()) R.setIdentity(); // a non-finite state: the run's watch stops it
     }
-    if (!R.allFinite()) R.setIdentity(); // a non-finite state: the run's watch stops it
+  }
+  if constexpr (dim == 2) {
+    // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so
+    // (cos, sin) = (a, b) / |(a, b)| (no atan2); identity where (a, b) is zero or not finite
+    // (a non-finite state: the run's watch stops it).
+    for (int i = 0; i < net.num_nodes(); ++i) {
+      const double a = m_polar(0, i), b = m_polar(1, i), r2 = a * a + b * b;
+      const double inv = 1 / std::sqrt(r2);
+      Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
+      if (r2 > 0 && std::isfinite(inv * (a + b)))
+        m_polar.col(i) << a * inv, b * inv;
+      else
+        m_polar.col(i) << 1.0, 0.0;
+      R << m_polar(0, i), -m_polar(1, i), m_polar(1, i), m_polar(0, i);
+    }
   }
 }
 

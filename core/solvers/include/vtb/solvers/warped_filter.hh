@@ -83,6 +83,9 @@ private:
   OrderedLDLT m_h;                  ///< ordered by nodes (block = dim): L is made of dim x dim tiles
   BlockSolve<dim> m_h_blocks;       ///< the step's solve with m_h, tile by tile
   std::vector<Mat<dim>> m_rotation; ///< per node
+  Nodal<dim> m_spring_rest;         ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
+  Nodal<dim> m_adj_rest;            ///< per adjacency entry of node i: X_j - X_i (the rotations read it in order)
+  Eigen::Matrix2Xd m_polar;         ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
   std::vector<double> m_base;       ///< H(0)'s ordered upper values
   /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
   /// k in [m_tptr[s], m_tptr[s + 1]).
