@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <numeric>
 
 namespace vtb {
 namespace {
@@ -30,6 +31,14 @@ void insert_loop(CDT& cdt, const std::vector<Eigen::Vector2d>& loop) {
   std::vector<CDT::Vertex_handle> v;
   for (const auto& p : loop) v.push_back(cdt.insert(K::Point_2(p.x(), p.y())));
   for (std::size_t k = 0; k < n; ++k) cdt.insert_constraint(v[k], v[(k + 1) % n]);
+}
+
+/// The area enclosed by a simple closed loop (the shoelace formula).
+double loop_area(const std::vector<Eigen::Vector2d>& loop) {
+  double twice = 0;
+  for (std::size_t i = 0, j = loop.size() - 1; i < loop.size(); j = i++)
+    twice += loop[j].x() * loop[i].y() - loop[i].x() * loop[j].y();
+  return std::abs(twice) / 2;
 }
 
 void insert_polygon(CDT& cdt, const Polygon& poly) {
@@ -131,18 +140,18 @@ Mesh2 to_mesh(const CDT& cdt, const Polygon& poly) {
     if (f->is_in_domain()) m.cells.push_back({id[f->vertex(0)], id[f->vertex(1)], id[f->vertex(2)]});
   std::sort(m.cells.begin(), m.cells.end());
   check_and_orient(m);
-  // Boundary groups: facets on the named polygon edges.
+  // Boundary groups: the boundary facets both of whose nodes lie on one of the group's edges
+  // (edge k of `loop` runs from vertex k to k + 1).
   const double tol = 1e-9 * bounding_diagonal(m);
-  auto on_edge = [&](int node, int k) {
-    const Eigen::Vector2d a = poly.vertices[static_cast<std::size_t>(k)];
-    const Eigen::Vector2d b = poly.vertices[(static_cast<std::size_t>(k) + 1) % poly.vertices.size()];
-    const Eigen::Vector2d p = m.points.col(node);
-    const Eigen::Vector2d d = b - a;
-    const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-    return (a + t * d - p).norm() <= tol;
-  };
   const auto boundary = boundary_facets(m);
-  for (const auto& [name, edges] : poly.edge_groups) {
+  auto group_on = [&](const std::vector<Eigen::Vector2d>& loop, const std::vector<int>& edges) {
+    auto on_edge = [&](int node, int k) {
+      const Eigen::Vector2d a = loop[static_cast<std::size_t>(k)];
+      const Eigen::Vector2d d = loop[(static_cast<std::size_t>(k) + 1) % loop.size()] - a;
+      const Eigen::Vector2d p = m.points.col(node);
+      const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+      return (a + t * d - p).norm() <= tol;
+    };
     MeshGroup<2> g;
     for (const auto& f : boundary)
       for (int k : edges)
@@ -153,27 +162,13 @@ Mesh2 to_mesh(const CDT& cdt, const Polygon& poly) {
         }
     std::sort(g.nodes.begin(), g.nodes.end());
     g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
-    m.groups[name] = std::move(g);
-  }
+    return g;
+  };
+  for (const auto& [name, edges] : poly.edge_groups) m.groups[name] = group_on(poly.vertices, edges);
   for (const auto& h : poly.holes) {
-    // The hole's edges: boundary facets both of whose nodes lie on the same hole edge.
-    auto on_hole_edge = [&](int node, std::size_t k) {
-      const Eigen::Vector2d a = h.vertices[k], b = h.vertices[(k + 1) % h.vertices.size()];
-      const Eigen::Vector2d p = m.points.col(node), d = b - a;
-      const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
-      return (a + t * d - p).norm() <= tol;
-    };
-    MeshGroup<2> g;
-    for (const auto& f : boundary)
-      for (std::size_t k = 0; k < h.vertices.size(); ++k)
-        if (on_hole_edge(f[0], k) && on_hole_edge(f[1], k)) {
-          g.facets.push_back(f);
-          g.nodes.insert(g.nodes.end(), f.begin(), f.end());
-          break;
-        }
-    std::sort(g.nodes.begin(), g.nodes.end());
-    g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
-    m.groups[h.group] = std::move(g);
+    std::vector<int> all(h.vertices.size());
+    std::iota(all.begin(), all.end(), 0);
+    m.groups[h.group] = group_on(h.vertices, all);
   }
   return m;
 }
@@ -269,16 +264,8 @@ Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
   if (poly.vertices.size() < 3) throw InputError("polygon: needs at least 3 vertices");
   if (nodes < static_cast<int>(poly.vertices.size()) || nodes > 2'000'000)
     throw InputError("polygon: node count " + std::to_string(nodes) + " out of range");
-  double area = 0;
-  for (std::size_t i = 0, j = poly.vertices.size() - 1; i < poly.vertices.size(); j = i++)
-    area += poly.vertices[j].x() * poly.vertices[i].y() - poly.vertices[i].x() * poly.vertices[j].y();
-  area = std::abs(area) / 2;
-  for (const auto& h : poly.holes) {
-    double a = 0;
-    for (std::size_t i = 0, j = h.vertices.size() - 1; i < h.vertices.size(); j = i++)
-      a += h.vertices[j].x() * h.vertices[i].y() - h.vertices[i].x() * h.vertices[j].y();
-    area -= std::abs(a) / 2;
-  }
+  double area = loop_area(poly.vertices);
+  for (const auto& h : poly.holes) area -= loop_area(h.vertices);
   // Scan size bounds around the estimate h0 (equilateral cells of edge h have sqrt(3)/2 h^2
   // per node) and keep the candidates closest below the target.
   const double h0 = std::sqrt(2.0 * area / (std::sqrt(3.0) * nodes));
