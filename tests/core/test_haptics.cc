@@ -622,29 +622,46 @@ TEST(Haptics, ThreadedServoLoopRunsThePressAndTheWatchdog) {
   // finite and within the limit, and after a NaN fault at 1.2 s the force is zero within the
   // watchdog's 10 ms stall limit plus its 30 ms ramp, with margin for a late physics step (50 ms).
   // Nothing here asserts a rate: timing is measured by vtb_bench_servo, not by tests.
+  //
+  // On a shared virtual machine the physics thread is sometimes descheduled for more than the
+  // watchdog's 10 ms (seen: trips at 0.04-0.86 s with no fault injected, with the full filter
+  // as with the tensor one, on an idle two-core machine). The watchdog is right to trip then,
+  // and every run is held to the safety checks (finite, within the limit, zero 50 ms after the
+  // trip, whatever tripped it); the injected fault's own checks need a run that reached 1.2 s,
+  // and up to five runs are made to get one (a run trips early in about one of five here).
   HapticsOptions o;
   o.lockstep = false;
   o.fault = HapticsOptions::Fault::nan;
   o.fault_time = 1.2;
   Scene s = scene_named("haptic_press");
   s.duration = 1.5;
-  const HapticsReport r = run_haptics(s, o);
-  ASSERT_GT(r.samples, 100);
-  const ProbeTrace& p = r.probes.at(0);
-  double before = 0;
-  for (std::size_t k = 0; k < r.t.size(); ++k) {
-    const double f = std::hypot(p.fx[k], p.fy[k]);
-    ASSERT_TRUE(std::isfinite(f)) << "t = " << r.t[k];
-    ASSERT_LE(f, 4.0) << "t = " << r.t[k];
-    if (r.t[k] < 1.2) before = std::max(before, f);
-    if (r.t[k] >= r.fault_time + 0.05) {
-      ASSERT_EQ(f, 0.0) << "t = " << r.t[k];
+  bool reached = false;
+  for (int attempt = 0; attempt < 5 && !reached; ++attempt) {
+    const HapticsReport r = run_haptics(s, o);
+    ASSERT_GT(r.samples, 100);
+    ASSERT_GT(r.fault_time, 0) << "the injected fault (or an earlier stall) trips the watchdog";
+    const ProbeTrace& p = r.probes.at(0);
+    double before = 0;
+    for (std::size_t k = 0; k < r.t.size(); ++k) {
+      const double f = std::hypot(p.fx[k], p.fy[k]);
+      ASSERT_TRUE(std::isfinite(f)) << "t = " << r.t[k];
+      ASSERT_LE(f, 4.0) << "t = " << r.t[k];
+      if (r.t[k] < r.fault_time) before = std::max(before, f);
+      if (r.t[k] >= r.fault_time + 0.05) {
+        ASSERT_EQ(f, 0.0) << "t = " << r.t[k];
+      }
     }
+    EXPECT_EQ(r.nonfinite_samples, 0);
+    if (r.fault_time < 1.2) {
+      std::cout << "run " << attempt + 1 << ": the physics thread stalled past the watchdog at " << r.fault_time
+                << " s (safety checks held); again\n";
+      continue;
+    }
+    reached = true;
+    EXPECT_GT(before, 0.05) << "the handle was pressing when the fault came";
+    EXPECT_GT(r.physics_steps, 100);
   }
-  EXPECT_GT(before, 0.05) << "the handle was pressing when the fault came";
-  EXPECT_GE(r.fault_time, 1.2);
-  EXPECT_EQ(r.nonfinite_samples, 0);
-  EXPECT_GT(r.physics_steps, 100);
+  EXPECT_TRUE(reached) << "five runs in a row stalled before the injected fault";
 }
 
 } // namespace
