@@ -131,18 +131,6 @@ struct MismatchTracker {
   }
 };
 
-/// Adds spring s at displacement u to `tracker`: its vector now and its rest vector turned by
-/// both ends' rotations R. True when it passes `trigger` (MismatchTracker::add).
-template <int dim>
-[[gnu::always_inline]] inline bool add_spring(MismatchTracker& tracker, const SpringNetwork<dim>& net,
-                                              const Nodal<dim>& rest, const std::vector<Mat<dim>>& R, int s,
-                                              const Nodal<dim>& u, double trigger) {
-  const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-  const Vec<dim> D = rest.col(s);
-  return tracker.add<dim>(D + u.col(j) - u.col(i),
-                          (R[static_cast<std::size_t>(i)] + R[static_cast<std::size_t>(j)]) * D, trigger);
-}
-
 /// f, factorised.
 const OrderedLDLT& factorised(OrderedLDLT& f) {
   if (!f.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
@@ -197,25 +185,29 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen:
   if constexpr (dim == 2) m_polar.resize(2, net.num_nodes());
 }
 
+template <int dim>
+template <class Tracker>
+[[gnu::always_inline]] inline bool WarpedFilter<dim>::add_spring(Tracker& tracker, int s, const Nodal<dim>& u,
+                                                                 double trigger) const {
+  const auto [i, j] = m_model.net.edge[static_cast<std::size_t>(s)];
+  const Vec<dim> D = m_spring_rest.col(s);
+  Vec<dim> t;
+  if constexpr (dim == 2) {
+    // (R_i + R_j) D from the rotations as (cos, sin) (m_polar after rotations()): half the
+    // bytes per end of a 2 x 2 matrix.
+    const Vec<2> cs = m_polar.col(i) + m_polar.col(j);
+    t = Vec<2>(cs.x() * D.x() - cs.y() * D.y(), cs.y() * D.x() + cs.x() * D.y());
+  } else {
+    t = (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D;
+  }
+  return tracker.template add<dim>(D + u.col(j) - u.col(i), t, trigger);
+}
+
 template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
-  const auto& net = m_model.net;
   MismatchTracker worst;
   bool out = false;
-  if constexpr (dim == 2) {
-    // The rotations as (cos, sin) (m_polar after rotations()): half the bytes per end of a
-    // 2 x 2 matrix; (R_i + R_j) D is D turned by (c_i + c_j, s_i + s_j), as add_spring makes it.
-    for (int s = 0; s < net.num_springs(); ++s) {
-      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-      const Vec<2> D = m_spring_rest.col(s);
-      const Vec<2> cs = m_polar.col(i) + m_polar.col(j);
-      out |= worst.add<2>(D + u.col(j) - u.col(i),
-                          Vec<2>(cs.x() * D.x() - cs.y() * D.y(), cs.y() * D.x() + cs.x() * D.y()),
-                          m_trigger[static_cast<std::size_t>(s)]);
-    }
-  } else {
-    for (int s = 0; s < net.num_springs(); ++s)
-      out |= add_spring(worst, net, m_spring_rest, m_rotation, s, u, m_trigger[static_cast<std::size_t>(s)]);
-  }
+  for (int s = 0; s < m_model.net.num_springs(); ++s)
+    out |= add_spring(worst, s, u, m_trigger[static_cast<std::size_t>(s)]);
   if (outgrown) *outgrown = out;
   return worst.value();
 }
@@ -226,7 +218,7 @@ template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>
 
 template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
   MismatchTracker one;
-  add_spring(one, m_model.net, m_spring_rest, m_rotation, s, u, 2.0);
+  add_spring(one, s, u, 2.0);
   return one.value();
 }
 

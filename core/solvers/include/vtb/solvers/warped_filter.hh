@@ -74,6 +74,9 @@ private:
   double scan(const Nodal<dim>& u, bool* outgrown) const;
   /// Spring s's mismatch at u.
   double spring_mismatch(int s, const Nodal<dim>& u) const;
+  /// Adds spring s at u to `tracker` (its vector now and its rest vector turned by both ends'
+  /// rotations); true when it passes `trigger`. Defined in the .cc, where scan inlines it.
+  template <class Tracker> bool add_spring(Tracker& tracker, int s, const Nodal<dim>& u, double trigger) const;
   /// Below this largest mismatch no spring is covered.
   static constexpr double kCoverFloor = 2e-3;
   /// Past this largest mismatch every spring gets the largest cover (docs/method.md).
