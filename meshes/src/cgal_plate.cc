@@ -46,34 +46,45 @@ void insert_polygon(CDT& cdt, const Polygon& poly) {
   for (const auto& h : poly.holes) insert_loop(cdt, h.vertices);
 }
 
-/// Marks the faces inside the constrained polygon and outside its holes: a flood from the
-/// infinite face that counts the constraints crossed (odd: inside the polygon, even: outside
-/// it or inside a hole). A centroid test would misclassify the flat faces that round-off
-/// leaves between the hull and points inserted on a slanted edge.
-void mark_domain(CDT& cdt) {
-  std::map<CDT::Face_handle, int> level;
-  std::vector<CDT::Face_handle> frontier{cdt.infinite_face()}, next;
-  for (int depth = 0; !frontier.empty(); ++depth) {
-    next.clear();
-    std::vector<CDT::Face_handle> stack;
-    for (const auto& f0 : frontier)
-      if (level.emplace(f0, depth).second) stack.push_back(f0);
-    while (!stack.empty()) {
-      const CDT::Face_handle f = stack.back();
-      stack.pop_back();
-      f->set_in_domain(depth % 2 == 1);
-      for (int i = 0; i < 3; ++i) {
-        const CDT::Face_handle n = f->neighbor(i);
-        if (level.count(n)) continue;
-        if (cdt.is_constrained(CDT::Edge(f, i))) {
-          next.push_back(n);
-        } else {
-          level.emplace(n, depth);
-          stack.push_back(n);
-        }
+/// One point inside each hole (its vertex mean: the holes are convex).
+std::vector<K::Point_2> hole_seeds(const Polygon& poly) {
+  std::vector<K::Point_2> seeds;
+  for (const auto& h : poly.holes) {
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& p : h.vertices) c += p / static_cast<double>(h.vertices.size());
+    seeds.emplace_back(c.x(), c.y());
+  }
+  return seeds;
+}
+
+/// Sets in_domain to `value` on the faces reached from `start` without crossing a constraint
+/// (each reached face is the first with another value, so every face is visited once).
+void flood(CDT& cdt, CDT::Face_handle start, bool value) {
+  std::vector<CDT::Face_handle> stack{start};
+  start->set_in_domain(value);
+  while (!stack.empty()) {
+    const CDT::Face_handle f = stack.back();
+    stack.pop_back();
+    for (int i = 0; i < 3; ++i) {
+      const CDT::Face_handle n = f->neighbor(i);
+      if (n->is_in_domain() != value && !cdt.is_constrained(CDT::Edge(f, i))) {
+        n->set_in_domain(value);
+        stack.push_back(n);
       }
     }
-    std::swap(frontier, next);
+  }
+}
+
+/// Marks the faces inside the constrained polygon and outside its holes: those that cannot be
+/// reached from the infinite face, or from a point inside a hole, without crossing a
+/// constraint. (A centroid test would misclassify the flat faces that round-off leaves between
+/// the hull and points inserted on a slanted edge.)
+void mark_domain(CDT& cdt, const Polygon& poly) {
+  for (auto f = cdt.all_faces_begin(); f != cdt.all_faces_end(); ++f) f->set_in_domain(true);
+  flood(cdt, cdt.infinite_face(), false);
+  for (const auto& seed : hole_seeds(poly)) {
+    const CDT::Face_handle f = cdt.locate(seed);
+    if (f->is_in_domain()) flood(cdt, f, false);
   }
 }
 
@@ -86,12 +97,7 @@ int refine(CDT& cdt, const Polygon& poly, double size) {
   // whatever the heap held before (a test failed or passed with the build folder's path).
   insert_polygon(cdt, poly);
   Mesher mesher(cdt);
-  std::vector<K::Point_2> seeds; // one point inside each hole: its faces are not refined
-  for (const auto& h : poly.holes) {
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& p : h.vertices) c += p / static_cast<double>(h.vertices.size());
-    seeds.emplace_back(c.x(), c.y());
-  }
+  const std::vector<K::Point_2> seeds = hole_seeds(poly); // the holes' faces are not refined
   mesher.set_seeds(seeds.begin(), seeds.end(), false);
   mesher.set_criteria(Criteria(0.125, size)); // B = sin^2(20.7 deg)
   mesher.refine_mesh();
@@ -99,7 +105,7 @@ int refine(CDT& cdt, const Polygon& poly, double size) {
 }
 
 /// Adds `count` nodes at the centroids of the largest domain triangles (deterministic order).
-void add_nodes(CDT& cdt, int count) {
+void add_nodes(CDT& cdt, const Polygon& poly, int count) {
   for (int added = 0; added < count; ++added) {
     CDT::Face_handle best;
     double best_area = -1;
@@ -116,7 +122,7 @@ void add_nodes(CDT& cdt, int count) {
       }
     }
     cdt.insert(best_c);
-    mark_domain(cdt);
+    mark_domain(cdt, poly);
   }
 }
 
@@ -238,11 +244,8 @@ Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius)
   p.vertices = {{0.0, 0.0}, {size.x(), 0.0}, {size.x(), size.y()}, {0.0, size.y()}};
   p.edge_groups = {{"bottom", {0}}, {"right", {1}}, {"top", {2}}, {"left", {3}}};
   if (hole_radius > 0) {
-    const double shorter = size.minCoeff();
-    if (!(hole_radius <= 0.4 * shorter))
-      throw InputError("rectangle: hole radius " + std::to_string(hole_radius) +
-                       " leaves less than a tenth of the shorter side (" + std::to_string(shorter) +
-                       ") on each side; at most " + std::to_string(0.4 * shorter));
+    if (const std::string why = hole_error(hole_radius, size.minCoeff()); !why.empty())
+      throw InputError("rectangle: " + why);
     // Edges about as long as the mesh's (an equilateral mesh of `nodes` nodes over the area).
     const double area = size.prod() - std::numbers::pi * hole_radius * hole_radius;
     const double h = std::sqrt(2.0 * area / (std::sqrt(3.0) * nodes));
@@ -280,9 +283,9 @@ Mesh2 mesh_polygon(const Polygon& poly, int nodes, double min_angle_deg) {
   for (const auto& [missing, size] : candidates) {
     if (missing > std::max(3, nodes / 20)) break; // too far: quality would suffer
     refine(cdt, poly, size);
-    mark_domain(cdt);
-    add_nodes(cdt, missing);
-    mark_domain(cdt);
+    mark_domain(cdt, poly);
+    add_nodes(cdt, poly, missing);
+    mark_domain(cdt, poly);
     Mesh2 m = to_mesh(cdt, poly);
     smooth(m, 10);
     if (m.num_nodes() == nodes && mesh_quality(m).min_angle >= min_angle_deg) {

@@ -148,6 +148,13 @@ INSTANTIATE_TEST_SUITE_P(
                 "[mesh].generate.nodes: is for mesher = \"cgal\"; a structured mesh takes divisions"},
         BadCase{"divisions = [4, 2]", "mesher = \"cgal\", nodes = 2",
                 "[mesh].generate.nodes: = 2: must be in [4, 500000]"},
+        BadCase{"divisions = [4, 2]", "divisions = [4, 2], hole = 0.01",
+                "[mesh].generate.hole: is for mesher = \"cgal\" (a structured mesh has no hole)"},
+        BadCase{"divisions = [4, 2]", "mesher = \"cgal\", nodes = 100, hole = -0.01",
+                "[mesh].generate.hole: = -0.01: must be > 0"},
+        BadCase{"divisions = [4, 2]", "mesher = \"cgal\", nodes = 100, hole = 0.03",
+                "[mesh].generate.hole: hole radius 0.03 m leaves less than a tenth of the shorter side (0.05 m) on "
+                "each side: at most 0.02 m"},
         BadCase{"divisions = [4, 2]", "mesher = \"delaunay\"",
                 "[mesh].generate.mesher: = \"delaunay\": must be one of structured cgal"},
         // Every further key with a range or a set of values (issue: keys without a bad case).

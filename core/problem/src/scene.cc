@@ -1,6 +1,7 @@
 #include "vtb/problem/scene.hh"
 
 #include "scene_reader.hh"
+#include "vtb/meshes/cgal_generate.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include <fstream>
@@ -102,9 +103,8 @@ void read_mesh(const TableReader& top, const std::string& name, const std::files
         if (gr.has("hole")) {
           if (d != 2) gr.fail("hole", "is for shape = \"rectangle\" (a plate with a hole)");
           s.mesh.hole = gr.number("hole", std::nullopt, positive);
-          if (s.mesh.hole > 0.4 * s.mesh.size.minCoeff())
-            gr.fail("hole", "must leave a tenth of the shorter side on each side: at most 0.4 x " +
-                                std::to_string(s.mesh.size.minCoeff()));
+          if (const std::string why = hole_error(s.mesh.hole, s.mesh.size.minCoeff()); !why.empty())
+            gr.fail("hole", why);
         }
       } else {
         if (gr.has("hole")) gr.fail("hole", "is for mesher = \"cgal\" (a structured mesh has no hole)");

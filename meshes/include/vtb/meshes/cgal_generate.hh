@@ -6,6 +6,8 @@
 #include "vtb/meshes/mesh.hh"
 
 #include <map>
+#include <sstream>
+#include <string>
 
 namespace vtb {
 
@@ -39,11 +41,25 @@ Polygon paper_plate();
 /// Throws InputError if no mesh with that count and quality is found. Deterministic.
 Mesh2 mesh_polygon(const Polygon& polygon, int nodes, double min_angle_deg = 20.0);
 
+/// The largest hole mesh_rectangle cuts, as a fraction of the rectangle's shorter side: a
+/// ligament of at least a tenth of that side on each side of the hole.
+inline constexpr double kMaxHoleRadius = 0.4;
+
+/// Why a hole of this radius does not fit a rectangle whose shorter side is `shorter` (one
+/// phrase), or empty if it does.
+inline std::string hole_error(double radius, double shorter) {
+  if (radius <= kMaxHoleRadius * shorter) return {};
+  std::ostringstream os;
+  os << "hole radius " << radius << " m leaves less than a tenth of the shorter side (" << shorter
+     << " m) on each side: at most " << kMaxHoleRadius * shorter << " m";
+  return os.str();
+}
+
 /// An unstructured rectangle [0, size]: mesh_polygon of its four corners, exactly `nodes`
 /// nodes; groups bottom, right, top, left (as the structured generator names them). With
 /// hole_radius > 0, a circular hole of that radius at the centre (a polygon with edges about
-/// as long as the mesh's, at least 16), its boundary the group "hole"; the hole must leave a
-/// ligament of at least a tenth of the shorter side on each side (InputError otherwise).
+/// as long as the mesh's, at least 16), its boundary the group "hole"; a radius above
+/// kMaxHoleRadius x the shorter side is an InputError.
 Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius = 0);
 
 /// An unstructured box [0, size] meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %),
