@@ -2,6 +2,7 @@
 // the CGAL plates land: 126 ~ 123 nodes, exactly 517 nodes) and on 3D boxes, plus the W
 // precompute. Run: build/bin/vtb_bench_step --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true  (medians are what the closing notes quote).
+#include "vtb/linalg/block_multigrid.hh"
 #include "vtb/linalg/nodal_solve.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/problem/solver_names.hh"
@@ -130,6 +131,8 @@ VTB_STEP_BENCH(box275, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterNeighbors, filtered_neighbors)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
+VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterTensorMultigrid, filtered_tensor_multigrid)
+VTB_STEP_BENCH(box1701, solvers::kFiltered, solvers::kFilterMultigrid, filtered_multigrid)
 VTB_STEP_BENCH(box1701, solvers::kImplicitEuler, "", implicit_euler)
 
 #ifdef VTB_HAVE_CGAL_MESHERS
@@ -142,6 +145,7 @@ const Model<3>& slab10k() {
 }
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterMultigrid, filtered_multigrid)
+VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterTensorMultigrid, filtered_tensor_multigrid)
 VTB_STEP_BENCH(slab10k, solvers::kImplicitEuler, "", implicit_euler)
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
@@ -318,6 +322,37 @@ void BM_precompute_factor_cholmod_slab10k(benchmark::State& st) {
 void BM_precompute_factor_simplicial_slab10k(benchmark::State& st) {
   factor_simplicial(st, slab10k());
 }
+/// The tensor-multigrid filter's kernels: one block V-cycle, and the refresh after the cover
+/// changed H's values (the diagonal inverses, the Galerkin products, the coarsest factor).
+BlockMultigrid<3> tensor_cycle(const Model<3>& m) {
+  Nodal<3> x(3, static_cast<Eigen::Index>(m.free_nodes.size()));
+  for (Eigen::Index a = 0; a < x.cols(); ++a) x.col(a) = m.net.rest.col(m.free_nodes[static_cast<std::size_t>(a)]);
+  return BlockMultigrid<3>(tensor_filter_matrix(m, 1e-3), x);
+}
+void BM_kernel_tensor_vcycle_slab10k(benchmark::State& st) {
+  BlockMultigrid<3> mg = tensor_cycle(slab10k());
+  const auto n = static_cast<std::size_t>(slab10k().free_nodes.size()) * BlockMultigrid<3>::kLanes;
+  std::vector<double> b(n, 0.0), x(n);
+  for (std::size_t k = 0; k < n; ++k) b[k] = k % 4 == 3 ? 0.0 : std::sin(0.1 * static_cast<double>(k));
+  for (auto _ : st) {
+    mg.apply(b.data(), x.data());
+    benchmark::DoNotOptimize(x.data());
+  }
+  std::string sizes;
+  for (const Eigen::Index l : mg.level_sizes()) sizes += (sizes.empty() ? "nodes " : " ") + std::to_string(l);
+  st.SetLabel(sizes);
+  st.counters["MB"] = static_cast<double>(mg.memory_bytes()) / 1e6;
+}
+void BM_kernel_tensor_refresh_slab10k(benchmark::State& st) {
+  BlockMultigrid<3> mg = tensor_cycle(slab10k());
+  for (auto _ : st) mg.refresh();
+}
+void BM_precompute_tensor_vcycle_slab10k(benchmark::State& st) {
+  for (auto _ : st) benchmark::DoNotOptimize(tensor_cycle(slab10k()).levels());
+}
+BENCHMARK(BM_kernel_tensor_vcycle_slab10k)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_tensor_refresh_slab10k)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_precompute_tensor_vcycle_slab10k)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_kernel_solve_nodal_slab10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_cholmod_slab10k)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_precompute_factor_cholmod_slab10k)->Unit(benchmark::kMillisecond);

@@ -198,7 +198,9 @@ template <int dim> double field_error(const Trajectory<dim>& tr, const Trajector
   return tr.field.size() == ref.field.size() ? e / peak : std::numeric_limits<double>::infinity();
 }
 
-template <int dim> void expect_tensor_filter_within_implicit_eulers_error(const char* scene_file, double duration) {
+template <int dim>
+void expect_tensor_filter_within_implicit_eulers_error(const char* scene_file, double duration,
+                                                       std::initializer_list<const char*> filters = {"tensor"}) {
   Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes" / scene_file);
   scene.duration = duration;
   const Model<dim> model = build_model<dim>(scene, std::get<Mesh<dim>>(load_mesh(scene)));
@@ -208,14 +210,19 @@ template <int dim> void expect_tensor_filter_within_implicit_eulers_error(const 
     IntegratorOptions o;
     o.dt = dt;
     o.kind = "implicit-euler";
-    Trajectory<dim> ie, tensor;
+    Trajectory<dim> ie;
     ASSERT_TRUE(simulate(model, o, ie, true).stable);
-    o.kind = "filtered";
-    o.filter = "tensor";
-    ASSERT_TRUE(simulate(model, o, tensor, true).stable);
-    const double e_ie = field_error(ie, ref), e_tensor = field_error(tensor, ref);
-    std::cout << scene_file << " dt " << dt << ": tensor " << e_tensor << ", implicit Euler " << e_ie << "\n";
-    EXPECT_LE(e_tensor, 1.5 * e_ie) << scene_file << " dt = " << dt;
+    const double e_ie = field_error(ie, ref);
+    for (const char* filter : filters) {
+      o.kind = "filtered";
+      o.filter = filter;
+      Trajectory<dim> tensor;
+      ASSERT_TRUE(simulate(model, o, tensor, true).stable);
+      const double e_tensor = field_error(tensor, ref);
+      std::cout << scene_file << " dt " << dt << ": " << filter << " " << e_tensor << ", implicit Euler " << e_ie
+                << "\n";
+      EXPECT_LE(e_tensor, 1.5 * e_ie) << scene_file << " " << filter << " dt = " << dt;
+    }
   }
 }
 
@@ -227,7 +234,10 @@ TEST(Cvode, TensorFilterTracksASlabPressAndThePapersPlateAsWellAsImplicitEuler) 
   // the whole mesh (the largest mismatch's, set by the driven point's neighbourhood) the slab
   // was at 4.0x (the plate 1.6-1.7x): the cover's transverse damping slowed every spring's
   // rotation. With each spring's own cover (warped_filter.hh) measured 1.1x and 1.03x.
-  expect_tensor_filter_within_implicit_eulers_error<3>("slab_press.toml", 0.8);
+  // The block V-cycle in place of H_t's factor (tensor-multigrid, the large-mesh form) adds the
+  // extra mass Delta_t (B^-1 = H_t + Delta_t): measured 1.39x / 1.42x implicit Euler's error at
+  // 1 / 10 ms, against the factor's 1.12x / 1.12x.
+  expect_tensor_filter_within_implicit_eulers_error<3>("slab_press.toml", 0.8, {"tensor", "tensor-multigrid"});
   expect_tensor_filter_within_implicit_eulers_error<2>("plate517_step.toml", 1.0);
 }
 

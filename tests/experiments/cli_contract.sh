@@ -17,7 +17,7 @@ check() { # name, condition
 "$vtb" solvers > "$work/solvers.txt"; rc=$?
 # One entry per solver name of solver_names.hh (the k* constants that are not filters).
 entries=$(grep -c '^inline constexpr const char\* k[A-Za-z]* = ' "$src/core/problem/include/vtb/problem/solver_names.hh")
-filters=$(grep -c '^inline constexpr const char\* kFilter[A-Z][a-z]* = ' "$src/core/problem/include/vtb/problem/solver_names.hh")
+filters=$(grep -c '^inline constexpr const char\* kFilter[A-Z][A-Za-z]* = ' "$src/core/problem/include/vtb/problem/solver_names.hh")
 expected=$((entries - filters))
 check "vtb solvers lists the registry ($expected entries, with their keys)" '[ $rc -eq 0 ] && [ $(grep -c "\[solver\] keys:" "$work/solvers.txt") -eq $expected ] && grep -q "^implicit-euler " "$work/solvers.txt" && grep -q "^filtered-tensor " "$work/solvers.txt"'
 

@@ -60,15 +60,17 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
       m_correct(o.momentum_correction && !model.has_constraints()), m_strain_limit(o.strain_limit) {
   if (std::find(solvers::kFilters.begin(), solvers::kFilters.end(), m_filter) == solvers::kFilters.end())
     throw InputError("[solver].filter = \"" + o.filter + "\": must be " + solvers::kFilterAuto +
-                     ", neighbors, full, tensor or multigrid");
+                     ", neighbors, full, tensor, multigrid or tensor-multigrid");
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
-  if (m_filter == solvers::kFilterTensor) {
-    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt);
-    // Its fallback: implicit Euler with the current Jacobian, refactorised each step it runs.
+  if (m_filter == solvers::kFilterTensor || m_filter == solvers::kFilterTensorMultigrid) {
+    const bool multigrid = m_filter == solvers::kFilterTensorMultigrid;
+    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt, multigrid);
+    // Its fallback: implicit Euler with the current Jacobian, refactorised each step it runs
+    // (with the V-cycle: the CG that implicit Euler's auto picks for the mesh, no factor).
     IntegratorOptions ie = o;
     ie.kind = solvers::kImplicitEuler;
-    ie.linear_solver = "direct";
+    ie.linear_solver = multigrid ? "auto" : "direct";
     m_fallback_ie = make_integrator(model, ie);
   }
   if (m_filter == solvers::kFilterMultigrid) {
@@ -87,7 +89,7 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
     }
     m_rhs.resize(dim, nf);
     m_couplings = std::make_unique<ScalarCouplings>(*m_h, nf);
-  } else {
+  } else if (!m_tensor) {
     m_sparse = filter_matrix_neighbors(model, o.dt);
   }
   if (m_tensor || m_h) m_coupling = Eigen::VectorXd::Zero(n); // the couplings' dt^2 k + dt c per node

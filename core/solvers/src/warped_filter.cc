@@ -131,28 +131,23 @@ struct MismatchTracker {
   }
 };
 
-/// f, factorised.
-const OrderedLDLT& factorised(OrderedLDLT& f) {
-  if (!f.factorize()) throw std::runtime_error("filtered (tensor): H is not positive definite");
-  return f;
-}
-
 } // namespace
 
 template <int dim>
-WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt)
-    : WarpedFilter(model, dt, tensor_filter_matrix(model, dt, 0.0)) {}
-
-template <int dim>
-WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0)
-    : m_model(model), m_h(H0, dim), m_h_blocks(factorised(m_h)),
-      m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
-      m_rhs(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, 1),
-      m_z(static_cast<Eigen::Index>(model.free_nodes.size()) * dim, kMaxCoupled * dim),
+WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigrid)
+    : m_model(model), m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
       m_capacitance(kMaxCoupled * dim) {
-  m_base.assign(m_h.values(), m_h.values() + m_h.nonzeros());
+  const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
+  Nodal<dim> x(dim, nf); // the free nodes' rest positions: the V-cycle's rigid modes
+  for (Eigen::Index a = 0; a < nf; ++a) x.col(a) = model.net.rest.col(model.free_nodes[static_cast<std::size_t>(a)]);
+  m_h = make_warped_system<dim>(tensor_filter_matrix(model, dt, 0.0), x, multigrid);
+  m_index.resize(static_cast<std::size_t>(nf) * dim);
+  for (int r = 0; r < static_cast<int>(nf) * dim; ++r) m_index[static_cast<std::size_t>(r)] = m_h->index(r);
+  m_rhs = Eigen::MatrixXd::Zero(m_h->size(), 1);
+  m_z = Eigen::MatrixXd::Zero(m_h->size(), kMaxCoupled * dim);
+  m_base.assign(m_h->values(), m_h->values() + m_h->value_count());
   // Each spring's transverse blocks at beta = 1, (dt c + dt^2 k)(I - n n^T) with the signs of
-  // tensor_filter_matrix, as (offset, value) pairs into H's ordered upper values, so that H(beta)
+  // tensor_filter_matrix, as (offset, value) pairs into H's stored values, so that H(beta)
   // = H(0) + sum_s beta_s T_s is refilled spring by spring.
   const auto& net = model.net;
   const int ns = net.num_springs();
@@ -165,9 +160,9 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, const Eigen:
           const Mat<dim> T = transverse_block<dim>(sign, K, D, dt);
           for (int p = 0; p < dim; ++p)
             for (int q = 0; q < dim; ++q) {
-              const int r = m_h.ordered(a * dim + p), c = m_h.ordered(b * dim + q);
-              if (r > c || T(p, q) == 0) continue;
-              m_toff.push_back(static_cast<int>(m_h.offset(r, c)));
+              const long off = m_h->offset(a * dim + p, b * dim + q);
+              if (off < 0 || T(p, q) == 0) continue;
+              m_toff.push_back(static_cast<int>(off));
               m_tval.push_back(T(p, q));
             }
         }
@@ -233,7 +228,7 @@ template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mis
   // tenth of its stiffness (strains past 0.1 turn springs that had little mismatch within a step).
   const auto& net = m_model.net;
   const double global = mismatch < kCoverFloor ? 0.0 : std::min(1.0, 2 * mismatch);
-  double* v = m_h.values();
+  double* v = m_h->values();
   std::copy(m_base.begin(), m_base.end(), v);
   for (int s = 0; s < net.num_springs(); ++s) {
     const double b = global == 0                   ? 0.0
@@ -244,8 +239,7 @@ template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mis
       v[m_toff[static_cast<std::size_t>(k)]] += b * m_tval[static_cast<std::size_t>(k)];
   }
   m_beta_max = global;
-  m_h.factorize(); // H(beta) is H(0) plus positive semidefinite terms: positive definite
-  m_h_blocks.refresh();
+  m_h->refresh();
   ++m_factor_version;
 }
 
@@ -273,15 +267,16 @@ template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& couplin
     for (int c = 0; c < m; ++c) {
       auto z = m_z.col(c);
       z.setZero();
-      z[m_h.ordered(m_coupled_node[static_cast<std::size_t>(c / dim)] * dim + c % dim)] = 1.0;
-      m_h.solve_in_place(z);
+      z[m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(c / dim)] * dim + c % dim)]] = 1.0;
+      m_h->solve(z);
     }
     m_z_version = m_factor_version;
   }
   Small C(m, m);
   for (int r = 0; r < m; ++r)
     for (int c = 0; c < m; ++c)
-      C(r, c) = m_z(m_h.ordered(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim), c);
+      C(r, c) =
+          m_z(m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim)], c);
   for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
   m_capacitance.compute(C);
 }
@@ -291,7 +286,8 @@ template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd
   if (m == 0) return;
   m_small.resize(m);
   for (int r = 0; r < m; ++r)
-    m_small[r] = y(m_h.ordered(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim), 0);
+    m_small[r] =
+        y(m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim)], 0);
   m_small = m_capacitance.solve(m_small);
   y.col(0).noalias() -= m_z.leftCols(m) * m_small;
 }
@@ -374,13 +370,13 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   for (int a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
     const Vec<dim> f = m_rotation[static_cast<std::size_t>(i)].transpose() * force.col(i);
-    for (int p = 0; p < dim; ++p) m_rhs(m_h.ordered(a * dim + p), 0) = f[p];
+    for (int p = 0; p < dim; ++p) m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0) = f[p];
   }
-  m_h_blocks.solve_in_place(Eigen::Map<Nodal<dim>>(m_rhs.data(), dim, nf)); // node-ordered: tile k = rows k dim ..
+  m_h->solve(m_rhs.col(0));
   correct_for_couplings(m_rhs);
   for (int a = 0; a < nf; ++a) {
     Vec<dim> x;
-    for (int p = 0; p < dim; ++p) x[p] = m_rhs(m_h.ordered(a * dim + p), 0);
+    for (int p = 0; p < dim; ++p) x[p] = m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0);
     dv.col(a) = dt * (m_rotation[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])] * x);
   }
 }

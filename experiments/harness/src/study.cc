@@ -27,7 +27,9 @@ namespace vtb::harness {
 std::vector<std::string> default_study_solvers(int dim) {
   std::vector<std::string> names;
   for (const solvers::Entry& e : solvers::kEntries)
-    if (e.springs && e.fixed_step && *e.filter && (dim == 3 || std::string_view(e.filter) != solvers::kFilterMultigrid))
+    if (e.springs && e.fixed_step && *e.filter &&
+        (dim == 3 || (std::string_view(e.filter) != solvers::kFilterMultigrid &&
+                      std::string_view(e.filter) != solvers::kFilterTensorMultigrid)))
       names.emplace_back(e.name);
   for (const char* s : {solvers::kImplicitEuler, solvers::kExplicit, solvers::kCvode}) names.emplace_back(s);
   return names;
@@ -412,12 +414,16 @@ std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r)
 /// Each solver's pgfplots style (paper/preamble.tex, shared with the paper's figures): cvode,
 /// fem and explicit have styles of their own names.
 std::string plot_style(const std::string& solver) {
-  static constexpr std::pair<const char*, const char*> kStyles[] = {
-      {solvers::kFilteredFull, "full"},        {solvers::kFilteredNeighbors, "neighbors"},
-      {solvers::kFilteredTensor, "tensor"},    {solvers::kFilteredMultigrid, "multigrid"},
-      {solvers::kImplicitEuler, "ie"},         {solvers::kBullet, "bullet"},
-      {solvers::kCvode, solvers::kCvode},      {solvers::kFem, solvers::kFem},
-      {solvers::kExplicit, solvers::kExplicit}};
+  static constexpr std::pair<const char*, const char*> kStyles[] = {{solvers::kFilteredFull, "full"},
+                                                                    {solvers::kFilteredNeighbors, "neighbors"},
+                                                                    {solvers::kFilteredTensor, "tensor"},
+                                                                    {solvers::kFilteredMultigrid, "multigrid"},
+                                                                    {solvers::kFilteredTensorMultigrid, "tensormg"},
+                                                                    {solvers::kImplicitEuler, "ie"},
+                                                                    {solvers::kBullet, "bullet"},
+                                                                    {solvers::kCvode, solvers::kCvode},
+                                                                    {solvers::kFem, solvers::kFem},
+                                                                    {solvers::kExplicit, solvers::kExplicit}};
   for (const auto& [name, style] : kStyles)
     if (solver == name) return style;
   return "black, mark=+";

@@ -45,6 +45,10 @@ inline constexpr Entry kEntries[] = {
      kFilterTensor, "dt, momentum_correction, strain_limit", false, true, true, false},
     {kFilteredMultigrid, "the full filter with H^-1 applied by one symmetric multigrid V-cycle (large 3D meshes)",
      kFiltered, kFilterMultigrid, "dt, momentum_correction, strain_limit", false, true, true, false},
+    {kFilteredTensorMultigrid,
+     "the tensor filter with H_t^-1 applied by one symmetric block V-cycle with rigid-mode coarse spaces (large 3D "
+     "meshes)",
+     kFiltered, kFilterTensorMultigrid, "dt, momentum_correction, strain_limit", false, true, true, false},
     {kImplicitEuler,
      "linearised backward Euler with the spring Jacobian (sparse LDL^T, or warm-started CG with block Jacobi or the "
      "multigrid V-cycle)",

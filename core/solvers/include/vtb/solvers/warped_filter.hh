@@ -33,20 +33,45 @@
 /// the mean spring stiffness at the paper's plate's free corner diverged at dt = 10 ms: in the
 /// directions where the node's own springs are weak, H holds little more than its mass.
 
-#include "vtb/linalg/block_solve.hh"
-#include "vtb/linalg/ordered_ldlt.hh"
 #include "vtb/springs/model.hh"
 
 #include <Eigen/Cholesky>
+#include <Eigen/SparseCore>
 
 #include <array>
+#include <memory>
 #include <vector>
 
 namespace vtb {
 
+/// How the tensor filter solves with H: its factor (`tensor`) or one block V-cycle B
+/// (`tensor-multigrid`: 0 < B <= H^-1, so B^-1 = H + Delta, the step with the extra mass Delta;
+/// block_multigrid.hh). Both keep H's values where the cover writes them (values(), offset()).
+template <int dim> class WarpedSystem {
+public:
+  virtual ~WarpedSystem() = default;
+  /// Length of the solve's vector, and the position of dof r (dim a + p) in it.
+  virtual Eigen::Index size() const = 0;
+  virtual int index(int r) const = 0;
+  /// H's stored values, and the offset of entry (r, c) among them (-1: not stored).
+  virtual double* values() = 0;
+  virtual std::size_t value_count() const = 0;
+  virtual long offset(int r, int c) const = 0;
+  /// After values() changed.
+  virtual void refresh() = 0;
+  /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
+  virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
+};
+
+/// H's factor, or (multigrid) one block V-cycle on H with the rigid modes at positions x.
+template <int dim>
+std::unique_ptr<WarpedSystem<dim>> make_warped_system(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x,
+                                                      bool multigrid);
+
 template <int dim> class WarpedFilter {
 public:
-  WarpedFilter(const Model<dim>& model, double dt);
+  /// multigrid: solve with one block V-cycle instead of H's factor (large 3D meshes).
+  WarpedFilter(const Model<dim>& model, double dt, bool multigrid = false);
   /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
   static constexpr int kMaxCoupled = 8;
   /// Beyond this direction mismatch the warped rest Jacobian is not trusted: the filtered step
@@ -67,7 +92,6 @@ public:
   double direction_mismatch(const Nodal<dim>& u) const;
 
 private:
-  WarpedFilter(const Model<dim>& model, double dt, const Eigen::SparseMatrix<double>& H0);
   /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and refactorises.
   void cover(const Nodal<dim>& u, double mismatch);
   /// The largest mismatch at u; `outgrown` (if given): whether a spring passed its trigger.
@@ -83,23 +107,23 @@ private:
   static constexpr double kLocalCoverLimit = 0.1;
 
   const Model<dim>& m_model;
-  OrderedLDLT m_h;                  ///< ordered by nodes (block = dim): L is made of dim x dim tiles
-  BlockSolve<dim> m_h_blocks;       ///< the step's solve with m_h, tile by tile
-  std::vector<Mat<dim>> m_rotation; ///< per node
-  Nodal<dim> m_spring_rest;         ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
-  Nodal<dim> m_adj_rest;            ///< per adjacency entry of node i: X_j - X_i (the rotations read it in order)
-  Eigen::Matrix2Xd m_polar;         ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
-  std::vector<double> m_base;       ///< H(0)'s ordered upper values
+  std::unique_ptr<WarpedSystem<dim>> m_h; ///< H's factor or V-cycle
+  std::vector<int> m_index;               ///< per free dof (dim a + p): its position in the solve's vector
+  std::vector<Mat<dim>> m_rotation;       ///< per node
+  Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
+  Nodal<dim> m_adj_rest;                  ///< per adjacency entry of node i: X_j - X_i (the rotations read it in order)
+  Eigen::Matrix2Xd m_polar;               ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
+  std::vector<double> m_base;             ///< H(0)'s stored values
   /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
   /// k in [m_tptr[s], m_tptr[s + 1]).
   std::vector<int> m_tptr, m_toff;
   std::vector<double> m_tval;
   std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
   double m_beta_max = 0;         ///< twice the largest mismatch at the last refill
-  Eigen::MatrixXd m_rhs;         ///< ordered dofs, one column
+  Eigen::MatrixXd m_rhs;         ///< one column, laid out as m_h's
   /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
   void couple(const Eigen::VectorXd& coupling);
-  /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y in the ordered dofs).
+  /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y laid out as m_h's).
   void correct_for_couplings(Eigen::MatrixXd& y) const;
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxCoupled * dim, kMaxCoupled * dim>;
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxCoupled * dim, 1>;
@@ -107,7 +131,7 @@ private:
   int m_coupled = 0;                             ///< how many nodes are coupled now
   std::array<int, kMaxCoupled> m_coupled_node{}; ///< their free indices
   std::array<double, kMaxCoupled> m_coupled_k{}; ///< and their dt^2 k + dt c
-  Eigen::MatrixXd m_z;                           ///< ordered dofs x (dim per coupled node): H^-1 U
+  Eigen::MatrixXd m_z;                           ///< m_h's layout x (dim per coupled node): H^-1 U
   Eigen::LDLT<Small> m_capacitance;              ///< C^-1 + U^T Z
   mutable SmallVec m_small;
 };

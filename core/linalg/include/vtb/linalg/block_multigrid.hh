@@ -1,0 +1,100 @@
+#pragma once
+/// \file
+/// One fixed symmetric V-cycle of smoothed-aggregation multigrid for an SPD matrix made of
+/// dim x dim node blocks (row dim a + p: node a, axis p): the tensor filter's stand-in for
+/// H_t^-1 on 3D meshes whose factor of H_t is too large (`filter = "tensor-multigrid"`,
+/// docs/method.md). The scalar V-cycle (multigrid.hh) serves the scalar filter's H; this one
+/// keeps each node's axes together, as elasticity needs.
+///
+/// Setup (once): node aggregates of the blocks' graph (aggregation.hh, strength by the
+/// blocks' norms); per aggregate, the tentative prolongator is an orthonormal basis of the
+/// rigid modes on its nodes (dim translations and dim (dim - 1) / 2 rotations: elasticity's
+/// near-kernel, which a coarse space of translations alone misses, so that such a cycle
+/// contracted bending's error by only 0.97), smoothed by one damped block-Jacobi step; Galerkin
+/// coarse matrices P^T A P with a block of rigid modes per coarse node, down to at most
+/// `coarsest` nodes, where a sparse LDL^T solves exactly.
+///
+/// Apply (nothing allocated): one V(1,1) cycle from x = 0 with node-block Gauss-Seidel,
+/// forward before the coarse correction and backward after it. As for the scalar cycle, the
+/// post-smoother is the pre-smoother's adjoint and the coarse operators are Galerkin, so
+/// 0 < B <= A^-1 and B^-1 = A + Delta with Delta symmetric positive semidefinite.
+///
+/// The finest matrix's values may change (the tensor filter's transverse cover): write them
+/// through values() and offset(), then refresh() recomputes the diagonal inverses, the coarse
+/// matrices (numeric products into the patterns made at setup) and the coarsest factor,
+/// without allocating.
+
+#include "vtb/linalg/nodal.hh"
+#include "vtb/linalg/ordered_ldlt.hh"
+
+#include <Eigen/SparseCore>
+
+#include <memory>
+#include <vector>
+
+namespace vtb {
+
+template <int dim> class BlockMultigrid {
+public:
+  /// Values per node in the cycle's vectors: 3D nodes are padded to 4 (the pad stays 0).
+  static constexpr int kLanes = dim == 3 ? 4 : dim;
+  /// A coarse node's values: the rigid modes.
+  static constexpr int kModes = dim * (dim + 1) / 2;
+
+  /// A: both triangles stored; its pattern is taken by node blocks (an entry of a block makes
+  /// the whole block part of the pattern). x: the nodes' positions (the rigid modes').
+  BlockMultigrid(const Eigen::SparseMatrix<double>& A, const Nodal<dim>& x, Eigen::Index coarsest = 64);
+
+  /// The finest matrix's values: entry (dim a + p, dim b + q) at values()[offset(...)].
+  double* values() { return m_mats.front().val.data(); }
+  std::size_t value_count() const { return m_mats.front().val.size(); }
+  /// Offset into values() of entry (r, c), or -1 where its node block is not in the pattern.
+  long offset(int r, int c) const;
+  /// After values() changed: the diagonal inverses, coarse matrices and coarsest factor again.
+  void refresh();
+
+  /// x <- B b; b and x hold kLanes values per node (node a at a kLanes ..), pads 0; distinct.
+  void apply(const double* b, double* x);
+
+  int levels() const { return static_cast<int>(m_mats.size()); }
+  /// Nodes of each level, finest first (the last is the one solved directly).
+  std::vector<Eigen::Index> level_sizes() const;
+  /// Bytes held by the matrices, prolongators, coarse factor and work arrays.
+  std::size_t memory_bytes() const;
+
+private:
+  /// Square node blocks by rows: block k of row i is (i, col[k]), nb x nb values stored as nb
+  /// columns of w lanes (value (p, q) at val[k nb w + q w + p]); diag[i]: the diagonal block's k.
+  struct BlockCsr {
+    int nb = dim, w = kLanes;
+    std::vector<int> ptr, col, diag;
+    std::vector<double> val;
+    int rows() const { return static_cast<int>(ptr.size()) - 1; }
+    int block() const { return nb * w; }
+  };
+  /// Rectangular blocks (nbf x nbc, nbc columns of wf lanes) by fine rows: P, and A P.
+  struct RectCsr {
+    std::vector<int> ptr, col;
+    std::vector<double> val;
+  };
+  struct Level {
+    std::vector<double> inv_diag;        ///< per node, the inverse diagonal block (as the matrix's blocks)
+    RectCsr prolong;                     ///< P by fine rows
+    std::vector<int> rptr, rrow, rblock; ///< P by coarse rows: its fine rows and P's block index
+    RectCsr ap;                          ///< A P: the Galerkin product's half
+    std::vector<int> marker;             ///< per coarse node: its position in the row being summed
+    std::vector<int> dead;               ///< coarse values with no fine support (a small aggregate): 1 on the diagonal
+  };
+  void cycle(std::size_t l, const double* b, double* x);
+  void galerkin(std::size_t l);
+
+  std::vector<BlockCsr> m_mats;              ///< every level's matrix, finest first
+  std::vector<Level> m_levels;               ///< every level but the coarsest
+  std::vector<std::vector<double>> m_b, m_x; ///< work per coarse level
+  std::unique_ptr<OrderedLDLT> m_coarse;     ///< the coarsest level's factor
+  std::vector<int> m_coarse_offset;          ///< per coarsest block value: its factor offset, or -1
+  std::vector<int> m_coarse_order;           ///< per coarsest dof: its factor row
+  Eigen::MatrixXd m_coarse_rhs;              ///< one column in factor order
+};
+
+} // namespace vtb

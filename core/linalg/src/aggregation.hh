@@ -1,0 +1,22 @@
+#pragma once
+/// \file
+/// Smoothed aggregation's two setup steps, shared by the scalar V-cycle (multigrid.hh) and the
+/// block one (block_multigrid.hh): the aggregates of a matrix graph and the smoothed
+/// prolongator. Internal to vtb::linalg.
+
+#include <Eigen/SparseCore>
+
+#include <vector>
+
+namespace vtb::detail {
+
+using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+
+/// Aggregate of each row of A (graph of the strong off-diagonal entries); returns their count.
+int aggregate(const RowSparse& A, std::vector<int>& agg);
+
+/// P = (I - w D^-1 A) P0, P0 the aggregates' indicator, w = 4/3 over an estimate of the
+/// spectral radius of D^-1 A.
+RowSparse smoothed_prolongator(const RowSparse& A, const std::vector<int>& agg, int nc);
+
+} // namespace vtb::detail

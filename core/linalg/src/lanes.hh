@@ -1,0 +1,23 @@
+#pragma once
+/// \file
+/// A node's values as one GCC vector of W doubles (two or four: 3D nodes are padded to four),
+/// loaded unaligned and may_alias as the intrinsics' types are, for the V-cycles' sweeps
+/// (multigrid.cc, block_multigrid.cc). Internal to vtb::linalg.
+
+namespace vtb::detail {
+
+template <int W> struct LaneType;
+template <> struct LaneType<2> { typedef double type __attribute__((vector_size(16), aligned(8), may_alias)); };
+template <> struct LaneType<4> { typedef double type __attribute__((vector_size(32), aligned(8), may_alias)); };
+// Eight: a 3D coarse node (six rigid modes, padded), two AVX2 or four SSE2 operations.
+template <> struct LaneType<8> { typedef double type __attribute__((vector_size(64), aligned(8), may_alias)); };
+template <int W> using Lane = typename LaneType<W>::type;
+// Always inlined, so no 32-byte vector crosses a call (core/linalg/CMakeLists.txt: -Wno-psabi).
+template <int W> [[gnu::always_inline]] inline Lane<W> load(const double* p) {
+  return *reinterpret_cast<const Lane<W>*>(p);
+}
+template <int W> [[gnu::always_inline]] inline void store(double* p, Lane<W> v) {
+  *reinterpret_cast<Lane<W>*>(p) = v;
+}
+
+} // namespace vtb::detail
