@@ -24,7 +24,7 @@ constexpr int lanes_of(int nb) {
 /// One level's raw arrays, for the sweeps below.
 struct Arrays {
   const int *ptr, *col, *diag, *pp, *pc;
-  const double *val, *dinv, *pv;
+  const double *val, *dinv, *pv, *ptv; ///< ptv: P's blocks transposed
   int n, nc;
 };
 
@@ -47,10 +47,10 @@ template <int W, int NB> [[gnu::always_inline]] inline Lane<W> times(const doubl
 /// Forward block Gauss-Seidel from x = 0 (only the lower blocks meet nonzero x), then the
 /// restricted residual bc = P^T (b - A x) = P^T (-U x), as the scalar cycle does (the diagonal
 /// and lower parts cancel b exactly after the sweep); bc is zeroed here. P's blocks are NBC
-/// columns of W lanes, a coarse node WC lanes.
+/// columns of W lanes (transposed: NB columns of WC lanes), a coarse node WC lanes.
 template <int W, int NB, int WC, int NBC>
 [[gnu::always_inline]] inline void forward_and_restrict(const Arrays& L, const double* b, double* x, double* bc) {
-  constexpr int B = W * NB, PB = W * NBC;
+  constexpr int B = W * NB, PTB = WC * NB;
   for (int i = 0; i < L.n; ++i) {
     Lane<W> s = load<W>(b + i * W);
     for (int k = L.ptr[i]; k < L.diag[i]; ++k) s -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
@@ -60,15 +60,11 @@ template <int W, int NB, int WC, int NBC>
   for (int i = 0; i < L.n; ++i) {
     Lane<W> r = {};
     for (int k = L.diag[i] + 1; k < L.ptr[i + 1]; ++k) r -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
+    double rv[W];
+    store<W>(rv, r);
     for (int p = L.pp[i]; p < L.pp[i + 1]; ++p) {
-      const double* pb = L.pv + p * PB;
       double* t = bc + L.pc[p] * WC;
-      for (int c = 0; c < NBC; ++c) {
-        const Lane<W> prod = load<W>(pb + c * W) * r;
-        double sum = 0;
-        for (int e = 0; e < W; ++e) sum += prod[e];
-        t[c] += sum;
-      }
+      store<WC>(t, load<WC>(t) + times<WC, NB>(L.ptv + p * PTB, rv));
     }
   }
 }
@@ -305,6 +301,13 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
             lev.prolong.val[static_cast<std::size_t>(kk * wf * kModes + c * wf + p)] =
                 P.coeff(i * nb + p, I * kModes + c);
       }
+    const int wc = lanes_of(kModes);
+    lev.ptrans.assign(lev.prolong.col.size() * static_cast<std::size_t>(wc * nb), 0.0);
+    for (std::size_t kk = 0; kk < lev.prolong.col.size(); ++kk)
+      for (int p = 0; p < nb; ++p)
+        for (int c = 0; c < kModes; ++c)
+          lev.ptrans[kk * static_cast<std::size_t>(wc * nb) + static_cast<std::size_t>(p * wc + c)] =
+              lev.prolong.val[kk * static_cast<std::size_t>(wf * kModes) + static_cast<std::size_t>(c * wf + p)];
     // P by coarse rows: the fine rows and block indices of each coarse column.
     lev.rptr.assign(static_cast<std::size_t>(nc) + 1, 0);
     for (int c : lev.prolong.col) ++lev.rptr[static_cast<std::size_t>(c) + 1];
@@ -351,57 +354,61 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
 }
 
 template <int dim> void BlockMultigrid<dim>::galerkin(std::size_t l) {
+  if constexpr (dim == 3)
+    m_mats[l].nb == 3 ? galerkin_products<4, 3, 8>(l) : galerkin_products<8, 6, 8>(l);
+  else
+    m_mats[l].nb == 2 ? galerkin_products<2, 2, 4>(l) : galerkin_products<4, 3, 4>(l);
+  // 1 on the dead values' diagonal (their P columns are zero).
+  BlockCsr& C = m_mats[l + 1];
+  for (int d : m_levels[l].dead)
+    C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
+        1.0;
+}
+
+template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::galerkin_products(std::size_t l) {
+  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
   const BlockCsr& A = m_mats[l];
   BlockCsr& C = m_mats[l + 1];
   Level& lev = m_levels[l];
-  const int nb = A.nb, w = A.w, nbc = C.nb, wc = C.w, pb = w * nbc;
   RectCsr& ap = lev.ap;
   int* marker = lev.marker.data();
-  // A P, row by row into its pattern: a scatter through the row's marker of coarse columns.
+  const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = lev.prolong.ptr.data(), *pc = lev.prolong.col.data();
+  const double *av = A.val.data(), *pv = lev.prolong.val.data(), *ptv = lev.ptrans.data();
+  double* apv = ap.val.data();
+  // A P, row by row into its pattern (a scatter through the row's marker of coarse columns):
+  // column c of block (i, J) += A_ij times column c of P_jJ.
   for (int i = 0; i < A.rows(); ++i) {
     for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
       marker[ap.col[static_cast<std::size_t>(q)]] = q;
-      std::fill_n(ap.val.data() + q * pb, pb, 0.0);
+      std::fill_n(apv + q * PB, PB, 0.0);
     }
-    for (int k = A.ptr[static_cast<std::size_t>(i)]; k < A.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
-      const double* a = A.val.data() + k * A.block();
-      const int j = A.col[static_cast<std::size_t>(k)];
-      for (int p = lev.prolong.ptr[static_cast<std::size_t>(j)]; p < lev.prolong.ptr[static_cast<std::size_t>(j) + 1];
-           ++p) {
-        const double* pj = lev.prolong.val.data() + p * pb;
-        double* t = ap.val.data() + marker[lev.prolong.col[static_cast<std::size_t>(p)]] * pb;
-        for (int c = 0; c < nbc; ++c)
-          for (int q = 0; q < nb; ++q) {
-            const double f = pj[c * w + q];
-            for (int r = 0; r < nb; ++r) t[c * w + r] += f * a[q * w + r];
-          }
+    for (int k = ptr[i]; k < ptr[i + 1]; ++k) {
+      const double* a = av + k * AB;
+      for (int p = pp[col[k]]; p < pp[col[k] + 1]; ++p) {
+        const double* pj = pv + p * PB;
+        double* t = apv + marker[pc[p]] * PB;
+        for (int c = 0; c < NBC; ++c) store<W>(t + c * W, load<W>(t + c * W) + times<W, NB>(a, pj + c * W));
       }
     }
   }
-  // P^T (A P), coarse row by coarse row; then 1 on the dead values' diagonal.
+  // P^T (A P), coarse row by coarse row: column c of block (I, J) += P_iI^T times column c of
+  // (A P)_iJ.
+  double* cv = C.val.data();
   for (int I = 0; I < C.rows(); ++I) {
     for (int q = C.ptr[static_cast<std::size_t>(I)]; q < C.ptr[static_cast<std::size_t>(I) + 1]; ++q) {
       marker[C.col[static_cast<std::size_t>(q)]] = q;
-      std::fill_n(C.val.data() + q * C.block(), C.block(), 0.0);
+      std::fill_n(cv + q * CB, CB, 0.0);
     }
     for (int s = lev.rptr[static_cast<std::size_t>(I)]; s < lev.rptr[static_cast<std::size_t>(I) + 1]; ++s) {
       const int i = lev.rrow[static_cast<std::size_t>(s)];
-      const double* pI = lev.prolong.val.data() + lev.rblock[static_cast<std::size_t>(s)] * pb;
+      const double* pt = ptv + lev.rblock[static_cast<std::size_t>(s)] * PTB;
       for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
-        const double* a = ap.val.data() + q * pb;
-        double* t = C.val.data() + marker[ap.col[static_cast<std::size_t>(q)]] * C.block();
-        for (int c = 0; c < nbc; ++c)
-          for (int r = 0; r < nbc; ++r) {
-            double sum = 0;
-            for (int p = 0; p < nb; ++p) sum += pI[r * w + p] * a[c * w + p];
-            t[c * wc + r] += sum;
-          }
+        const double* a = apv + q * PB;
+        double* t = cv + marker[ap.col[static_cast<std::size_t>(q)]] * CB;
+        for (int c = 0; c < NBC; ++c) store<WC>(t + c * WC, load<WC>(t + c * WC) + times<WC, NB>(pt, a + c * W));
       }
     }
   }
-  for (int d : lev.dead)
-    C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / nbc)] * C.block() + (d % nbc) * (wc + 1))] +=
-        1.0;
 }
 
 template <int dim> void BlockMultigrid<dim>::refresh() {
@@ -444,9 +451,9 @@ template <int dim> void BlockMultigrid<dim>::cycle(std::size_t l, const double* 
     return;
   }
   const Level& L = m_levels[l];
-  const Arrays arrays{
-      A.ptr.data(),      A.col.data(),         A.diag.data(), L.prolong.ptr.data(), L.prolong.col.data(), A.val.data(),
-      L.inv_diag.data(), L.prolong.val.data(), A.rows(),      m_mats[l + 1].rows()};
+  const Arrays arrays{A.ptr.data(),         A.col.data(), A.diag.data(),       L.prolong.ptr.data(),
+                      L.prolong.col.data(), A.val.data(), L.inv_diag.data(),   L.prolong.val.data(),
+                      L.ptrans.data(),      A.rows(),     m_mats[l + 1].rows()};
   double *bc = m_b[l].data(), *xc = m_x[l].data();
   sweep_down<dim>(arrays, A.nb, b, x, bc);
   cycle(l + 1, bc, xc);
@@ -467,9 +474,9 @@ template <int dim> std::size_t BlockMultigrid<dim>::memory_bytes() const {
                       sizeof(double) * static_cast<std::size_t>(m_coarse_rhs.size());
   for (const BlockCsr& A : m_mats) bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + doubles(A.val);
   for (const Level& L : m_levels)
-    bytes += doubles(L.inv_diag) + ints(L.prolong.ptr) + ints(L.prolong.col) + doubles(L.prolong.val) + ints(L.rptr) +
-             ints(L.rrow) + ints(L.rblock) + ints(L.ap.ptr) + ints(L.ap.col) + doubles(L.ap.val) + ints(L.marker) +
-             ints(L.dead);
+    bytes += doubles(L.inv_diag) + ints(L.prolong.ptr) + ints(L.prolong.col) + doubles(L.prolong.val) +
+             doubles(L.ptrans) + ints(L.rptr) + ints(L.rrow) + ints(L.rblock) + ints(L.ap.ptr) + ints(L.ap.col) +
+             doubles(L.ap.val) + ints(L.marker) + ints(L.dead);
   for (std::size_t l = 0; l < m_b.size(); ++l) bytes += doubles(m_b[l]) + doubles(m_x[l]);
   return bytes;
 }

@@ -80,6 +80,7 @@ private:
   struct Level {
     std::vector<double> inv_diag;        ///< per node, the inverse diagonal block (as the matrix's blocks)
     RectCsr prolong;                     ///< P by fine rows
+    std::vector<double> ptrans;          ///< P's blocks transposed (nbf columns of wc lanes), same order
     std::vector<int> rptr, rrow, rblock; ///< P by coarse rows: its fine rows and P's block index
     RectCsr ap;                          ///< A P: the Galerkin product's half
     std::vector<int> marker;             ///< per coarse node: its position in the row being summed
@@ -87,6 +88,8 @@ private:
   };
   void cycle(std::size_t l, const double* b, double* x);
   void galerkin(std::size_t l);
+  /// galerkin() for fine nodes of NB values on W lanes (coarse: kModes on WC lanes).
+  template <int W, int NB, int WC> void galerkin_products(std::size_t l);
 
   std::vector<BlockCsr> m_mats;              ///< every level's matrix, finest first
   std::vector<Level> m_levels;               ///< every level but the coarsest
