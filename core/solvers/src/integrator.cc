@@ -18,15 +18,17 @@ template <int dim> State<dim> initial_state(const Model<dim>& model) {
 
 template <int dim> std::string chosen_filter(const Model<dim>& model, const std::string& filter) {
   if (filter != solvers::kFilterAuto) return filter;
-  // The factor's step and memory grow like n^(4/3) in 3D against the V-cycle's n (9,864-node
-  // slab: 2.47 ms and 45 MB against 0.996 ms and 4.2 MB); below the threshold the factor is
-  // cheap and exact, where the V-cycle adds mass (docs/performance.md, item 7).
-  if (dim == 3 && model.free_nodes.size() >= kLargeFreeNodes3D) return solvers::kFilterMultigrid;
-  // In 2D the lag-free tensor filter: on the paper's plates and the cantilever the full
-  // filter's extra mass costs 7-22x its transient error, at 2.3-3.1x its step (docs/method.md). In 3D its step is 7x
-  // the full filter's (1,701-node box), so the factor stays there.
-  if (dim == 2) return solvers::kFilterTensor;
-  return solvers::kFilterFull;
+  const std::size_t free = model.free_nodes.size();
+  // Large 3D meshes: the scalar V-cycle, whose step is 18-30x cheaper than implicit Euler's on
+  // the 10k slab, where the tensor filter's block V-cycle is 2.5x cheaper (and 14x more
+  // accurate over a transient: docs/method.md); the factor's fill grows like n^(4/3) there.
+  if (dim == 3 && free >= kLargeFreeNodes3D) return solvers::kFilterMultigrid;
+  // Below, the lag-free tensor filter: the full filter's extra mass costs 7-22x its transient
+  // error in 2D, 80-99 % on a twisted bar and 30 % on a loaded 2k slab in 3D (docs/method.md),
+  // at 2-3x its step in 2D and 4-7x in 3D; in 3D by its factor on small meshes and its block
+  // V-cycle from kTensorCycleFreeNodes3D.
+  if (dim == 3 && free >= kTensorCycleFreeNodes3D) return solvers::kFilterTensorMultigrid;
+  return solvers::kFilterTensor;
 }
 
 template <int dim>

@@ -35,7 +35,8 @@ inline constexpr Entry kEntries[] = {
     {kExplicit, "symplectic Euler; stable below the Courant limit only", kExplicit, "", "dt, strain_limit", true, true,
      true, true},
     {kFiltered,
-     "the paper's filtered implicit scheme with the scene's filter (auto: full, multigrid on large 3D meshes)",
+     "the paper's filtered implicit scheme with the scene's filter (auto: tensor, tensor-multigrid from 1,000 free "
+     "nodes in 3D, multigrid from 4,000)",
      kFiltered, "", "dt, filter, momentum_correction, strain_limit", true, true, true, true},
     {kFilteredFull, "the filtered scheme with the full inverse W (stable at any dt)", kFiltered, kFilterFull,
      "dt, momentum_correction, strain_limit", false, true, true, false},

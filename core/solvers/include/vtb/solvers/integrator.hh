@@ -45,8 +45,7 @@ template <int dim> double coupling_diagonal(const State<dim>& s, Eigen::Index i,
 /// The couplings' force over the step that the implicit system expects on its right-hand side
 /// (as a spring's dt K v): -dt k v at node i; the damping has none (its force is at v already).
 template <int dim> Vec<dim> coupling_force_correction(const State<dim>& s, Eigen::Index i, double dt) {
-  if (i < s.applied_stiffness.size() && s.applied_stiffness[i] > 0)
-    return -dt * s.applied_stiffness[i] * s.v.col(i);
+  if (i < s.applied_stiffness.size() && s.applied_stiffness[i] > 0) return -dt * s.applied_stiffness[i] * s.v.col(i);
   return Vec<dim>::Zero();
 }
 
@@ -87,10 +86,15 @@ struct IntegratorOptions {
 /// filter's and implicit Euler's `auto` linear solver's threshold.
 inline constexpr std::size_t kLargeFreeNodes3D = 4000;
 
+/// From this many free nodes a 3D tensor filter solves with its block V-cycle rather than H_t's
+/// factor, whose step is no cheaper from about 600 nodes and 2.3x dearer at 1,400 (CGAL slabs,
+/// docs/performance.md item 13).
+inline constexpr std::size_t kTensorCycleFreeNodes3D = 1000;
+
 /// The filter `filtered` runs for `filter` on this model: `filter` itself, or for `auto` the
-/// full filter (the exact H^-1 by the factor), the multigrid filter on 3D meshes of
-/// kLargeFreeNodes3D free nodes and more. The tensor filter is not picked yet: it still
-/// diverges under hard pulls (docs/method.md).
+/// lag-free tensor filter (2D; 3D below kLargeFreeNodes3D free nodes, by its factor and from
+/// kTensorCycleFreeNodes3D by its block V-cycle) and the scalar multigrid filter on 3D meshes of
+/// kLargeFreeNodes3D free nodes and more, where the step's cost rules (docs/method.md).
 template <int dim> std::string chosen_filter(const Model<dim>& model, const std::string& filter);
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
