@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace vtb {
@@ -24,24 +25,28 @@ constexpr int lanes_of(int nb) {
 /// One level's raw arrays, for the sweeps below.
 struct Arrays {
   const int *ptr, *col, *diag, *pp, *pc;
-  const double *val, *dinv, *pv, *ptv; ///< ptv: P's blocks transposed
+  const float* val;
+  const double* dinv;
+  const float *pv, *ptv; ///< ptv: P's blocks transposed
   int n, nc;
 };
 
 /// The NB x NB block at a (NB columns of W lanes) times the node x (its first NB values).
-/// Two partial sums (even and odd columns), so that the block's adds form two shorter chains.
-template <int W, int NB> [[gnu::always_inline]] inline Lane<W> times(const double* a, const double* x) {
-  Lane<W> even = load<W>(a) * x[0], odd = load<W>(a + W) * x[1];
+/// The NB x NB block at a (NB columns of W lanes, double or float) times the node x (its first
+/// NB values), in two partial sums (even and odd columns), so that the adds form two shorter
+/// chains.
+template <int W, int NB, class T, class X> [[gnu::always_inline]] inline Lane<W> times(const T* a, const X* x) {
+  Lane<W> even = load<W>(a) * static_cast<double>(x[0]), odd = load<W>(a + W) * static_cast<double>(x[1]);
   for (int q = 2; q < NB; q += 2) {
-    even += load<W>(a + q * W) * x[q];
-    if (q + 1 < NB) odd += load<W>(a + (q + 1) * W) * x[q + 1];
+    even += load<W>(a + q * W) * static_cast<double>(x[q]);
+    if (q + 1 < NB) odd += load<W>(a + (q + 1) * W) * static_cast<double>(x[q + 1]);
   }
   return even + odd;
 }
-template <int W, int NB> [[gnu::always_inline]] inline Lane<W> times(const double* a, Lane<W> x) {
+template <int W, int NB, class T> [[gnu::always_inline]] inline Lane<W> times(const T* a, Lane<W> x) {
   double v[W];
   store<W>(v, x);
-  return times<W, NB>(a, v);
+  return times<W, NB>(a, static_cast<const double*>(v));
 }
 
 /// Forward block Gauss-Seidel from x = 0 (only the lower blocks meet nonzero x), then the
@@ -165,6 +170,16 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
       m.diag.push_back(static_cast<int>(it - m.col.begin()));
     }
     m.val.assign(m.col.size() * static_cast<std::size_t>(m.block()), 0.0);
+    m.f.assign(m.val.size(), 0.0f);
+    m.trans.resize(m.col.size());
+    for (int i = 0; i < m.rows(); ++i)
+      for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
+        const int j = m.col[static_cast<std::size_t>(k)];
+        const auto b = m.col.begin() + m.ptr[static_cast<std::size_t>(j)], e = m.col.begin() + m.ptr[j + 1];
+        const auto it = std::lower_bound(b, e, i);
+        if (it == e || *it != i) throw std::runtime_error("multigrid: a pattern that is not symmetric");
+        m.trans[static_cast<std::size_t>(k)] = static_cast<int>(it - m.col.begin());
+      }
     return m;
   };
   // A block matrix as a dof-level one (for the setup's products).
@@ -190,6 +205,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
       m_mats.front().val[static_cast<std::size_t>(offset(static_cast<int>(i), static_cast<int>(it.col())))] =
           it.value();
 
+  round(m_mats.front());
   // The rigid modes at the finest level, about the nodes' centroid: dim translations, then the
   // rotations (2D: (-y, x); 3D: e_k x r).
   const auto n0 = static_cast<Eigen::Index>(m_mats.front().rows());
@@ -302,12 +318,14 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
                 P.coeff(i * nb + p, I * kModes + c);
       }
     const int wc = lanes_of(kModes);
-    lev.ptrans.assign(lev.prolong.col.size() * static_cast<std::size_t>(wc * nb), 0.0);
+    lev.prolong.f.assign(lev.prolong.val.begin(), lev.prolong.val.end());
+    lev.ptrans.assign(lev.prolong.col.size() * static_cast<std::size_t>(wc * nb), 0.0f);
     for (std::size_t kk = 0; kk < lev.prolong.col.size(); ++kk)
       for (int p = 0; p < nb; ++p)
         for (int c = 0; c < kModes; ++c)
           lev.ptrans[kk * static_cast<std::size_t>(wc * nb) + static_cast<std::size_t>(p * wc + c)] =
-              lev.prolong.val[kk * static_cast<std::size_t>(wf * kModes) + static_cast<std::size_t>(c * wf + p)];
+              lev.prolong.f[kk * static_cast<std::size_t>(wf * kModes) + static_cast<std::size_t>(c * wf + p)];
+    lev.prolong.val = {}; // the rounded values are P from here on
     // P by coarse rows: the fine rows and block indices of each coarse column.
     lev.rptr.assign(static_cast<std::size_t>(nc) + 1, 0);
     for (int c : lev.prolong.col) ++lev.rptr[static_cast<std::size_t>(c) + 1];
@@ -338,7 +356,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
   const BlockCsr& C = m_mats.back();
   const Eigen::SparseMatrix<double> Cs(dofs(C));
   m_coarse = std::make_unique<OrderedLDLT>(Cs, C.nb);
-  m_coarse_offset.assign(C.val.size(), -1);
+  m_coarse_offset.assign(C.f.size(), -1);
   for (int i = 0; i < C.rows(); ++i)
     for (int k = C.ptr[static_cast<std::size_t>(i)]; k < C.ptr[static_cast<std::size_t>(i) + 1]; ++k)
       for (int p = 0; p < C.nb; ++p)
@@ -358,11 +376,54 @@ template <int dim> void BlockMultigrid<dim>::galerkin(std::size_t l) {
     m_mats[l].nb == 3 ? galerkin_products<4, 3, 8>(l) : galerkin_products<8, 6, 8>(l);
   else
     m_mats[l].nb == 2 ? galerkin_products<2, 2, 4>(l) : galerkin_products<4, 3, 4>(l);
-  // 1 on the dead values' diagonal (their P columns are zero).
+  // 1 on the dead values' diagonal (their P columns are zero); then what the cycle reads.
   BlockCsr& C = m_mats[l + 1];
   for (int d : m_levels[l].dead)
     C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
         1.0;
+  round(C);
+}
+
+template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
+  // Each value once, from the block on or above the diagonal (the computed coarse matrices are
+  // symmetric only to round-off), mirrored below it; then each dof row's rounding errors added
+  // to its diagonal value, rounded up: the stored matrix minus val is symmetric and
+  // diagonally dominant with a nonnegative diagonal, so positive semidefinite. The cycle is
+  // then one for a matrix >= val, and B <= that matrix's inverse <= val's (docs/method.md).
+  const int B = m.block();
+  for (int i = 0; i < m.rows(); ++i)
+    for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
+      const int j = m.col[static_cast<std::size_t>(k)];
+      if (j < i) continue;
+      const int t = m.trans[static_cast<std::size_t>(k)];
+      for (int p = 0; p < m.nb; ++p)
+        for (int q = 0; q < m.nb; ++q) {
+          if (j == i && q < p) continue;
+          const float v = static_cast<float>(m.val[static_cast<std::size_t>(k * B + q * m.w + p)]);
+          m.f[static_cast<std::size_t>(k * B + q * m.w + p)] = v;
+          m.f[static_cast<std::size_t>(t * B + p * m.w + q)] = v;
+        }
+    }
+  for (int i = 0; i < m.rows(); ++i)
+    for (int p = 0; p < m.nb; ++p) {
+      double shift = 0;
+      for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k)
+        for (int q = 0; q < m.nb; ++q) {
+          const auto e = static_cast<std::size_t>(k * B + q * m.w + p);
+          const int j = m.col[static_cast<std::size_t>(k)];
+          // the error against the value the row's symmetric counterpart was rounded from
+          const double exact =
+              (j > i || (j == i && q >= p))
+                  ? m.val[e]
+                  : m.val[static_cast<std::size_t>(m.trans[static_cast<std::size_t>(k)] * B + p * m.w + q)];
+          shift += std::abs(static_cast<double>(m.f[e]) - exact);
+        }
+      const auto d = static_cast<std::size_t>(m.diag[static_cast<std::size_t>(i)] * B + p * m.w + p);
+      const double target = static_cast<double>(m.f[d]) + shift;
+      float v = static_cast<float>(target);
+      if (static_cast<double>(v) < target) v = std::nextafter(v, std::numeric_limits<float>::infinity());
+      m.f[d] = v;
+    }
 }
 
 template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::galerkin_products(std::size_t l) {
@@ -373,7 +434,7 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
   RectCsr& ap = lev.ap;
   int* marker = lev.marker.data();
   const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = lev.prolong.ptr.data(), *pc = lev.prolong.col.data();
-  const double *av = A.val.data(), *pv = lev.prolong.val.data(), *ptv = lev.ptrans.data();
+  const float *av = A.f.data(), *pv = lev.prolong.f.data(), *ptv = lev.ptrans.data();
   double* apv = ap.val.data();
   // A P, row by row into its pattern (a scatter through the row's marker of coarse columns):
   // column c of block (i, J) += A_ij times column c of P_jJ.
@@ -383,9 +444,9 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
       std::fill_n(apv + q * PB, PB, 0.0);
     }
     for (int k = ptr[i]; k < ptr[i + 1]; ++k) {
-      const double* a = av + k * AB;
+      const float* a = av + k * AB;
       for (int p = pp[col[k]]; p < pp[col[k] + 1]; ++p) {
-        const double* pj = pv + p * PB;
+        const float* pj = pv + p * PB;
         double* t = apv + marker[pc[p]] * PB;
         for (int c = 0; c < NBC; ++c) store<W>(t + c * W, load<W>(t + c * W) + times<W, NB>(a, pj + c * W));
       }
@@ -401,7 +462,7 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
     }
     for (int s = lev.rptr[static_cast<std::size_t>(I)]; s < lev.rptr[static_cast<std::size_t>(I) + 1]; ++s) {
       const int i = lev.rrow[static_cast<std::size_t>(s)];
-      const double* pt = ptv + lev.rblock[static_cast<std::size_t>(s)] * PTB;
+      const float* pt = ptv + lev.rblock[static_cast<std::size_t>(s)] * PTB;
       for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
         const double* a = apv + q * PB;
         double* t = cv + marker[ap.col[static_cast<std::size_t>(q)]] * CB;
@@ -412,12 +473,13 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
 }
 
 template <int dim> void BlockMultigrid<dim>::refresh() {
+  round(m_mats.front());
   for (std::size_t l = 0; l < m_levels.size(); ++l) {
     const BlockCsr& A = m_mats[l];
     double* inv = m_levels[l].inv_diag.data();
     Small D(A.nb, A.nb);
     for (int i = 0; i < A.rows(); ++i) {
-      const double* a = A.val.data() + A.diag[static_cast<std::size_t>(i)] * A.block();
+      const float* a = A.f.data() + A.diag[static_cast<std::size_t>(i)] * A.block();
       for (int p = 0; p < A.nb; ++p)
         for (int q = 0; q < A.nb; ++q) D(p, q) = a[q * A.w + p];
       const Small Dinv = D.inverse();
@@ -429,7 +491,7 @@ template <int dim> void BlockMultigrid<dim>::refresh() {
   }
   double* v = m_coarse->values();
   std::fill_n(v, m_coarse->nonzeros(), 0.0);
-  const std::vector<double>& cv = m_mats.back().val;
+  const std::vector<float>& cv = m_mats.back().f;
   for (std::size_t e = 0; e < cv.size(); ++e)
     if (m_coarse_offset[e] >= 0) v[m_coarse_offset[e]] = cv[e];
   if (!m_coarse->factorize()) throw std::runtime_error("multigrid: the coarsest matrix is not positive definite");
@@ -452,7 +514,7 @@ template <int dim> void BlockMultigrid<dim>::cycle(std::size_t l, const double* 
   }
   const Level& L = m_levels[l];
   const Arrays arrays{A.ptr.data(),         A.col.data(), A.diag.data(),       L.prolong.ptr.data(),
-                      L.prolong.col.data(), A.val.data(), L.inv_diag.data(),   L.prolong.val.data(),
+                      L.prolong.col.data(), A.f.data(),   L.inv_diag.data(),   L.prolong.f.data(),
                       L.ptrans.data(),      A.rows(),     m_mats[l + 1].rows()};
   double *bc = m_b[l].data(), *xc = m_x[l].data();
   sweep_down<dim>(arrays, A.nb, b, x, bc);
@@ -472,11 +534,13 @@ template <int dim> std::size_t BlockMultigrid<dim>::memory_bytes() const {
   std::size_t bytes = static_cast<std::size_t>(m_coarse->nonzeros()) * (sizeof(double) + sizeof(int)) * 2 +
                       ints(m_coarse_offset) + ints(m_coarse_order) +
                       sizeof(double) * static_cast<std::size_t>(m_coarse_rhs.size());
-  for (const BlockCsr& A : m_mats) bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + doubles(A.val);
+  auto floats = [](const std::vector<float>& v) { return v.size() * sizeof(float); };
+  for (const BlockCsr& A : m_mats)
+    bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + ints(A.trans) + doubles(A.val) + floats(A.f);
   for (const Level& L : m_levels)
     bytes += doubles(L.inv_diag) + ints(L.prolong.ptr) + ints(L.prolong.col) + doubles(L.prolong.val) +
-             doubles(L.ptrans) + ints(L.rptr) + ints(L.rrow) + ints(L.rblock) + ints(L.ap.ptr) + ints(L.ap.col) +
-             doubles(L.ap.val) + ints(L.marker) + ints(L.dead);
+             floats(L.prolong.f) + floats(L.ptrans) + ints(L.rptr) + ints(L.rrow) + ints(L.rblock) + ints(L.ap.ptr) +
+             ints(L.ap.col) + doubles(L.ap.val) + ints(L.marker) + ints(L.dead);
   for (std::size_t l = 0; l < m_b.size(); ++l) bytes += doubles(m_b[l]) + doubles(m_x[l]);
   return bytes;
 }

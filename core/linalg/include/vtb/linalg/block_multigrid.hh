@@ -19,6 +19,11 @@
 /// post-smoother is the pre-smoother's adjoint and the coarse operators are Galerkin, so
 /// 0 < B <= A^-1 and B^-1 = A + Delta with Delta symmetric positive semidefinite.
 ///
+/// The cycle is bound by memory, so it reads the matrices and P in single precision: each
+/// matrix rounded symmetrically with each diagonal value raised by its row's rounding errors
+/// (BlockCsr::f), so that the stored matrix is >= the exact one and the bound above holds for
+/// the exact A; P rounded once and used as rounded everywhere.
+///
 /// The finest matrix's values may change (the tensor filter's transverse cover): write them
 /// through values() and offset(), then refresh() recomputes the diagonal inverses, the coarse
 /// matrices (numeric products into the patterns made at setup) and the coarsest factor,
@@ -68,7 +73,11 @@ private:
   struct BlockCsr {
     int nb = dim, w = kLanes;
     std::vector<int> ptr, col, diag;
-    std::vector<double> val;
+    std::vector<int> trans;  ///< per block (i, j): the block (j, i)
+    std::vector<double> val; ///< the level's matrix
+    /// What the cycle reads: val in single precision, symmetric, each diagonal value raised by
+    /// its row's rounding errors, so that the stored matrix is >= val (round()).
+    std::vector<float> f;
     int rows() const { return static_cast<int>(ptr.size()) - 1; }
     int block() const { return nb * w; }
   };
@@ -76,11 +85,12 @@ private:
   struct RectCsr {
     std::vector<int> ptr, col;
     std::vector<double> val;
+    std::vector<float> f; ///< P: its values rounded once, used everywhere (any P keeps B <= A^-1)
   };
   struct Level {
     std::vector<double> inv_diag;        ///< per node, the inverse diagonal block (as the matrix's blocks)
     RectCsr prolong;                     ///< P by fine rows
-    std::vector<double> ptrans;          ///< P's blocks transposed (nbf columns of wc lanes), same order
+    std::vector<float> ptrans;           ///< P's blocks transposed (nbf columns of wc lanes), same order
     std::vector<int> rptr, rrow, rblock; ///< P by coarse rows: its fine rows and P's block index
     RectCsr ap;                          ///< A P: the Galerkin product's half
     std::vector<int> marker;             ///< per coarse node: its position in the row being summed
@@ -88,6 +98,8 @@ private:
   };
   void cycle(std::size_t l, const double* b, double* x);
   void galerkin(std::size_t l);
+  /// m.f from m.val (BlockCsr::f).
+  static void round(BlockCsr& m);
   /// galerkin() for fine nodes of NB values on W lanes (coarse: kModes on WC lanes).
   template <int W, int NB, int WC> void galerkin_products(std::size_t l);
 
