@@ -2,6 +2,9 @@
 /// \file
 /// `[solver] filter = "tensor"`: the filtered step with the full rest Jacobian instead of the
 /// paper's isotropic Laplacian, and stiffness warping (Mueller et al. 2002) for rotations.
+/// `filter = "tensor-multigrid"` is the same step with H_t^-1 applied by one symmetric block
+/// V-cycle instead of H_t's factor (WarpedSystem below; block_multigrid.hh): the step with the
+/// cycle's extra mass Delta_t >= 0, for 3D meshes whose factor is too large.
 ///
 ///   H_t = M (1 + dt gamma) + dt D_0 + dt^2 K_0   (dim n x dim n on the free nodes: the spring
 ///        Jacobian's blocks k n n^T and c n n^T at rest, from the shared assembly),
