@@ -368,7 +368,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
   m_coarse_order.resize(static_cast<std::size_t>(C.rows()) * static_cast<std::size_t>(C.nb));
   for (std::size_t d = 0; d < m_coarse_order.size(); ++d) m_coarse_order[d] = m_coarse->ordered(static_cast<int>(d));
   m_coarse_rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m_coarse_order.size()), 1);
-  refresh();
+  finish(); // the setup's loop made every level's values
 }
 
 template <int dim> void BlockMultigrid<dim>::galerkin(std::size_t l) {
@@ -474,6 +474,11 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
 
 template <int dim> void BlockMultigrid<dim>::refresh() {
   round(m_mats.front());
+  for (std::size_t l = 0; l < m_levels.size(); ++l) galerkin(l);
+  finish();
+}
+
+template <int dim> void BlockMultigrid<dim>::finish() {
   for (std::size_t l = 0; l < m_levels.size(); ++l) {
     const BlockCsr& A = m_mats[l];
     double* inv = m_levels[l].inv_diag.data();
@@ -487,7 +492,6 @@ template <int dim> void BlockMultigrid<dim>::refresh() {
       for (int p = 0; p < A.nb; ++p)
         for (int q = 0; q < A.nb; ++q) inv[i * A.block() + q * A.w + p] = Dinv(p, q);
     }
-    galerkin(l);
   }
   double* v = m_coarse->values();
   std::fill_n(v, m_coarse->nonzeros(), 0.0);

@@ -98,6 +98,8 @@ private:
   };
   void cycle(std::size_t l, const double* b, double* x);
   void galerkin(std::size_t l);
+  /// The diagonal inverses and the coarsest factor of the levels' current values.
+  void finish();
   /// m.f from m.val (BlockCsr::f).
   static void round(BlockCsr& m);
   /// galerkin() for fine nodes of NB values on W lanes (coarse: kModes on WC lanes).
