@@ -26,7 +26,9 @@ Action add_view(CLI::App& app) {
   // The steppers, and the filtered scheme's names that fix its filter.
   const auto startable = [](const solvers::Entry& e) { return e.interactive || *e.filter != '\0'; };
   cmd->add_option("--solver", o->solver, "Start with this solver: " + solvers::list(+startable));
-  cmd->add_option("--filter", o->filter, "Start with this filter: full | neighbors | tensor | multigrid");
+  std::string filters; // from the names' table, so that a new filter is listed (solver_names.hh)
+  for (const char* f : solvers::kFilterChoices) filters += (filters.empty() ? "" : " | ") + std::string(f);
+  cmd->add_option("--filter", o->filter, "Start with this filter: " + filters);
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
   cmd->add_flag("--device", o->device,
                 "Device mode: the mouse, or the --drag path, is the hand on the simulated ProCAT (3D: in the scene's "
