@@ -40,6 +40,8 @@ template <int dim> void LiveSim<dim>::rebuild() {
   o.dt = m_controls.dt;
   auto integ = make_integrator(*model, o); // the integrator keeps a reference to *model
   const bool same_size = m_model && m_model->num_nodes() == model->num_nodes();
+  const auto* filtered = dynamic_cast<const FilteredImplicit<dim>*>(integ.get());
+  m_running_filter = filtered ? filtered->filter() : std::string();
   m_integ = std::move(integ);
   m_model = std::move(model);
   if (!same_size || !m_failure.empty()) {

@@ -75,6 +75,9 @@ public:
   /// (the previous configuration is kept); the state is kept when the model is unchanged.
   void configure(const SimControls& controls);
   const SimControls& controls() const { return m_controls; }
+  /// The filter the filtered solver runs (`auto` resolved for this model); empty for the
+  /// other solvers.
+  const std::string& running_filter() const { return m_running_filter; }
 
   /// Advances the simulated time by up to `sim_seconds` in steps of dt, stopping early when
   /// the steps have taken `wall_budget` seconds of wall time (then stats().behind is set).
@@ -133,6 +136,7 @@ private:
   double m_courant_dt = 0;
   StepHook<dim>* m_hook = nullptr;
   std::string m_probe_name;
+  std::string m_running_filter; ///< what the filtered solver runs (auto resolved)
 };
 
 } // namespace vtb::viewer

@@ -33,6 +33,8 @@ template <int dim> void App<dim>::draw_solver_controls() {
       }
     ImGui::EndCombo();
   }
+  if (sim.controls().filter == solvers::kFilterAuto && !sim.running_filter().empty())
+    ImGui::TextDisabled("auto runs the %s filter here", sim.running_filter().c_str());
   if (ImGui::BeginCombo("springs", m_edit.springs.c_str())) {
     for (const char* k : kSprings)
       if (ImGui::Selectable(k, m_edit.springs == k)) {

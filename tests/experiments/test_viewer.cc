@@ -187,6 +187,27 @@ TEST(Viewer, ThePanelRunsTheTensorFilterOnFittedSprings) {
   ::unsetenv("VTB_CACHE_DIR");
 }
 
+TEST(Viewer, ThePanelSaysWhatTheAutoFilterRuns) {
+  // With no filter chosen (auto) the panel names the filter auto resolved to for this model:
+  // the lag-free tensor filter on the 2D plate (chosen_filter). A filter picked by name runs as
+  // named, and a solver that is not the filtered one runs no filter.
+  const test::FreshDir cache;
+  ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
+  const Scene scene = plate();
+  viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
+  EXPECT_EQ(sim.controls().filter, solvers::kFilterAuto);
+  EXPECT_EQ(sim.running_filter(), chosen_filter(sim.model(), solvers::kFilterAuto));
+  EXPECT_EQ(sim.running_filter(), solvers::kFilterTensor);
+  viewer::SimControls c = sim.controls();
+  c.filter = solvers::kFilterFull;
+  sim.configure(c);
+  EXPECT_EQ(sim.running_filter(), solvers::kFilterFull);
+  c.solver = solvers::kImplicitEuler;
+  sim.configure(c);
+  EXPECT_TRUE(sim.running_filter().empty());
+  ::unsetenv("VTB_CACHE_DIR");
+}
+
 TEST(Viewer, AnUnstableSolverIsReportedAndTheViewerCarriesOn) {
   // The explicit scheme at 1 ms, far beyond its limit on this plate (~1e-6 s): it diverges
   // within a few steps; the viewer reports which solver and when, keeps drawing, and exits 0.
