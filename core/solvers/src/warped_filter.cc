@@ -1,5 +1,7 @@
 #include "vtb/solvers/warped_filter.hh"
 
+#include "mismatch_kernel.hh"
+
 #include "vtb/springs/force_jacobian.hh"
 
 #include <Eigen/Geometry>
@@ -91,26 +93,31 @@ struct MismatchTracker {
 
   /// Adds the pair; true when its sin^2 passes `trigger` (or it is at 90 degrees or more).
   template <int dim> [[gnu::always_inline]] bool add(const Vec<dim>& d, const Vec<dim>& t, double trigger = 2.0) {
-    const double dd = d.squaredNorm();
-    if (!(dd > 0)) return false;
-    const double tt = t.squaredNorm();
-    if (d.dot(t) > 0) {
-      double cross2;
-      if constexpr (dim == 2) {
-        cross2 = d.x() * t.y() - d.y() * t.x();
-        cross2 *= cross2;
-      } else {
-        cross2 = d.cross(t).squaredNorm();
-      }
+    double cross2;
+    if constexpr (dim == 2) {
+      cross2 = d.x() * t.y() - d.y() * t.x();
+      cross2 *= cross2;
+    } else {
+      cross2 = d.cross(t).squaredNorm();
+    }
+    return add_terms(d.dot(t), cross2, d.squaredNorm() * t.squaredNorm(), trigger);
+  }
+
+  /// The same from the pair's d . t, |d x t|^2 and |d|^2 |t|^2 (`den`; a pair with den 0 is
+  /// skipped, as a spring of length 0 has no direction).
+  [[gnu::always_inline]] bool add_terms(double dot, double cross2, double den, double trigger) {
+    if (!(den > 0)) return false;
+    if (dot > 0) {
       // Divided only where a new worst is found (the divider stalled the loop); NaN stays.
-      if (!(cross2 <= worst_sin2 * (dd * tt))) {
-        const double s2 = cross2 / (dd * tt);
+      if (!(cross2 <= worst_sin2 * den)) {
+        const double s2 = cross2 / den;
         worst_sin2 = std::isnan(worst_sin2) ? worst_sin2 : s2;
       }
-      return cross2 > trigger * (dd * tt);
+      return cross2 > trigger * den;
     }
-    // 90 degrees or more (at least sqrt(2)), or not finite: rare, directly
-    const double m = (d / std::sqrt(dd) - t / std::sqrt(tt)).norm();
+    // 90 degrees or more (at least sqrt(2)), or not finite: rare, directly as
+    // |d/|d| - t/|t|| = sqrt(2 - 2 cos theta)
+    const double m = std::sqrt(2 - 2 * dot / std::sqrt(den));
     if (!(m <= worst)) worst = m;
     return true;
   }
@@ -135,7 +142,7 @@ struct MismatchTracker {
 
 template <int dim>
 WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigrid)
-    : m_model(model), m_rotation(static_cast<std::size_t>(model.num_nodes()), Mat<dim>::Identity()),
+    : m_model(model), m_rotation(dim == 3 ? static_cast<std::size_t>(model.num_nodes()) : 0, Mat<dim>::Identity()),
       m_capacitance(kMaxCoupled * dim) {
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   Nodal<dim> x(dim, nf); // the free nodes' rest positions: the V-cycle's rigid modes
@@ -173,11 +180,16 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   for (int sp = 0; sp < ns; ++sp)
     m_spring_rest.col(sp) = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
                             net.rest.col(net.edge[static_cast<std::size_t>(sp)][0]);
-  m_adj_rest.resize(dim, static_cast<Eigen::Index>(net.adj_node.size()));
-  for (int i = 0; i < net.num_nodes(); ++i)
-    for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
-      m_adj_rest.col(p) = net.rest.col(net.adj_node[static_cast<std::size_t>(p)]) - net.rest.col(i);
-  if constexpr (dim == 2) m_polar.resize(2, net.num_nodes());
+  if constexpr (dim == 3) {
+    m_adj_rest.resize(dim, static_cast<Eigen::Index>(net.adj_node.size()));
+    for (int i = 0; i < net.num_nodes(); ++i)
+      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
+        m_adj_rest.col(p) = net.rest.col(net.adj_node[static_cast<std::size_t>(p)]) - net.rest.col(i);
+  }
+  if constexpr (dim == 2) {
+    m_polar.resize(2, net.num_nodes());
+    m_pq.resize(ns, 6);
+  }
 }
 
 template <int dim>
@@ -193,7 +205,7 @@ template <class Tracker>
     const Vec<2> cs = m_polar.col(i) + m_polar.col(j);
     t = Vec<2>(cs.x() * D.x() - cs.y() * D.y(), cs.y() * D.x() + cs.x() * D.y());
   } else {
-    t = (m_rotation[static_cast<std::size_t>(i)] + m_rotation[static_cast<std::size_t>(j)]) * D;
+    t = (rotation(i) + rotation(j)) * D;
   }
   return tracker.template add<dim>(D + u.col(j) - u.col(i), t, trigger);
 }
@@ -201,8 +213,31 @@ template <class Tracker>
 template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
   MismatchTracker worst;
   bool out = false;
-  for (int s = 0; s < m_model.net.num_springs(); ++s)
-    out |= add_spring(worst, s, u, m_trigger[static_cast<std::size_t>(s)]);
+  const int ns = m_model.net.num_springs();
+  if constexpr (dim == 2) {
+    // From the springs' products that rotations() left in m_pq (p = d . D, q = D x d, w =
+    // |d|^2 |D|^2, c = (cos, sin)_i + (cos, sin)_j): with t = (R_i + R_j) D and R_i + R_j =
+    // [cx -cy; cy cx], d . t = cx p + cy q, d x t = cy p - cx q and |t|^2 = |c|^2 |D|^2, so u
+    // is not read again. The rare spring past 90 degrees (or of length 0, or not finite) sends
+    // the scan to the tracker's exact pass.
+    (void)u;
+    bool rare = false;
+    detail::mismatch_sin2(ns, &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_pq(0, 3), &m_pq(0, 4), m_trigger.data(),
+                          &m_pq(0, 5), out, rare);
+    if (!rare) {
+      if (outgrown) *outgrown = out;
+      return MismatchTracker::from_sin2(m_pq.col(5).maxCoeff());
+    }
+    out = false;
+    for (int s = 0; s < ns; ++s) {
+      const double p = m_pq(s, 0), q = m_pq(s, 1), cx = m_pq(s, 3), cy = m_pq(s, 4);
+      const double cross = cy * p - cx * q;
+      out |= worst.add_terms(cx * p + cy * q, cross * cross, m_pq(s, 2) * (cx * cx + cy * cy),
+                             m_trigger[static_cast<std::size_t>(s)]);
+    }
+  } else {
+    for (int s = 0; s < ns; ++s) out |= add_spring(worst, s, u, m_trigger[static_cast<std::size_t>(s)]);
+  }
   if (outgrown) *outgrown = out;
   return worst.value();
 }
@@ -298,28 +333,41 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   // sum stays in registers (scattered spring by spring, each add waited on the previous
   // one's store to the same node); the rest vectors X_j - X_i are read in order (m_adj_rest).
   // In 2D the rotation needs only a = A00 + A11 = sum d . D and b = A10 - A01 = sum D x d:
-  // gathered in a first pass, normalised in a second, so that the square roots and divisions
-  // of successive nodes overlap instead of each waiting at the end of its node's gather.
+  // made per spring, gathered per node, then normalised in a pass of their own, so that the
+  // square roots and divisions of successive nodes overlap instead of each waiting at the end
+  // of its node's gather.
+  if constexpr (dim == 2) {
+    // Each spring's d . D, D x d and |d|^2 |D|^2, once (the gather below and the scan read them).
+    for (int s = 0; s < net.num_springs(); ++s) {
+      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+      const Vec<2> D = m_spring_rest.col(s);
+      const Vec<2> d = D + u.col(j) - u.col(i);
+      m_pq(s, 0) = d.dot(D);
+      m_pq(s, 1) = D.x() * d.y() - D.y() * d.x();
+      m_pq(s, 2) = d.squaredNorm() * D.squaredNorm();
+    }
+  }
   for (int i = 0; i < net.num_nodes(); ++i) {
-    const auto ui = u.col(i);
     const int begin = net.adj_ptr[static_cast<std::size_t>(i)], end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
     if constexpr (dim == 2) {
-      // (d . D, D x d) summed in two interleaved partial sums: one chain of dependent adds
-      // per entry made the loop wait on the adder's latency.
+      // (d . D, D x d) is the same from both ends (d and D change sign together): made once
+      // per spring in the pass before this loop, gathered here in two interleaved partial
+      // sums (one chain of dependent adds per entry made the loop wait on the adder's latency).
       Vec<2> even = Vec<2>::Zero(), odd = Vec<2>::Zero();
-      auto term = [&](int p) {
-        const Vec<2> D = m_adj_rest.col(p);
-        const Vec<2> d = D + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
-        return Vec<2>(d.dot(D), D.x() * d.y() - D.y() * d.x());
-      };
       int p = begin;
       for (; p + 1 < end; p += 2) {
-        even += term(p);
-        odd += term(p + 1);
+        const int s0 = net.adj_spring[static_cast<std::size_t>(p)],
+                  s1 = net.adj_spring[static_cast<std::size_t>(p) + 1];
+        even += Vec<2>(m_pq(s0, 0), m_pq(s0, 1));
+        odd += Vec<2>(m_pq(s1, 0), m_pq(s1, 1));
       }
-      if (p < end) even += term(p);
+      if (p < end) {
+        const int s0 = net.adj_spring[static_cast<std::size_t>(p)];
+        even += Vec<2>(m_pq(s0, 0), m_pq(s0, 1));
+      }
       m_polar.col(i) = even + odd;
     } else {
+      const auto ui = u.col(i);
       Mat<dim> A = Mat<dim>::Zero();
       for (int p = begin; p < end; ++p) {
         const Vec<dim> D = m_adj_rest.col(p);
@@ -338,17 +386,25 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   }
   if constexpr (dim == 2) {
     // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so
-    // (cos, sin) = (a, b) / |(a, b)| (no atan2); identity where (a, b) is zero or not finite
-    // (a non-finite state: the run's watch stops it).
-    for (int i = 0; i < net.num_nodes(); ++i) {
-      const double a = m_polar(0, i), b = m_polar(1, i), r2 = a * a + b * b;
-      const double inv = 1 / std::sqrt(r2);
-      Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
-      if (r2 > 0 && std::isfinite(inv * (a + b)))
-        m_polar.col(i) << a * inv, b * inv;
-      else
-        m_polar.col(i) << 1.0, 0.0;
-      R << m_polar(0, i), -m_polar(1, i), m_polar(1, i), m_polar(0, i);
+    // (cos, sin) = (a, b) / |(a, b)| (no atan2), node by node without a branch so that the
+    // square roots and divisions overlap; identity where (a, b) is zero or not finite (a
+    // non-finite state: the run's watch stops it), in a pass of its own that rarely finds one.
+    const int n = net.num_nodes();
+    bool bad = false;
+    for (int i = 0; i < n; ++i) {
+      const double a = m_polar(0, i), b = m_polar(1, i);
+      const double inv = 1 / std::sqrt(a * a + b * b);
+      m_polar(0, i) = a * inv;
+      m_polar(1, i) = b * inv;
+      bad |= !(std::abs(inv * (a + b)) < std::numeric_limits<double>::infinity()); // NaN or inf
+    }
+    for (int i = 0; bad && i < n; ++i)
+      if (!std::isfinite(m_polar(0, i) + m_polar(1, i))) m_polar.col(i) << 1.0, 0.0;
+    // Each spring's ends' (cos, sin) summed, for the scan.
+    for (int s = 0; s < net.num_springs(); ++s) {
+      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+      m_pq(s, 3) = m_polar(0, i) + m_polar(0, j);
+      m_pq(s, 4) = m_polar(1, i) + m_polar(1, j);
     }
   }
 }
@@ -369,7 +425,7 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   const auto nf = static_cast<int>(free.size());
   for (int a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
-    const Vec<dim> f = m_rotation[static_cast<std::size_t>(i)].transpose() * force.col(i);
+    const Vec<dim> f = rotation(i).transpose() * force.col(i);
     for (int p = 0; p < dim; ++p) m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0) = f[p];
   }
   m_h->solve(m_rhs.col(0));
@@ -377,7 +433,7 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   for (int a = 0; a < nf; ++a) {
     Vec<dim> x;
     for (int p = 0; p < dim; ++p) x[p] = m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0);
-    dv.col(a) = dt * (m_rotation[static_cast<std::size_t>(free[static_cast<std::size_t>(a)])] * x);
+    dv.col(a) = dt * (rotation(free[static_cast<std::size_t>(a)]) * x);
   }
 }
 

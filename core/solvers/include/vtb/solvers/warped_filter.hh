@@ -89,9 +89,18 @@ public:
   void solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv);
   /// The rotation of each node's neighbourhood at displacement u (identity at rest).
   void rotations(const Nodal<dim>& u);
-  const std::vector<Mat<dim>>& rotation() const { return m_rotation; }
+  /// Node i's rotation after rotations() (2D: made from its (cos, sin)).
+  Mat<dim> rotation(int i) const {
+    if constexpr (dim == 2) {
+      Mat<2> R;
+      R << m_polar(0, i), -m_polar(1, i), m_polar(1, i), m_polar(0, i);
+      return R;
+    } else {
+      return m_rotation[static_cast<std::size_t>(i)];
+    }
+  }
   /// The largest |n_s - R n0_s| over springs s = (i, j), R the normalised mean of R_i and R_j
-  /// (rotations() first).
+  /// (rotations(u) first, with the same u: in 2D it reads that pass's per-spring products).
   double direction_mismatch(const Nodal<dim>& u) const;
 
 private:
@@ -112,11 +121,14 @@ private:
   const Model<dim>& m_model;
   std::unique_ptr<WarpedSystem<dim>> m_h; ///< H's factor or V-cycle
   std::vector<int> m_index;               ///< per free dof (dim a + p): its position in the solve's vector
-  std::vector<Mat<dim>> m_rotation;       ///< per node
+  std::vector<Mat<dim>> m_rotation;       ///< 3D, per node (2D: m_polar)
   Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
-  Nodal<dim> m_adj_rest;                  ///< per adjacency entry of node i: X_j - X_i (the rotations read it in order)
-  Eigen::Matrix2Xd m_polar;               ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
-  std::vector<double> m_base;             ///< H(0)'s stored values
+  Nodal<dim> m_adj_rest;    ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
+  Eigen::Matrix2Xd m_polar; ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
+  /// 2D, per spring (row) at the last rotations(), column by column: d . D, D x d, |d|^2 |D|^2,
+  /// the ends' (cos, sin) summed, and (the scan's scratch) the spring's sin^2.
+  mutable Eigen::Matrix<double, Eigen::Dynamic, 6> m_pq;
+  std::vector<double> m_base; ///< H(0)'s stored values
   /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
   /// k in [m_tptr[s], m_tptr[s + 1]).
   std::vector<int> m_tptr, m_toff;

@@ -1,0 +1,23 @@
+#include "mismatch_kernel.hh"
+
+#include "vtb/linalg/vector_clones.hh"
+
+namespace vtb::detail {
+
+VTB_VECTOR_CLONES void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx,
+                                     const double* cy, const double* trigger, double* s2, bool& outgrown, bool& rare) {
+  long out = 0, odd = 0;
+  for (int s = 0; s < n; ++s) {
+    const double cross = cy[s] * p[s] - cx[s] * q[s], dot = cx[s] * p[s] + cy[s] * q[s];
+    const double den = w[s] * (cx[s] * cx[s] + cy[s] * cy[s]), cross2 = cross * cross;
+    const bool ok = (dot > 0) & (den > 0); // false for NaN
+    const double r = cross2 / den;
+    s2[s] = ok ? r : 0.0;
+    out |= cross2 > trigger[s] * den;
+    odd |= !ok;
+  }
+  outgrown = out != 0;
+  rare = odd != 0;
+}
+
+} // namespace vtb::detail
