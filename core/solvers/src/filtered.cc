@@ -142,6 +142,9 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   // dv = dt W a.
   if (m_tensor && !m_fallback) {
     m_tensor->solve(m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
+    // Toward implicit Euler's step where a cover or the V-cycle makes H depart from the
+    // warped rest Jacobian (WarpedFilter::correct).
+    m_tensor->correct(s.u, s.v, m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);

@@ -186,6 +186,13 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
       for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
         m_adj_rest.col(p) = net.rest.col(net.adj_node[static_cast<std::size_t>(p)]) - net.rest.col(i);
   }
+  m_multigrid = multigrid;
+  m_residual = Nodal<dim>::Zero(dim, net.num_nodes());
+  m_iterate = Nodal<dim>::Zero(dim, net.num_nodes());
+  m_direction = Nodal<dim>::Zero(dim, nf);
+  m_spring_d.resize(dim, ns);
+  m_spring_q.resize(ns);
+  m_spring_at.resize(ns);
   if constexpr (dim == 2) {
     m_polar.resize(2, net.num_nodes());
     m_pq.resize(ns, 6);
@@ -274,6 +281,7 @@ template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mis
       v[m_toff[static_cast<std::size_t>(k)]] += b * m_tval[static_cast<std::size_t>(k)];
   }
   m_beta_max = global;
+  m_correction_rest = 0; // a new cover: correct() measures its gain again
   m_h->refresh();
   ++m_factor_version;
 }

@@ -87,6 +87,24 @@ public:
   /// including the couplings' forces and their -dt k v term), H' = H_t + c I at each node with
   /// a `coupling` coefficient c = dt^2 k + dt b > 0 (per node; empty: none).
   void solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv);
+  /// Moves dv (solve()'s) toward implicit Euler's step where the filter's matrix departs from
+  /// the warped rest Jacobian (a cover is on: its transverse damping lags; or H is solved by
+  /// the V-cycle, whose B^-1 = H + Delta carries extra mass): one step of conjugate gradients on
+  /// implicit Euler's system A x = b, preconditioned by this filter's own R H'^-1 R^T, from x =
+  /// dv. A = M (1 + dt gamma) + the couplings' c - dt D(u) - dt^2 K(u) is the current Jacobian
+  /// (K's transverse term clamped at 0 under compression, as implicit Euler's), b = dt (F + dt
+  /// K(u) v), both applied spring by spring (no matrix). dv becomes the point of the line dv +
+  /// alpha z, z the preconditioned residual, nearest to implicit Euler's step in A's energy
+  /// norm: never farther from it than the filter's step. When a correction moves the step by
+  /// less than kCorrectionGain of its energy, the next kCorrectionRest calls return at once (a
+  /// new cover ends the rest). `force` is solve()'s F (with the dt k axial term that is dt K(u)
+  /// v's axial part), u and v the state it was made at. Allocates nothing.
+  void correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force, const Eigen::VectorXd& coupling,
+               double dt, Nodal<dim>& dv);
+  /// correct()'s threshold on its gain (docs/method.md: the measured gains of the cases).
+  static constexpr double kCorrectionGain = 0.05;
+  /// Steps left uncorrected after a correction below that gain.
+  static constexpr int kCorrectionRest = 8;
   /// The rotation of each node's neighbourhood at displacement u (identity at rest).
   void rotations(const Nodal<dim>& u);
   /// Node i's rotation after rotations() (2D: made from its (cos, sin)).
@@ -134,8 +152,15 @@ private:
   std::vector<int> m_tptr, m_toff;
   std::vector<double> m_tval;
   std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
-  double m_beta_max = 0;         ///< twice the largest mismatch at the last refill
-  Eigen::MatrixXd m_rhs;         ///< one column, laid out as m_h's
+  // correct()'s scratch: the residual and the iterate by nodes (fixed nodes 0), the
+  // preconditioned residual by free nodes, and each spring's block of A as q d d^T + a_t I
+  // (its vector d, q and a_t).
+  Nodal<dim> m_residual, m_iterate, m_direction, m_spring_d;
+  Eigen::VectorXd m_spring_q, m_spring_at;
+  double m_beta_max = 0;     ///< twice the largest mismatch at the last refill
+  bool m_multigrid = false;  ///< H solved by the block V-cycle
+  int m_correction_rest = 0; ///< correct() calls left to skip
+  Eigen::MatrixXd m_rhs;     ///< one column, laid out as m_h's
   /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
   void couple(const Eigen::VectorXd& coupling);
   /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y laid out as m_h's).
