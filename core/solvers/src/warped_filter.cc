@@ -341,40 +341,40 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   // sum stays in registers (scattered spring by spring, each add waited on the previous
   // one's store to the same node); the rest vectors X_j - X_i are read in order (m_adj_rest).
   // In 2D the rotation needs only a = A00 + A11 = sum d . D and b = A10 - A01 = sum D x d:
-  // made per spring, gathered per node, then normalised in a pass of their own, so that the
-  // square roots and divisions of successive nodes overlap instead of each waiting at the end
-  // of its node's gather.
+  // summed spring by spring, then normalised in a pass of their own, so that the square roots
+  // and divisions of successive nodes overlap instead of each waiting at the end of its sum.
   if constexpr (dim == 2) {
-    // Each spring's d . D, D x d and |d|^2 |D|^2, once (the gather below and the scan read them).
-    for (int s = 0; s < net.num_springs(); ++s) {
-      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+    // (d . D, D x d) is the same from both ends (d and D change sign together): made once per
+    // spring, with |d|^2 |D|^2 for the scan, and added to both ends' sums; springs come sorted
+    // by their first node, so that node's sum stays in registers over its run (as the spring
+    // kernel's forces) and only the second node's is added in memory.
+    m_polar.setZero();
+    const auto* e = net.edge.data();
+    const int ns = net.num_springs();
+    int i = ns > 0 ? e[0][0] : 0;
+    Vec<2> sum = Vec<2>::Zero();
+    for (int s = 0; s < ns; ++s) {
+      if (e[s][0] != i) {
+        m_polar.col(i) += sum;
+        i = e[s][0];
+        sum.setZero();
+      }
+      const int j = e[s][1];
       const Vec<2> D = m_spring_rest.col(s);
       const Vec<2> d = D + u.col(j) - u.col(i);
-      m_pq(s, 0) = d.dot(D);
-      m_pq(s, 1) = D.x() * d.y() - D.y() * d.x();
+      const Vec<2> pq(d.dot(D), D.x() * d.y() - D.y() * d.x());
+      m_pq(s, 0) = pq.x();
+      m_pq(s, 1) = pq.y();
       m_pq(s, 2) = d.squaredNorm() * D.squaredNorm();
+      sum += pq;
+      m_polar.col(j) += pq;
     }
+    if (ns > 0) m_polar.col(i) += sum;
   }
-  for (int i = 0; i < net.num_nodes(); ++i) {
-    const int begin = net.adj_ptr[static_cast<std::size_t>(i)], end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
-    if constexpr (dim == 2) {
-      // (d . D, D x d) is the same from both ends (d and D change sign together): made once
-      // per spring in the pass before this loop, gathered here in two interleaved partial
-      // sums (one chain of dependent adds per entry made the loop wait on the adder's latency).
-      Vec<2> even = Vec<2>::Zero(), odd = Vec<2>::Zero();
-      int p = begin;
-      for (; p + 1 < end; p += 2) {
-        const int s0 = net.adj_spring[static_cast<std::size_t>(p)],
-                  s1 = net.adj_spring[static_cast<std::size_t>(p) + 1];
-        even += Vec<2>(m_pq(s0, 0), m_pq(s0, 1));
-        odd += Vec<2>(m_pq(s1, 0), m_pq(s1, 1));
-      }
-      if (p < end) {
-        const int s0 = net.adj_spring[static_cast<std::size_t>(p)];
-        even += Vec<2>(m_pq(s0, 0), m_pq(s0, 1));
-      }
-      m_polar.col(i) = even + odd;
-    } else {
+  if constexpr (dim == 3) {
+    for (int i = 0; i < net.num_nodes(); ++i) {
+      const int begin = net.adj_ptr[static_cast<std::size_t>(i)];
+      const int end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
       const auto ui = u.col(i);
       Mat<dim> A = Mat<dim>::Zero();
       for (int p = begin; p < end; ++p) {
