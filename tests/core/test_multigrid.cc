@@ -56,26 +56,31 @@ Eigen::VectorXd relative_spectrum(const Eigen::MatrixXd& B, const Eigen::MatrixX
   return Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(0.5 * (S + S.transpose())).eigenvalues();
 }
 
-/// `worst`: the contraction 1 - min eig(B H) the cycle must beat on this H.
+/// A cycle's dense matrix B against H: symmetric up to round-off (the post-smoother is the
+/// pre-smoother's adjoint and the coarse operators are Galerkin, P^T A P, so B = B^T in exact
+/// arithmetic), 0 < B <= H^-1 (the eigenvalues of B H lie in (0, 1]: E = I - B H is
+/// H-self-adjoint and positive semidefinite; round-off 1e-10 on a matrix of condition below
+/// 1e4), and a contraction 1 - min eig(B H) below `worst`.
+void expect_symmetric_contraction_below_the_inverse(const Eigen::MatrixXd& B, const Eigen::SparseMatrix<double>& H,
+                                                    double worst) {
+  EXPECT_LT((B - B.transpose()).cwiseAbs().maxCoeff(), 1e-12 * B.cwiseAbs().maxCoeff());
+  const Eigen::VectorXd lambda = relative_spectrum(B, Eigen::MatrixXd(H));
+  EXPECT_GT(lambda.minCoeff(), 0.0);
+  EXPECT_LE(lambda.maxCoeff(), 1.0 + 1e-10);
+  EXPECT_LT(1.0 - lambda.minCoeff(), worst);
+}
+
+/// `worst`: the contraction 1 - min eig(B H) the cycle must beat on this H. A smoothed-
+/// aggregation V(1,1) cycle contracts the error by a factor independent of the mesh, about 0.4
+/// on these meshes (0.42 on the 9,864-node slab; docs/performance.md). 0.6 separates it from a
+/// cycle whose coarse correction is broken (Gauss-Seidel alone contracts the smooth modes by
+/// 1 - O(h^2): above 0.9 here).
 void expect_cycle_is_a_contraction_below_the_inverse(const Eigen::SparseMatrix<double>& H, double worst = 0.6) {
   SymmetricMultigrid<2> mg(H, 16);
   const std::vector<Eigen::Index> sizes = mg.level_sizes();
   ASSERT_GE(sizes.size(), 3u) << "a hierarchy of at least three levels";
   for (std::size_t l = 1; l < sizes.size(); ++l) EXPECT_LT(sizes[l], sizes[l - 1]);
-  const Eigen::MatrixXd B = dense_cycle(mg, H.rows());
-  // Symmetric up to round-off: the post-smoother is the pre-smoother's adjoint and the coarse
-  // operators are Galerkin (P^T A P), so B = B^T in exact arithmetic.
-  EXPECT_LT((B - B.transpose()).cwiseAbs().maxCoeff(), 1e-12 * B.cwiseAbs().maxCoeff());
-  // 0 < B <= H^-1: the eigenvalues of B H lie in (0, 1] (E = I - B H is H-self-adjoint and
-  // positive semidefinite; round-off 1e-10 on a matrix of condition below 1e4).
-  const Eigen::VectorXd lambda = relative_spectrum(B, Eigen::MatrixXd(H));
-  EXPECT_GT(lambda.minCoeff(), 0.0);
-  EXPECT_LE(lambda.maxCoeff(), 1.0 + 1e-10);
-  // And a useful one: a smoothed-aggregation V(1,1) cycle contracts the error by a factor
-  // independent of the mesh, about 0.4 on these meshes (0.42 on the 9,864-node slab;
-  // docs/performance.md). 0.6 separates it from a cycle whose coarse correction is broken
-  // (Gauss-Seidel alone contracts the smooth modes by 1 - O(h^2): above 0.9 here).
-  EXPECT_LT(1.0 - lambda.minCoeff(), worst);
+  expect_symmetric_contraction_below_the_inverse(dense_cycle(mg, H.rows()), H, worst);
 }
 
 TEST(MultigridCycle, IsSymmetricAndBetweenZeroAndTheInverseIn2D) {
@@ -140,16 +145,11 @@ void expect_block_cycle_is_a_contraction_below_the_inverse(const Model<dim>& m, 
   BlockMultigrid<dim> mg(H, free_positions(m), 16);
   const std::vector<Eigen::Index> sizes = mg.level_sizes();
   ASSERT_GE(sizes.size(), 3u) << "a hierarchy of at least three levels";
-  const Eigen::MatrixXd B = dense_block_cycle(mg, H.rows());
   // As for the scalar cycle: symmetric in exact arithmetic, B H's eigenvalues in (0, 1]. The
   // cycle reads its matrices in single precision, each diagonal raised by its row's rounding
   // errors so that the stored matrix is >= H: without that raise the largest eigenvalue was
-  // 1 + O(1e-8) here, beyond the 1e-10 below (double round-off on these small matrices).
-  EXPECT_LT((B - B.transpose()).cwiseAbs().maxCoeff(), 1e-12 * B.cwiseAbs().maxCoeff());
-  const Eigen::VectorXd lambda = relative_spectrum(B, Eigen::MatrixXd(H));
-  EXPECT_GT(lambda.minCoeff(), 0.0);
-  EXPECT_LE(lambda.maxCoeff(), 1.0 + 1e-10);
-  EXPECT_LT(1.0 - lambda.minCoeff(), worst);
+  // 1 + O(1e-8) here, beyond the 1e-10 bound (double round-off on these small matrices).
+  expect_symmetric_contraction_below_the_inverse(dense_block_cycle(mg, H.rows()), H, worst);
 }
 
 TEST(BlockMultigridCycle, IsSymmetricAndBetweenZeroAndTheInverseOfTheTensorFiltersMatrix) {

@@ -64,26 +64,26 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   };
   // r = b - A x at x = dv: b = dt F' plus the transverse part of dt^2 K v (F' holds its axial
   // part, the filter's dt k term), A x = the diagonal's plus the springs' B (x_i - x_j).
+  // e0 = x . A x, the step's own energy, for the gain below.
   m_iterate.setZero();
-  for (Eigen::Index a = 0; a < nf; ++a) m_iterate.col(free[static_cast<std::size_t>(a)]) = dv.col(a);
   m_residual = dt * force;
+  double e0 = 0;
   for (Eigen::Index a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
-    m_residual.col(i) -= diagonal(i) * m_iterate.col(i);
+    const double m = diagonal(i);
+    m_iterate.col(i) = dv.col(a);
+    m_residual.col(i) -= m * dv.col(a);
+    e0 += m * dv.col(a).squaredNorm();
   }
-  // e0 = x . A x, the step's own energy, for the gain below.
-  double e0 = 0;
-  for (Eigen::Index a = 0; a < nf; ++a) e0 += diagonal(free[static_cast<std::size_t>(a)]) * dv.col(a).squaredNorm();
-  alignas(64) double d[kChunk * dim], ew[kChunk * dim], l2[kChunk], dw[kChunk], de[kChunk], ww[kChunk], g[kChunk];
+  alignas(64) double ew[kChunk * dim], l2[kChunk], dw[kChunk], de[kChunk], ww[kChunk], g[kChunk];
   for (int s0 = 0; s0 < ns; s0 += kChunk) {
     const int n = std::min(kChunk, ns - s0);
     for (int s = 0; s < n; ++s) {
       const int i = e[s0 + s][0], j = e[s0 + s][1];
       const Vec<dim> ds = net.rest.col(j) + u.col(j) - net.rest.col(i) - u.col(i);
       const Vec<dim> w = m_iterate.col(i) - m_iterate.col(j), vel = v.col(j) - v.col(i);
-      Eigen::Map<Vec<dim>>(d + dim * s) = ds;
-      Eigen::Map<Vec<dim>>(ew + dim * s) = vel - w;
       m_spring_d.col(s0 + s) = ds;
+      Eigen::Map<Vec<dim>>(ew + dim * s) = vel - w;
       l2[s] = ds.squaredNorm();
       dw[s] = ds.dot(w);
       de[s] = ds.dot(vel);
@@ -91,21 +91,10 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     }
     correction_terms(n, dt, l2, dw, de, net.rest_length.data() + s0, net.stiffness.data() + s0, net.damping.data() + s0,
                      g, m_spring_q.data() + s0, m_spring_at.data() + s0);
-    int i = e[s0][0];
-    Vec<dim> sum = Vec<dim>::Zero();
-    for (int s = 0; s < n; ++s) {
-      if (e[s0 + s][0] != i) {
-        m_residual.col(i) += sum;
-        i = e[s0 + s][0];
-        sum.setZero();
-      }
-      const Vec<dim> t = g[s] * Eigen::Map<const Vec<dim>>(d + dim * s) +
-                         m_spring_at[s0 + s] * Eigen::Map<const Vec<dim>>(ew + dim * s);
-      sum += t;
-      m_residual.col(e[s0 + s][1]) -= t;
-      e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
-    }
-    m_residual.col(i) += sum;
+    for (int s = 0; s < n; ++s) e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
+    add_by_first_node_runs<-1>(net, s0, n, m_residual, [&](int s) -> Vec<dim> {
+      return g[s] * m_spring_d.col(s0 + s) + m_spring_at[s0 + s] * Eigen::Map<const Vec<dim>>(ew + dim * s);
+    });
   }
   // z = P r (P: R H'^-1 R^T, this filter's own solve), alpha = r . z / z . A z.
   solve(m_residual, coupling, 1.0, m_direction);

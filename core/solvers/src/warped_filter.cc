@@ -349,27 +349,16 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
     // by their first node, so that node's sum stays in registers over its run (as the spring
     // kernel's forces) and only the second node's is added in memory.
     m_polar.setZero();
-    const auto* e = net.edge.data();
-    const int ns = net.num_springs();
-    int i = ns > 0 ? e[0][0] : 0;
-    Vec<2> sum = Vec<2>::Zero();
-    for (int s = 0; s < ns; ++s) {
-      if (e[s][0] != i) {
-        m_polar.col(i) += sum;
-        i = e[s][0];
-        sum.setZero();
-      }
-      const int j = e[s][1];
+    add_by_first_node_runs<+1>(net, 0, net.num_springs(), m_polar, [&](int s) -> Vec<2> {
+      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
       const Vec<2> D = m_spring_rest.col(s);
       const Vec<2> d = D + u.col(j) - u.col(i);
       const Vec<2> pq(d.dot(D), D.x() * d.y() - D.y() * d.x());
       m_pq(s, 0) = pq.x();
       m_pq(s, 1) = pq.y();
       m_pq(s, 2) = d.squaredNorm() * D.squaredNorm();
-      sum += pq;
-      m_polar.col(j) += pq;
-    }
-    if (ns > 0) m_polar.col(i) += sum;
+      return pq;
+    });
   }
   if constexpr (dim == 3) {
     for (int i = 0; i < net.num_nodes(); ++i) {
