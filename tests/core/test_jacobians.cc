@@ -342,6 +342,20 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> implicit_euler_system(const Model<di
   return {A, b};
 }
 
+/// The expected correction's pieces, from the assembled system A x = b at the filter's step
+/// x0: r = b - A x0 and z = P r (the filter's own solve), both on the free dofs.
+template <int dim>
+std::pair<Eigen::VectorXd, Eigen::VectorXd>
+residual_and_direction(const Model<dim>& m, WarpedFilter<dim>& filter, const Eigen::MatrixXd& A,
+                       const Eigen::VectorXd& b, const Eigen::VectorXd& x0, const Eigen::VectorXd& coupling) {
+  const int nf = static_cast<int>(m.free_nodes.size());
+  const Eigen::VectorXd r = b - A * x0;
+  Nodal<dim> r_nodes = Nodal<dim>::Zero(dim, m.num_nodes()), z(dim, nf);
+  for (int a = 0; a < nf; ++a) r_nodes.col(m.free_nodes[static_cast<std::size_t>(a)]) = r.segment<dim>(dim * a);
+  filter.solve(r_nodes, coupling, 1.0, z);
+  return {r, Eigen::Map<const Eigen::VectorXd>(z.data(), dim * nf)};
+}
+
 template <int dim> void check_correction(const Model<dim>& m, bool multigrid) {
   const double dt = 0.01;
   const State<dim> s = random_state(m, 1.0, 3); // 15 % distortion: the cover is on
@@ -352,18 +366,14 @@ template <int dim> void check_correction(const Model<dim>& m, bool multigrid) {
   Nodal<dim> force = Nodal<dim>::Zero(dim, m.num_nodes());
   add_internal_forces(m.net, s.u, s.v, force, dt); // the filter's F, with its dt k axial term
   const int nf = static_cast<int>(m.free_nodes.size());
-  Nodal<dim> dv0(dim, nf), dv(dim, nf), z(dim, nf);
+  Nodal<dim> dv0(dim, nf), dv(dim, nf);
   filter.solve(force, coupling, dt, dv0);
   const auto [A, b] = implicit_euler_system(m, s, dt, coupling);
   const Eigen::VectorXd x_ie = A.ldlt().solve(b);
   const auto flat = [&](const Nodal<dim>& x) { return Eigen::Map<const Eigen::VectorXd>(x.data(), dim * nf).eval(); };
-  // The expected correction, from the assembled system: r = b - A x0, z = P r (the filter's
-  // own solve), x1 = x0 + (r . z / z . A z) z.
-  const Eigen::VectorXd x0 = flat(dv0), r = b - A * x0;
-  Nodal<dim> r_nodes = Nodal<dim>::Zero(dim, m.num_nodes());
-  for (int a = 0; a < nf; ++a) r_nodes.col(m.free_nodes[static_cast<std::size_t>(a)]) = r.segment<dim>(dim * a);
-  filter.solve(r_nodes, coupling, 1.0, z);
-  const Eigen::VectorXd zf = flat(z), x1 = x0 + (r.dot(zf) / zf.dot(A * zf)) * zf;
+  const Eigen::VectorXd x0 = flat(dv0);
+  const auto [r, zf] = residual_and_direction(m, filter, A, b, x0, coupling);
+  const Eigen::VectorXd x1 = x0 + (r.dot(zf) / zf.dot(A * zf)) * zf;
   dv = dv0;
   filter.correct(s.u, s.v, force, coupling, dt, dv);
   // Matrix-free against assembled: the same operations in another order, 1e-10 of the step.
@@ -411,15 +421,12 @@ TEST(TensorFilter, TheVCyclesCorrectionRunsEveryStep) {
   const Eigen::VectorXd none;
   WarpedFilter<3> filter(m, dt, true);
   filter.prepare(s.u);
-  Nodal<3> dv0(3, nf), z(3, nf);
+  Nodal<3> dv0(3, nf);
   filter.solve(force, none, dt, dv0);
   // The first correction's gain, from the assembled system (as check_correction).
   const auto [A, b] = implicit_euler_system(m, s, dt, Eigen::VectorXd::Zero(m.num_nodes()));
-  const Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(dv0.data(), 3 * nf), r = b - A * x0;
-  Nodal<3> r_nodes = Nodal<3>::Zero(3, m.num_nodes());
-  for (int a = 0; a < nf; ++a) r_nodes.col(m.free_nodes[static_cast<std::size_t>(a)]) = r.segment<3>(3 * a);
-  filter.solve(r_nodes, none, 1.0, z);
-  const Eigen::VectorXd zf = Eigen::Map<const Eigen::VectorXd>(z.data(), 3 * nf);
+  const Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(dv0.data(), 3 * nf);
+  const auto [r, zf] = residual_and_direction(m, filter, A, b, x0, none);
   const double gain = std::pow(r.dot(zf), 2) / (zf.dot(A * zf) * x0.dot(A * x0));
   ASSERT_LT(gain, WarpedFilter<3>::kCorrectionGain) << "the test needs a gain below the threshold";
   ASSERT_GT(gain, 1e-8);

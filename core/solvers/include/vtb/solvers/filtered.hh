@@ -60,6 +60,8 @@ public:
   /// Tensor filter: the steps taken by implicit Euler because the distortion passed what the
   /// warped rest Jacobian is trusted with (WarpedFilter::kTrustedMismatch).
   long fallback_steps() const { return m_fallback_steps; }
+  /// Whether it has that fallback (the tensor filters).
+  bool has_fallback() const { return m_fallback_ie != nullptr; }
 
 private:
   void finish_step(State<dim>& s);

@@ -98,8 +98,8 @@ public:
   /// norm: never farther from it than the filter's step. When a correction moves the step by
   /// less than kCorrectionGain of its energy, the next kCorrectionRest calls return at once (a
   /// new cover ends the rest) where the departure is a cover's; under the V-cycle, whose Delta
-  /// lags every step alike, every call corrects. `force` is solve()'s F (with the dt k axial term that is dt K(u)
-  /// v's axial part), u and v the state it was made at. Allocates nothing.
+  /// lags every step alike, every call corrects. `force` is solve()'s F (with the dt k axial
+  /// term that is dt K(u) v's axial part), u and v the state it was made at. Allocates nothing.
   void correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force, const Eigen::VectorXd& coupling,
                double dt, Nodal<dim>& dv);
   /// correct()'s threshold on its gain (docs/method.md: the measured gains of the cases).
