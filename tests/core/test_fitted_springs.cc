@@ -13,6 +13,7 @@
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/spring_network.hh"
 
+#include <Eigen/Geometry>
 #include <Eigen/SparseCholesky>
 #include <gtest/gtest.h>
 
@@ -255,13 +256,34 @@ double block_error(const Mesh3& m, const Eigen::VectorXd& k, double E, double nu
   return (us - ufem).norm() / ufem.norm();
 }
 
+/// Two strips of the block's top face (x <= 1 cm, x >= 3 cm) under opposite uniform tractions
+/// along y, lumped onto the vertices of the facets inside each strip by a third of their area.
+Eigen::VectorXd strip_traction(const Mesh3& m) {
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * m.num_nodes());
+  for (const auto& facet : boundary_facets(m)) {
+    bool top = true, low = true, high = true;
+    for (int v : facet) {
+      top = top && m.points(2, v) > 0.04 - 1e-9;
+      low = low && m.points(0, v) <= 0.01 + 1e-9;
+      high = high && m.points(0, v) >= 0.03 - 1e-9;
+    }
+    if (!top || !(low || high)) continue;
+    const Eigen::Vector3d a = m.points.col(facet[0]), b = m.points.col(facet[1]), c = m.points.col(facet[2]);
+    const double share = 0.5 * (b - a).cross(c - a).norm() / 3.0;
+    for (int v : facet) f[3 * v + 1] += low ? share : -share;
+  }
+  return f;
+}
+
 TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
   // The held-out case of issue #25: a CGAL Mesh_3 block clamped at its bottom, its top sheared,
   // pressed and twisted, nu 0.3 (off the Cauchy value, so no network is exact). The free-body
   // fit was worse than Lloyd here; trained on the clamped body's modes (the scene's supports)
   // the fitted network is held to the issue's 5 % goal on each load and to half Lloyd's error.
   // No load below is in the training set: it sees the lowest clamped modes and the uniform
-  // stress states' tractions on the whole boundary, not these patches.
+  // stress states' tractions on the whole boundary, not these patches. The tolerance is the
+  // issue's 5 % goal (a P1 mesh of this size is itself a few percent from the continuum, so
+  // closer is not asked of springs).
   const Mesh3 m = mesh_box({0.04, 0.04, 0.04}, 500);
   const double E = 5.0e4, nu = 0.3;
   std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()), false);
@@ -286,7 +308,12 @@ TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
       {"twist", load([&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
          const Eigen::Vector3d r = x - centre;
          return 0.05 * Eigen::Vector3d(-r.y(), r.x(), 0);
-       })}};
+       })},
+      // fidelity.csv's twist: the top's strips x <= 1 cm and x >= 3 cm pushed along +y and -y
+      // by a uniform traction lumped by area, as a scene's box load is; the load's edges cut
+      // across the face (7.1 % before the training answers were weighted by energy,
+      // FitOptions::weighting).
+      {"strips", strip_traction(m)}};
   for (const auto& [name, f] : loads) {
     const double fitted = block_error(m, k, E, nu, fixed, f), before = block_error(m, lloyd, E, nu, fixed, f);
     EXPECT_LT(fitted, 0.05) << name << ", lloyd " << before;
@@ -406,16 +433,14 @@ TEST(FittedSprings, AreCachedPerMeshPoissonRatioAndSupports) {
   info.hit = true;
   const Eigen::VectorXd a = cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info);
   EXPECT_FALSE(info.hit);
-  // The fit is equivariant in E t (every stiffness in it scales with E t, its displacements do
-  // not); the cache fits at unit E t, so the direct fit at E t = 100 differs only where the
-  // subspace iteration stops (eigenvalues converged to 1e-8 relative; measured 1.1e-8 on the
-  // springs), far below the fit's 0.5 % stopping gain.
+  // The fit runs at unit E t and is scaled (every stiffness in it scales with E t, its
+  // displacements do not): the direct fit at E t = 100 is the cached one, bit for bit.
   FitReport rep;
-  EXPECT_TRUE(a.isApprox(fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &rep), 1e-6));
+  EXPECT_EQ(fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &rep), a);
   EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
   EXPECT_TRUE(info.hit);
   EXPECT_EQ(info.chosen, rep.chosen) << "the cache keeps what the guard chose";
-  EXPECT_NEAR(info.validation, rep.validation(), 1e-6) << "and its validation error";
+  EXPECT_EQ(info.validation, rep.validation()) << "and its validation error";
   EXPECT_TRUE(cached_fitted_stiffness(m, 2.0e4, 0.3, 0.01, {}, &info).isApprox(2 * a, 1e-14));
   EXPECT_TRUE(info.hit) << "another stiffness reads the same fit, scaled";
   cached_fitted_stiffness(m, 1.0e4, 0.25, 0.01, {}, &info);

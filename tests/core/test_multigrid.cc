@@ -13,6 +13,9 @@
 #include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
+
 namespace vtb {
 namespace {
 
@@ -99,18 +102,22 @@ TEST(MultigridCycle, IsSymmetricAndBetweenZeroAndTheInverseIn3D) {
   expect_cycle_is_a_contraction_below_the_inverse(filter_system_matrix(free, 0.01));
 }
 
-TEST(MultigridCycle, StaysBelowTheInverseOnFittedSpringsOfHighContrast) {
-  // The default springs on a small box are fitted (springs = "auto"); on the free box the fit
-  // spreads them from 0.11x to 37x their mean, and the aggregates, built on the mesh's graph
-  // with one strength threshold, follow that contrast less well: the contraction measured
-  // 0.56 clamped and 0.77 free (docs/performance.md). What the filter's stability rests on
+TEST(MultigridCycle, StaysBelowTheInverseOnSpringsOfHighContrast) {
+  // Fitted springs vary from spring to spring: an earlier fit spread the free box's from 0.11x
+  // to 37x their mean, and the aggregates, built on the mesh's graph with one strength
+  // threshold, follow such contrast less well (contraction 0.56 clamped and 0.77 free,
+  // docs/performance.md). Here the default springs are scattered log-uniformly over 0.1x .. 30x
+  // (fixed seed), more than any fit has produced. What the filter's stability rests on
   // (0 < B <= H^-1) must hold all the same; the bound is the one that separates a working
   // coarse correction from Gauss-Seidel alone (above 0.9, the comment above).
-  const Model<3> m = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "12, 4, 4");
-  expect_cycle_is_a_contraction_below_the_inverse(filter_system_matrix(m, 0.01), 0.9);
-  const Model<3> free = box_model("", 0.05, "12, 4, 4");
-  ASSERT_GT(free.net.stiffness.maxCoeff(), 10 * free.net.stiffness.mean()) << "a high-contrast network";
-  expect_cycle_is_a_contraction_below_the_inverse(filter_system_matrix(free, 0.01), 0.9);
+  for (const char* fix : {"[[fix]]\ngroup = \"left\"\n", ""}) {
+    Model<3> m = box_model(fix, 0.05, "12, 4, 4");
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> spread(std::log(0.1), std::log(30.0));
+    for (Eigen::Index s = 0; s < m.net.stiffness.size(); ++s) m.net.stiffness[s] *= std::exp(spread(rng));
+    ASSERT_GT(m.net.stiffness.maxCoeff(), 10 * m.net.stiffness.mean()) << "a high-contrast network";
+    expect_cycle_is_a_contraction_below_the_inverse(filter_system_matrix(m, 0.01), 0.9);
+  }
 }
 
 /// The block cycle B as a dense matrix (column k = B e_k, node-major dofs).

@@ -396,7 +396,7 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
   const double start_held = early ? fit.held_out_error(Tv, Fv) : 0.0;
   double best_held = start_held;
   VectorXd best = x;
-  int strikes = 0;
+  int strikes = 0, small_gains = 0;
   for (int it = 0; it < o.max_iterations; ++it) {
     const VectorXd gradient = fit.apply_transpose(fit.residual()) + mu * x;
     int used = 0;
@@ -410,7 +410,8 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
       x = trial;
       objective = trial_objective;
       lambda /= 3;
-      stop = gain < o.tolerance;
+      small_gains = gain < o.tolerance ? small_gains + 1 : 0;
+      stop = small_gains >= 2;
       if (early) {
         const double held = fit.held_out_error(Tv, Fv);
         if (held < start_held && held >= (1 - o.min_improvement) * best_held && gain < o.min_improvement) ++strikes;
@@ -433,9 +434,12 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
 
 } // namespace
 
+namespace {
+
+/// The fit at unit E t (fitted_stiffness scales it).
 template <int dim>
-Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness,
-                                 const FitOptions& options, FitReport* report) {
+Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const FitOptions& options, FitReport* report) {
+  constexpr double E = 1.0, thickness = 1.0;
   const int n = mesh.num_nodes(), N = dim * n;
   const int modes = options.modes > 0 ? options.modes : (dim == 2 ? 16 : 24);
   // The network (van Gelder's constants, no dashpots): its edges, and the assembly's input.
@@ -497,6 +501,21 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   if (report) *report = rep;
   if (options.progress) options.progress("done", 1, 1);
   return k;
+}
+
+} // namespace
+
+template <int dim>
+Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness,
+                                 const FitOptions& options, FitReport* report) {
+  // Every stiffness in the fit (its FEM, its priors, its loads) scales with E t and its
+  // displacements do not, so it runs at unit E t and is scaled: the same springs, bit for bit,
+  // whatever the stiffness (the cache and a stiffness sweep rely on it).
+  const double scale = E * (dim == 2 ? thickness : 1.0);
+  if (options.start.size() == 0) return scale * fit_at_unit_stiffness(mesh, nu, options, report);
+  FitOptions unit = options;
+  unit.start /= scale;
+  return scale * fit_at_unit_stiffness(mesh, nu, unit, report);
 }
 
 template <int dim> int fit_dofs_needed(const FitOptions& options) {
