@@ -7,9 +7,13 @@
 #include "vtb/harness/bullet.hh"
 #include "vtb/harness/ranks.hh"
 #include "vtb/solvers/simulation.hh"
+#include "vtb/springs/load_check.hh"
 
+#include <cmath>
+#include <iomanip>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <unistd.h>
 
 namespace vtb::cli {
@@ -54,11 +58,25 @@ Action add_run(CLI::App& app) {
       springs =
           " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
     if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
+    std::string load_check; // the springs against P1 FEM on this scene's loads
+    if (std::isfinite(r.calibration_load_error)) {
+      std::ostringstream pct;
+      pct << std::setprecision(2) << 100 * r.calibration_load_error << " %";
+      load_check = " (" + pct.str() + " from P1 FEM on the scene's loads, static)";
+      if (r.calibration_load_error > kLoadErrorGoal)
+        std::cout << "vtb run: the " << r.calibration << " springs are " << pct.str()
+                  << " from P1 FEM on this scene's loads (static, linear; above " << 100 * kLoadErrorGoal << " %): "
+                  << (r.calibration == "fitted"
+                          ? "central springs miss part of this response (a load concentrated at an edge or "
+                            "corner, or nu near 0.5; docs/fidelity.md)"
+                          : "springs = \"fitted\" fits them to the FEM (docs/fidelity.md)")
+                  << "; vtb compare --reference fem measures the run\n";
+    }
     std::cout << "vtb run: " << scene.name << " with " << r.solver << filter << ", " << r.nodes << " nodes, "
-              << r.springs << springs << " springs, dt = " << r.dt << " s, " << r.steps_taken << " steps; precompute "
-              << r.precompute_seconds * 1e3 << " ms, step median " << r.step_seconds.median * 1e6 << " us, p99 "
-              << r.step_seconds.p99 * 1e6 << " us; max strain " << r.max_strain << "; outputs in " << out.string()
-              << "\n";
+              << r.springs << springs << " springs" << load_check << ", dt = " << r.dt << " s, " << r.steps_taken
+              << " steps; precompute " << r.precompute_seconds * 1e3 << " ms, step median "
+              << r.step_seconds.median * 1e6 << " us, p99 " << r.step_seconds.p99 * 1e6 << " us; max strain "
+              << r.max_strain << "; outputs in " << out.string() << "\n";
     if (!r.stable) {
       std::cerr << "vtb: unstable: " << r.failure << " at t = " << r.failure_time << " s (" << r.solver
                 << ", dt = " << r.dt << " s); summary.json records stable = false\n";

@@ -129,6 +129,8 @@ template <int dim> void App<dim>::draw_panel() {
     ImGui::Text("springs: %s, held-out error %.1f %%", net.calibration.c_str(), 100 * net.calibration_validation);
   else
     ImGui::Text("springs: %s", net.calibration.c_str());
+  if (std::isfinite(net.calibration_load_error))
+    ImGui::Text("%.1f %% from P1 FEM on the scene's loads", 100 * net.calibration_load_error);
   if (!net.calibration_note.empty()) {
     ImGui::PushTextWrapPos(320);
     ImGui::TextDisabled("%s", net.calibration_note.c_str());

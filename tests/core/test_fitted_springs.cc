@@ -11,6 +11,8 @@
 #include "vtb/springs/fitted_cache.hh"
 #include "vtb/springs/fitted_springs.hh"
 #include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/load_check.hh"
+#include "vtb/springs/model.hh"
 #include "vtb/springs/spring_network.hh"
 
 #include <Eigen/Geometry>
@@ -21,8 +23,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <iomanip>
 #include <iostream>
 #include <random>
+#include <sstream>
 
 namespace vtb {
 namespace {
@@ -488,6 +492,58 @@ TEST(FittedSprings, AreTheDefaultWithinAutosBudgetAndLloydBeyondIt) {
   EXPECT_NE(beyond.calibration_note.find("beyond auto's budget"), std::string::npos) << beyond.calibration_note;
   EXPECT_EQ(beyond.stiffness, lloyd_stiffness(big, mat.young_modulus, mat.poisson_ratio, 1.0));
   ::unsetenv("VTB_CACHE_DIR");
+}
+
+/// A scene on `mesh` with the given springs and Poisson ratio: its bottom row of nodes (y <= 0.1)
+/// fixed and `load` (TOML) appended.
+Model<2> patch_model(const Mesh2& mesh, const char* springs, double nu, const std::string& load) {
+  std::ostringstream nu_text; // all digits: at nu = 1/3 Lloyd's element is the P1 element
+  nu_text << std::setprecision(17) << nu;
+  const Scene s = parse_scene("[scene]\nname = \"patch\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\n"
+                              "generate = { shape = \"rectangle\", size = [1.0, 1.0], divisions = [1, 1] }\n"
+                              "[material]\nyoung_modulus = 1.0e4\npoisson_ratio = " +
+                                  nu_text.str() + "\ndensity = 1000.0\nthickness = 0.01\n[solver]\nsprings = \"" +
+                                  springs + "\"\n[[fix]]\nbox = [[-1.0, -1.0], [100.0, 0.1]]\n" + load,
+                              "patch.toml", ".");
+  return build_model<2>(s, mesh);
+}
+
+TEST(LoadCheck, MeasuresTheSpringsAgainstTheFemOnTheScenesOwnLoads) {
+  // Every run's check of its springs (load_check.hh): the springs' linear static answer to the
+  // scene's loads against the P1 FEM's. Equilateral triangles at nu = 1/3: Lloyd's element is
+  // the P1 element, so the two answers agree to rounding (the factorisations' relative error,
+  // 1e-12 on this 117-node patch). At nu = 0.2 no network is exact: the check must equal the
+  // error of this file's own clamped solves (Eigen's LDL^T, another restriction to the free
+  // dofs) to their rounding, and the fit must bring it down.
+  const Mesh2 m = equilateral_patch(12, 8);
+  const double top = m.points.row(1).maxCoeff();
+  const std::string pull = "[[load]]\nbox = [[-1.0, " + std::to_string(top - 0.01) + "], [100.0, " +
+                           std::to_string(top + 0.01) + "]]\ntotal_force = [1.0, 0.5]\n";
+  const Model<2> exact = patch_model(m, "lloyd", 1.0 / 3.0, pull);
+  EXPECT_LT(exact.net.calibration_load_error, 1e-9);
+  const Model<2> lloyd = patch_model(m, "lloyd", 0.2, pull);
+  std::vector<bool> fixed(static_cast<std::size_t>(m.num_nodes()));
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(2 * m.num_nodes());
+  for (int v = 0; v < m.num_nodes(); ++v)
+    fixed[static_cast<std::size_t>(v)] = lloyd.constrained[static_cast<std::size_t>(v)];
+  Nodal<2> loads(2, m.num_nodes());
+  lloyd.external_forces(1e9, loads); // every load at its full value
+  for (int v = 0; v < m.num_nodes(); ++v) f.segment<2>(2 * v) = loads.col(v);
+  const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(m, 1.0e4, 0.2, 0.01), f, fixed, 2);
+  const Eigen::VectorXd us = clamped_solve(spring_matrix(m, lloyd.net.stiffness), f, fixed, 2);
+  const double expected = (us - ufem).norm() / ufem.norm();
+  EXPECT_GT(expected, 0.01) << "off the Cauchy value no network is exact";
+  EXPECT_NEAR(lloyd.net.calibration_load_error, expected, 1e-9 * expected);
+  EXPECT_LT(patch_model(m, "fitted", 0.2, pull).net.calibration_load_error, lloyd.net.calibration_load_error);
+  // Not measured (NaN, and summary.json leaves it out): no load, or a body its supports do not
+  // hold (a free body under loads has no static answer).
+  EXPECT_TRUE(std::isnan(patch_model(m, "lloyd", 0.2, "").net.calibration_load_error));
+  const Scene free = parse_scene("[scene]\nname = \"free\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\n"
+                                 "generate = { shape = \"rectangle\", size = [1.0, 1.0], divisions = [1, 1] }\n"
+                                 "[material]\nyoung_modulus = 1.0e4\npoisson_ratio = 0.2\ndensity = 1000.0\n" +
+                                     pull,
+                                 "free.toml", ".");
+  EXPECT_TRUE(std::isnan(build_model<2>(free, m).net.calibration_load_error));
 }
 
 TEST(FittedSprings, RefuseAMeshTooSmallToFitWithOneLine) {

@@ -39,8 +39,11 @@ sed "s#generate = .*#file = \"$work/broken.msh\"#" "$src/experiments/scenes/plat
 "$vtb" run "$work/broken.toml" --out "$work/out_broken" 2> "$work/err"; rc=$?
 check "broken mesh exits 1 naming the file" '[ $rc -eq 1 ] && grep -q "broken.msh" "$work/err" && [ ! -e "$work/out_broken" ]'
 
-"$vtb" run "$src/experiments/scenes/plate_step.toml" --duration 0.05 --out "$work/out_good" > /dev/null; rc=$?
+"$vtb" run "$src/experiments/scenes/plate_step.toml" --duration 0.05 --out "$work/out_good" > "$work/out_good.txt"; rc=$?
 check "good scene runs" '[ $rc -eq 0 ] && [ -s "$work/out_good/probes.csv" ] && [ -s "$work/out_good/reactions.csv" ] && [ -s "$work/out_good/summary.json" ]'
+# The scene names Lloyd's springs: the run says how far they are from P1 FEM on its loads, in
+# its line and in a line of its own past 5 %, and summary.json holds the number.
+check "the run says how good its springs are on its loads" 'grep -q "lloyd springs (.* from P1 FEM on the scene.s loads, static)" "$work/out_good.txt" && grep -q "^vtb run: the lloyd springs are .* above 5 %" "$work/out_good.txt" && grep -q "\"calibration_load_error\"" "$work/out_good/summary.json"'
 
 # A write that fails is an I/O error (exit 74), not bad input, named in one line; nothing is
 # left behind. Root ignores permissions, so the unwritable folders are a path through a

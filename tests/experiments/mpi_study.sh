@@ -39,7 +39,7 @@ check "mpirun -np 2 vtb sweep: the serial stability.csv but for its timing colum
 check "the sweep prints once" '[ $(grep -c "^criterion:" "$work/sweep.txt") -eq 1 ]'
 
 "${mpi[@]}" "$vtb" run "$scene" --duration 0.05 --out "$work/run" > "$work/run.txt" 2> /dev/null
-check "mpirun -np 2 vtb run (springs) prints once" '[ $(grep -c "^vtb run:" "$work/run.txt") -eq 1 ]'
+check "mpirun -np 2 vtb run (springs) prints once" '[ $(grep -c "^vtb run: .* with " "$work/run.txt") -eq 1 ]'
 "${mpi[@]}" "$vtb" solvers > "$work/solvers_mpi.txt" 2> /dev/null
 "$vtb" solvers > "$work/solvers.txt"
 check "mpirun -np 2 vtb solvers prints once" 'diff "$work/solvers.txt" "$work/solvers_mpi.txt"'

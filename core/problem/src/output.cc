@@ -49,6 +49,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
       j["calibration_cached"] = r.calibration_cached;
       j["calibration_validation_error"] = r.calibration_validation;
     }
+    if (std::isfinite(r.calibration_load_error)) j["calibration_load_error"] = r.calibration_load_error;
     if (!r.calibration_note.empty()) j["calibration_note"] = r.calibration_note;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }

@@ -191,19 +191,6 @@ struct Training {
   bool supported = false;
 };
 
-/// Whether holding the supports' nodes removes every rigid motion (R restricted to their dofs
-/// has full column rank); otherwise the free body's modes are the training set.
-template <int dim> bool supports_hold(const Mesh<dim>& mesh, const std::vector<int>& supports) {
-  if (supports.empty()) return false;
-  const MatrixXd R = rigid_modes(mesh);
-  MatrixXd Rs(dim * static_cast<Eigen::Index>(supports.size()), R.cols());
-  for (std::size_t a = 0; a < supports.size(); ++a)
-    Rs.middleRows(dim * static_cast<Eigen::Index>(a), dim) = R.middleRows(dim * supports[a], dim);
-  Eigen::ColPivHouseholderQR<MatrixXd> qr(Rs);
-  qr.setThreshold(1e-8);
-  return qr.rank() == R.cols();
-}
-
 /// The fit's state at one x: the network's answers U to the training loads, the residual
 /// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
 template <int dim> class Fit {
@@ -518,6 +505,17 @@ Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, dou
   return scale * fit_at_unit_stiffness(mesh, nu, unit, report);
 }
 
+template <int dim> bool supports_hold(const Mesh<dim>& mesh, const std::vector<int>& supports) {
+  if (supports.empty()) return false;
+  const MatrixXd R = rigid_modes(mesh);
+  MatrixXd Rs(dim * static_cast<Eigen::Index>(supports.size()), R.cols());
+  for (std::size_t a = 0; a < supports.size(); ++a)
+    Rs.middleRows(dim * static_cast<Eigen::Index>(a), dim) = R.middleRows(dim * supports[a], dim);
+  Eigen::ColPivHouseholderQR<MatrixXd> qr(Rs);
+  qr.setThreshold(1e-8);
+  return qr.rank() == R.cols();
+}
+
 template <int dim> int fit_dofs_needed(const FitOptions& options) {
   const int modes = options.modes > 0 ? options.modes : (dim == 2 ? 16 : 24);
   const int total = options.holdout > 1 ? modes + modes / (options.holdout - 1) : modes;
@@ -538,6 +536,8 @@ template <int dim> std::string fit_affordable(const Mesh<dim>& mesh, const std::
   return {};
 }
 
+template bool supports_hold<2>(const Mesh<2>&, const std::vector<int>&);
+template bool supports_hold<3>(const Mesh<3>&, const std::vector<int>&);
 template int fit_dofs_needed<2>(const FitOptions&);
 template int fit_dofs_needed<3>(const FitOptions&);
 template int fit_pinned_dofs<2>(const Mesh<2>&, const std::vector<int>&);

@@ -1,6 +1,7 @@
 #include "vtb/springs/model.hh"
 
 #include "vtb/springs/calibration.hh"
+#include "vtb/springs/load_check.hh"
 
 namespace vtb {
 
@@ -11,6 +12,7 @@ template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, co
   for (int v = 0; v < model.num_nodes(); ++v)
     if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
   model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress);
+  model.net.calibration_load_error = static_load_error<dim>(model, model.net, scene.material);
   return model;
 }
 
@@ -25,6 +27,7 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
   rep.calibration = model.net.calibration;
   rep.calibration_requested = model.net.calibration_requested;
   rep.calibration_validation = model.net.calibration_validation;
+  rep.calibration_load_error = model.net.calibration_load_error;
   rep.calibration_note = model.net.calibration_note;
   rep.calibration_seconds = model.net.calibration_seconds;
   rep.calibration_cached = model.net.calibration_cached;

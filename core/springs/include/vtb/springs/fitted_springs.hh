@@ -109,6 +109,11 @@ template <int dim>
 Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness,
                                  const FitOptions& options = {}, FitReport* report = nullptr);
 
+/// Whether holding the nodes `supports` removes every rigid motion of the mesh (the rigid
+/// modes restricted to their dofs have full column rank). Where they do, the fit trains on
+/// the supported body's modes; otherwise on the free body's.
+template <int dim> bool supports_hold(const Mesh<dim>& mesh, const std::vector<int>& supports);
+
 /// Free dofs the fit needs beyond its pins (modes, held-out modes and the subspace's margin),
 /// and the fit's pinned dofs with these supports; the fit refuses a mesh with fewer.
 template <int dim> int fit_dofs_needed(const FitOptions& options = {});

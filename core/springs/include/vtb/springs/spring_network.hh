@@ -28,6 +28,9 @@ template <int dim> struct SpringNetwork {
   /// When a fit ran (or was read): the used constants' relative error on the fit's held-out
   /// modes (FitReport::validation); NaN otherwise.
   double calibration_validation = std::numeric_limits<double>::quiet_NaN();
+  /// The springs' linear static error against the P1 FEM on the scene's own loads
+  /// (static_load_error, load_check.hh; set by build_model); NaN where not measured.
+  double calibration_load_error = std::numeric_limits<double>::quiet_NaN();
   /// One line when the constants are not what was asked for: auto beyond its budget, or the
   /// fit's guard keeping a prior. Empty otherwise.
   std::string calibration_note;

@@ -1,0 +1,71 @@
+#include "vtb/springs/load_check.hh"
+
+#include "vtb/springs/calibration.hh"
+#include "vtb/springs/fitted_springs.hh"
+#include "vtb/springs/force_jacobian.hh"
+
+#include <Eigen/CholmodSupport>
+
+#include <limits>
+
+namespace vtb {
+
+namespace {
+
+using SpMat = Eigen::SparseMatrix<double>;
+
+/// K's rows and columns at the free nodes' dofs (free node a, component i) -> dim a + i.
+template <int dim> SpMat free_block(const SpMat& K, const Problem<dim>& p) {
+  std::vector<Eigen::Triplet<double>> kept;
+  kept.reserve(static_cast<std::size_t>(K.nonZeros()));
+  for (int col = 0; col < K.outerSize(); ++col)
+    for (SpMat::InnerIterator it(K, col); it; ++it) {
+      const int a = p.free_index[static_cast<std::size_t>(it.row() / dim)];
+      const int b = p.free_index[static_cast<std::size_t>(it.col() / dim)];
+      if (a >= 0 && b >= 0) kept.emplace_back(dim * a + it.row() % dim, dim * b + it.col() % dim, it.value());
+    }
+  const auto n = static_cast<Eigen::Index>(dim * p.free_nodes.size());
+  SpMat out(n, n);
+  out.setFromTriplets(kept.begin(), kept.end());
+  return out;
+}
+
+/// K_ff^-1 f by CHOLMOD's supernodal Cholesky; false where K_ff is not positive definite.
+bool solve(const SpMat& K, const Eigen::VectorXd& f, Eigen::VectorXd& u) {
+  Eigen::CholmodSupernodalLLT<SpMat> llt(K);
+  if (llt.info() != Eigen::Success) return false;
+  u = llt.solve(f);
+  return llt.info() == Eigen::Success && u.allFinite();
+}
+
+} // namespace
+
+template <int dim>
+double static_load_error(const Problem<dim>& problem, const SpringNetwork<dim>& net, const MaterialDesc& material) {
+  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+  const int nf = static_cast<int>(problem.free_nodes.size());
+  if (problem.loads.empty() || dim * nf > kLoadCheckDofs) return nan;
+  std::vector<int> held;
+  for (int v = 0; v < problem.num_nodes(); ++v)
+    if (problem.constrained[static_cast<std::size_t>(v)]) held.push_back(v);
+  if (!supports_hold(problem.mesh, held)) return nan;
+  Eigen::VectorXd f = Eigen::VectorXd::Zero(dim * nf);
+  for (const auto& load : problem.loads)
+    for (std::size_t a = 0; a < load.nodes.size(); ++a) {
+      const int i = problem.free_index[static_cast<std::size_t>(load.nodes[a])];
+      if (i >= 0) f.template segment<dim>(dim * i) += load.force.col(static_cast<Eigen::Index>(a));
+    }
+  if (f.squaredNorm() == 0) return nan;
+  const SpMat K_fem = free_block(
+      fem_stiffness_matrix(problem.mesh, material.young_modulus, material.poisson_ratio, material.thickness), problem);
+  const Nodal<dim> rest = Nodal<dim>::Zero(dim, problem.num_nodes());
+  const SpMat K_springs = free_block(SpMat(-force_jacobians(net, rest, false).K), problem);
+  Eigen::VectorXd u_fem, u_springs;
+  if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return nan;
+  return (u_springs - u_fem).norm() / u_fem.norm();
+}
+
+template double static_load_error<2>(const Problem<2>&, const SpringNetwork<2>&, const MaterialDesc&);
+template double static_load_error<3>(const Problem<3>&, const SpringNetwork<3>&, const MaterialDesc&);
+
+} // namespace vtb
