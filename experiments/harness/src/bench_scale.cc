@@ -17,16 +17,10 @@
 #include <tuple>
 
 namespace vtb::harness {
-namespace {
 
-/// spring_fit.csv's text: the spring fit (springs = "fitted", no cache, the default options
-/// on the scene's supports) on CGAL Mesh_3 slabs clamped at one end, about 1k, 2k, 5k and
-/// 10k nodes (2k when quick): nodes, springs, wall time, the Levenberg-Marquardt steps its
-/// early stop took, the held-out error and the constants the guard kept.
-std::string fit_ladder(bool quick, std::ostream* log) {
+std::string fit_ladder(const std::vector<int>& slabs, std::ostream* log) {
   std::ostringstream os;
   os << "family,dim,nodes,springs,fit_seconds,lm_steps,validation_error,chosen\n";
-  const std::vector<int> slabs = quick ? std::vector<int>{2000} : std::vector<int>{1000, 2000, 5000, 10000};
   for (const int n : slabs) {
     if (log) *log << "[fit] CGAL slab of about " << n << " nodes\n";
     std::ostringstream scene;
@@ -53,8 +47,6 @@ std::string fit_ladder(bool quick, std::ostream* log) {
   }
   return os.str();
 }
-
-} // namespace
 
 std::string scaling_fit(const std::filesystem::path& dir) {
   const CsvTable t = CsvTable::read(dir / "scaling.csv");
@@ -95,7 +87,8 @@ void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* pro
           << t.text(r, "step_median_us") << std::setw(16) << t.text(r, "precompute_ms") << std::setw(12)
           << t.text(r, "heap_mb") << std::setw(13) << t.text(r, "error_vs_fem") << "\n";
   table << "\nfitted exponents (cost ~ nodes^p), scaling_fit.csv:\n" << fit;
-  const std::string springs = fit_ladder(quick, progress);
+  const std::string springs =
+      fit_ladder(quick ? std::vector<int>{2000} : std::vector<int>{1000, 2000, 5000, 10000}, progress);
   write_files_atomically(out, {{"spring_fit.csv", springs}});
   table << "\nthe spring fit (springs = \"fitted\", no cache), spring_fit.csv:\n" << springs;
 }

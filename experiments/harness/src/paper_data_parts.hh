@@ -24,6 +24,7 @@ struct Out {
 
 void timing(const std::filesystem::path& dir, Out& out);        // timing_rows.tex, calibration_rows.tex
 void fidelity(const std::filesystem::path& dir, Out& out);      // fidelity_rows.tex, vtbLloydWorst, vtbFittedWorst
+void fit_cost(const std::filesystem::path& dir, Out& out);      // vtbFitCost (spring_fit.csv)
 void transient(const std::filesystem::path& dir, Out& out);     // transient_rows.tex
 void accuracy(const std::filesystem::path& dir, Out& out);      // acc_*.dat, pareto.dat, conv_*.dat, decomp_*.dat
 void stability(const std::filesystem::path& dir, Out& out);     // stab_*.dat, courant.dat

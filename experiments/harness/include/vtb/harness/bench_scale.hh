@@ -7,6 +7,8 @@
 
 #include <filesystem>
 #include <iosfwd>
+#include <string>
+#include <vector>
 
 namespace vtb::harness {
 
@@ -15,6 +17,13 @@ namespace vtb::harness {
 /// log nodes) and OUT/spring_fit.csv (the spring fit's wall time, steps and held-out error on
 /// CGAL slabs of 1k to 10k nodes) and prints both to `table`.
 void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* progress, std::ostream& table);
+
+/// spring_fit.csv's text: the spring fit (springs = "fitted", no cache, the default options
+/// on the scene's supports) on CGAL Mesh_3 slabs 0.2 x 0.05 x 0.05 m clamped at one end, of
+/// about `slabs` nodes each: nodes, springs, wall time, the Levenberg-Marquardt steps, the
+/// held-out error and the constants the guard kept. A build without CGAL's meshers writes
+/// the header alone.
+std::string fit_ladder(const std::vector<int>& slabs, std::ostream* log);
 
 /// The fit of scaling.csv in `dir`, as scaling_fit.csv's text.
 std::string scaling_fit(const std::filesystem::path& dir);
