@@ -419,10 +419,6 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
   return x;
 }
 
-} // namespace
-
-namespace {
-
 /// The fit at unit E t (fitted_stiffness scales it).
 template <int dim>
 Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const FitOptions& options, FitReport* report) {
