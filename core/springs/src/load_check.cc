@@ -14,8 +14,17 @@ namespace {
 
 using SpMat = Eigen::SparseMatrix<double>;
 
-/// K's rows and columns at the free nodes' dofs (free node a, component i) -> dim a + i.
-template <int dim> SpMat free_block(const SpMat& K, const Problem<dim>& p) {
+/// K_ff^-1 f by CHOLMOD's supernodal Cholesky; false where K_ff is not positive definite.
+bool solve(const SpMat& K, const Eigen::VectorXd& f, Eigen::VectorXd& u) {
+  Eigen::CholmodSupernodalLLT<SpMat> llt(K);
+  if (llt.info() != Eigen::Success) return false;
+  u = llt.solve(f);
+  return llt.info() == Eigen::Success && u.allFinite();
+}
+
+} // namespace
+
+template <int dim> SpMat free_dof_block(const SpMat& K, const Problem<dim>& p) {
   std::vector<Eigen::Triplet<double>> kept;
   kept.reserve(static_cast<std::size_t>(K.nonZeros()));
   for (int col = 0; col < K.outerSize(); ++col)
@@ -30,16 +39,6 @@ template <int dim> SpMat free_block(const SpMat& K, const Problem<dim>& p) {
   return out;
 }
 
-/// K_ff^-1 f by CHOLMOD's supernodal Cholesky; false where K_ff is not positive definite.
-bool solve(const SpMat& K, const Eigen::VectorXd& f, Eigen::VectorXd& u) {
-  Eigen::CholmodSupernodalLLT<SpMat> llt(K);
-  if (llt.info() != Eigen::Success) return false;
-  u = llt.solve(f);
-  return llt.info() == Eigen::Success && u.allFinite();
-}
-
-} // namespace
-
 template <int dim>
 double static_load_error(const Problem<dim>& problem, const SpringNetwork<dim>& net, const MaterialDesc& material) {
   constexpr double nan = std::numeric_limits<double>::quiet_NaN();
@@ -49,22 +48,23 @@ double static_load_error(const Problem<dim>& problem, const SpringNetwork<dim>& 
   for (int v = 0; v < problem.num_nodes(); ++v)
     if (problem.constrained[static_cast<std::size_t>(v)]) held.push_back(v);
   if (!supports_hold(problem.mesh, held)) return nan;
-  Eigen::VectorXd f = Eigen::VectorXd::Zero(dim * nf);
-  for (const auto& load : problem.loads)
-    for (std::size_t a = 0; a < load.nodes.size(); ++a) {
-      const int i = problem.free_index[static_cast<std::size_t>(load.nodes[a])];
-      if (i >= 0) f.template segment<dim>(dim * i) += load.force.col(static_cast<Eigen::Index>(a));
-    }
+  Nodal<dim> loads(dim, problem.num_nodes());
+  problem.external_forces(std::numeric_limits<double>::infinity(), loads); // every load at its full value
+  Eigen::VectorXd f(dim * nf);
+  for (int a = 0; a < nf; ++a)
+    f.template segment<dim>(dim * a) = loads.col(problem.free_nodes[static_cast<std::size_t>(a)]);
   if (f.squaredNorm() == 0) return nan;
-  const SpMat K_fem = free_block(
+  const SpMat K_fem = free_dof_block(
       fem_stiffness_matrix(problem.mesh, material.young_modulus, material.poisson_ratio, material.thickness), problem);
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, problem.num_nodes());
-  const SpMat K_springs = free_block(SpMat(-force_jacobians(net, rest, false).K), problem);
+  const SpMat K_springs = free_dof_block(SpMat(-force_jacobians(net, rest, false).K), problem);
   Eigen::VectorXd u_fem, u_springs;
   if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return nan;
   return (u_springs - u_fem).norm() / u_fem.norm();
 }
 
+template Eigen::SparseMatrix<double> free_dof_block<2>(const Eigen::SparseMatrix<double>&, const Problem<2>&);
+template Eigen::SparseMatrix<double> free_dof_block<3>(const Eigen::SparseMatrix<double>&, const Problem<3>&);
 template double static_load_error<2>(const Problem<2>&, const SpringNetwork<2>&, const MaterialDesc&);
 template double static_load_error<3>(const Problem<3>&, const SpringNetwork<3>&, const MaterialDesc&);
 

@@ -261,7 +261,6 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
   write_text(o.out / "accuracy_speed.csv", acc.str());
 }
 
-/// (d) The stability map on the 123-node plate.
 /// spring_fit.csv: the fit's cost on clamped CGAL slabs (the default springs fit, docs/fidelity.md),
 /// 1k- and 2k-node slabs when quick (about 20 s), else the ladder of `vtb bench scale`.
 void write_fit_cost(const ReproduceOptions& o) {
@@ -269,6 +268,7 @@ void write_fit_cost(const ReproduceOptions& o) {
   write_files_atomically(o.out, {{"spring_fit.csv", fit_ladder(slabs, o.progress)}});
 }
 
+/// (d) The stability map on the 123-node plate.
 void write_stability(const ReproduceOptions& o) {
   if (o.progress) *o.progress << "[stability map]\n";
   Scene scene = scene_for(o, "plate123_step.toml", o.quick ? 0.5 : 1.0);

@@ -5,6 +5,7 @@
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/load_check.hh"
 #include "vtb/springs/model.hh"
 
 #include <Eigen/SparseCholesky>
@@ -20,17 +21,9 @@ namespace vtb::harness::parts {
 /// K_ff u_f = f_f with K the stiffness (df/du at rest, stiffness signs) over the free nodes.
 template <int dim> Nodal<dim> linear_static(const Model<dim>& model, double t) {
   const Nodal<dim> zero = Nodal<dim>::Zero(dim, model.num_nodes());
-  const Eigen::SparseMatrix<double> K = force_jacobians(model.net, zero, false).K;
   const int nf = static_cast<int>(model.free_nodes.size());
-  std::vector<Eigen::Triplet<double>> kept;
-  for (int col = 0; col < K.outerSize(); ++col)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(K, col); it; ++it) {
-      const int fi = model.free_index[static_cast<std::size_t>(it.row() / dim)];
-      const int fj = model.free_index[static_cast<std::size_t>(it.col() / dim)];
-      if (fi >= 0 && fj >= 0) kept.emplace_back(dim * fi + it.row() % dim, dim * fj + it.col() % dim, -it.value());
-    }
-  Eigen::SparseMatrix<double> Kff(dim * nf, dim * nf);
-  Kff.setFromTriplets(kept.begin(), kept.end());
+  const Eigen::SparseMatrix<double> Kff =
+      free_dof_block<dim>(Eigen::SparseMatrix<double>(-force_jacobians(model.net, zero, false).K), model);
   Nodal<dim> f(dim, model.num_nodes());
   model.external_forces(t, f);
   Eigen::VectorXd rhs(dim * nf);

@@ -7,6 +7,8 @@
 #include "vtb/problem/scene.hh"
 #include "vtb/springs/spring_network.hh"
 
+#include <Eigen/SparseCore>
+
 namespace vtb {
 
 /// Above this many free dofs the check is not made (two sparse factorisations: 1.5-2.4 s and
@@ -17,6 +19,12 @@ inline constexpr int kLoadCheckDofs = 40000;
 /// Issue 25's goal for the default springs, met by the fitted springs on every case of
 /// fidelity.csv: `vtb run` says so in a line when a scene's static_load_error is above it.
 inline constexpr double kLoadErrorGoal = 0.05;
+
+/// K's rows and columns at the problem's free nodes' dofs, (free node a, component i) ->
+/// dim a + i, from K's node-major dofs (node v, component i) -> dim v + i: the system a static
+/// answer with the fixed and driven nodes held at zero solves.
+template <int dim>
+Eigen::SparseMatrix<double> free_dof_block(const Eigen::SparseMatrix<double>& K, const Problem<dim>& problem);
 
 /// The springs' linear static answer to the scene's loads, each at its full value, against the
 /// P1 FEM's on the same mesh with the same nodes held (fixed and driven nodes at zero): the
