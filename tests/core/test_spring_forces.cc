@@ -88,5 +88,55 @@ TEST(SpringForces, EqualTheElementKernelSummedOnABox) {
   check_against_reference<3>(generate_box({0.2, 0.05, 0.05}, Eigen::Vector3i(10, 4, 4)));
 }
 
+TEST(SpringForces, MakeTheTurnsInTheirOwnPass) {
+  // add_internal_forces_and_turns gives add_internal_forces' forces to the bit and spring_turns'
+  // per-spring turns to the bit (the same operations in the same order), and the turns are
+  // their definition: per spring p = d . D, q = D x d, w = |d|^2 |D|^2; per node the sums over
+  // its springs, which the two passes add in different orders (the fused pass flushes a node's
+  // run at each chunk's end), as the definition does below. A sum of m terms in any order is
+  // within (m - 1) eps sum |terms| of the exact one; m <= 8 here, so two orders differ by at
+  // most 14 eps sum |terms| (measured: a few eps).
+  const SpringNetwork<2> net = build_network(generate_rectangle({0.2, 0.05}, Eigen::Vector2i(40, 10)),
+                                             MaterialDesc{5.0e4, 0.3, 1000.0, 0.05, 0.01, 2.0}, "lloyd");
+  ASSERT_GT(net.num_springs(), 3 * 256) << "the mesh must span several chunks";
+  std::mt19937 gen(5);
+  std::uniform_real_distribution<double> r(-1.0, 1.0);
+  const double h = net.rest_length.minCoeff();
+  const int n = net.num_nodes(), ns = net.num_springs();
+  Nodal<2> u(2, n), v(2, n);
+  for (Eigen::Index c = 0; c < u.size(); ++c) {
+    u.data()[c] = 0.2 * h * r(gen);
+    v.data()[c] = h * r(gen);
+  }
+  Eigen::VectorXd p(ns), q(ns), w(ns), p2(ns), q2(ns), w2(ns);
+  Eigen::Matrix2Xd sums = Eigen::Matrix2Xd::Constant(2, n, 7.0), sums2(2, n); // set, not added to
+  Nodal<2> f = Nodal<2>::Zero(2, n), f2 = Nodal<2>::Zero(2, n);
+  add_internal_forces_and_turns(net, u, v, f, 1e-3, SpringTurns{p.data(), q.data(), w.data(), &sums});
+  add_internal_forces(net, u, v, f2, 1e-3);
+  spring_turns(net, u, SpringTurns{p2.data(), q2.data(), w2.data(), &sums2});
+  EXPECT_TRUE(f == f2);
+  EXPECT_TRUE(p == p2);
+  EXPECT_TRUE(q == q2);
+  EXPECT_TRUE(w == w2);
+  Eigen::Matrix2Xd ref = Eigen::Matrix2Xd::Zero(2, n), size = Eigen::Matrix2Xd::Zero(2, n);
+  int terms = 0;
+  for (int s = 0; s < ns; ++s) {
+    const int i = net.edge[static_cast<std::size_t>(s)][0], j = net.edge[static_cast<std::size_t>(s)][1];
+    const Vec<2> D = net.rest.col(j) - net.rest.col(i), d = (net.rest.col(j) + u.col(j)) - (net.rest.col(i) + u.col(i));
+    EXPECT_EQ(p[s], d.dot(D));
+    EXPECT_EQ(q[s], D.x() * d.y() - D.y() * d.x());
+    EXPECT_EQ(w[s], d.squaredNorm() * D.squaredNorm());
+    for (const int node : {i, j}) {
+      ref.col(node) += Vec<2>(p[s], q[s]);
+      size.col(node) += Vec<2>(std::abs(p[s]), std::abs(q[s]));
+    }
+  }
+  for (int i = 0; i < n; ++i)
+    terms = std::max(terms, net.adj_ptr[static_cast<std::size_t>(i) + 1] - net.adj_ptr[static_cast<std::size_t>(i)]);
+  ASSERT_LE(terms, 8);
+  for (const Eigen::Matrix2Xd* got : {&sums, &sums2})
+    EXPECT_TRUE(((*got - ref).cwiseAbs().array() <= 14 * kEps * size.array()).all());
+}
+
 } // namespace
 } // namespace vtb

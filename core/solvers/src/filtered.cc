@@ -98,17 +98,48 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   m_dv.resize(dim, nf);
 }
 
+namespace {
+
+/// v_i += scale dv_k and then u_i += dt v_i for node i = node[k], k < n. Through raw pointers:
+/// Eigen's columns of s.v and s.u reloaded their data pointers from the State after every
+/// store (a store might have changed them), and the loop waited on those loads (2.6 us of the
+/// 517-node tensor step, docs/performance.md).
+template <int dim>
+void advance(State<dim>& s, Eigen::Index n, const int* node, const Nodal<dim>& dv, double scale, double dt) {
+  double* __restrict v = s.v.data();
+  double* __restrict u = s.u.data();
+  const double* __restrict d = dv.data();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const std::ptrdiff_t i = static_cast<std::ptrdiff_t>(node[k]) * dim;
+    for (int p = 0; p < dim; ++p) {
+      v[i + p] += scale * d[k * dim + p];
+      u[i + p] += dt * v[i + p];
+    }
+  }
+}
+
+} // namespace
+
 template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   const double dt = this->dt();
   const auto& net = m_model.net;
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<Eigen::Index>(free.size());
 
+  // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping; in 2D
+  // the tensor filter's springs' turns in the same pass (its rotations read them).
+  m_model.external_forces(s.t + dt, m_force);
+  if (s.applied.cols() == m_force.cols()) m_force += s.applied;
+  if constexpr (dim == 2)
+    if (m_tensor) add_internal_forces_and_turns(net, s.u, s.v, m_force, dt, m_tensor->turns());
+  if (dim == 3 || !m_tensor) add_internal_forces(net, s.u, s.v, m_force, dt);
+
   // The tensor filter where its warped rest Jacobian is trusted; past that distortion implicit
   // Euler takes the step (entered beyond kTrustedMismatch, left below 0.7 of it): the current
-  // Jacobian, refactorised, where the rest one is no model of the state (docs/method.md).
+  // Jacobian, refactorised, where the rest one is no model of the state (docs/method.md). Its
+  // forces above are then not used.
   if (m_tensor) {
-    const double mismatch = m_tensor->prepare(s.u);
+    const double mismatch = dim == 2 ? m_tensor->prepare_turned(s.u) : m_tensor->prepare(s.u);
     const double limit = WarpedFilter<dim>::kTrustedMismatch * (m_fallback ? 0.7 : 1.0);
     m_fallback = !(mismatch <= limit);
     m_fallback_steps += m_fallback;
@@ -119,10 +150,6 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     }
   }
 
-  // F_node: Voigt forces with the extra k dt axial term, plus loads and mass damping.
-  m_model.external_forces(s.t + dt, m_force);
-  if (s.applied.cols() == m_force.cols()) m_force += s.applied;
-  add_internal_forces(net, s.u, s.v, m_force, dt);
   // The couplings' implicit part, for the filters with a factor (tensor, full): their force's
   // -dt k v term here, their dt^2 k + dt c joining H through Woodbury's identity.
   const bool coupled =
@@ -156,11 +183,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
     if (coupled) m_couplings->correct(m_rhs);
     if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
-      for (Eigen::Index r = 0; r < nf; ++r) {
-        const int i = m_node_of_row[static_cast<std::size_t>(r)];
-        s.v.col(i) += dt * m_rhs.col(r);
-        s.u.col(i) += dt * s.v.col(i);
-      }
+      advance<dim>(s, nf, m_node_of_row.data(), m_rhs, dt, dt);
       finish_step(s);
       return;
     }
@@ -178,11 +201,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     }
   }
   if (m_correct) correct_momentum(s);
-  for (Eigen::Index a = 0; a < nf; ++a) {
-    const int i = free[static_cast<std::size_t>(a)];
-    s.v.col(i) += m_dv.col(a);
-    s.u.col(i) += dt * s.v.col(i);
-  }
+  advance<dim>(s, nf, free.data(), m_dv, 1.0, dt);
   finish_step(s);
 }
 

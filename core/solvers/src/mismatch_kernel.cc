@@ -1,8 +1,25 @@
 #include "mismatch_kernel.hh"
 
 #include "vtb/linalg/vector_clones.hh"
+#include "vtb/springs/spring_kernels.hh"
+
+#include <limits>
 
 namespace vtb::detail {
+
+VTB_VECTOR_CLONES bool unit_pairs(int n, double* ab) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  long odd = 0;
+  for (int i = 0; i < n; ++i) {
+    const double a = ab[2 * i], b = ab[2 * i + 1], x = a * a + b * b;
+    const bool ok = (x >= kTinyPair) & (x < inf); // false for NaN
+    const double inv = ok ? newton_inverse_sqrt(x) : 1.0;
+    ab[2 * i] = a * inv;
+    ab[2 * i + 1] = b * inv;
+    odd |= !ok;
+  }
+  return odd != 0;
+}
 
 VTB_VECTOR_CLONES void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx,
                                      const double* cy, const double* trigger, double* s2, bool& outgrown, bool& rare) {

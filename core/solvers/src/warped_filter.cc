@@ -341,24 +341,13 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
   // sum stays in registers (scattered spring by spring, each add waited on the previous
   // one's store to the same node); the rest vectors X_j - X_i are read in order (m_adj_rest).
   // In 2D the rotation needs only a = A00 + A11 = sum d . D and b = A10 - A01 = sum D x d:
-  // summed spring by spring, then normalised in a pass of their own, so that the square roots
-  // and divisions of successive nodes overlap instead of each waiting at the end of its sum.
+  // summed spring by spring, then normalised in a pass of their own (turn_rotations).
   if constexpr (dim == 2) {
     // (d . D, D x d) is the same from both ends (d and D change sign together): made once per
-    // spring, with |d|^2 |D|^2 for the scan, and added to both ends' sums; springs come sorted
-    // by their first node, so that node's sum stays in registers over its run (as the spring
-    // kernel's forces) and only the second node's is added in memory.
-    m_polar.setZero();
-    add_by_first_node_runs<+1>(net, 0, net.num_springs(), m_polar, [&](int s) -> Vec<2> {
-      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-      const Vec<2> D = m_spring_rest.col(s);
-      const Vec<2> d = D + u.col(j) - u.col(i);
-      const Vec<2> pq(d.dot(D), D.x() * d.y() - D.y() * d.x());
-      m_pq(s, 0) = pq.x();
-      m_pq(s, 1) = pq.y();
-      m_pq(s, 2) = d.squaredNorm() * D.squaredNorm();
-      return pq;
-    });
+    // spring, with |d|^2 |D|^2 for the scan, and added to both ends' sums (spring_turns; the
+    // step makes them in its force pass instead, prepare_turned).
+    spring_turns(net, u, turns());
+    turn_rotations();
   }
   if constexpr (dim == 3) {
     for (int i = 0; i < net.num_nodes(); ++i) {
@@ -381,22 +370,32 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
       if (!R.allFinite()) R.setIdentity(); // a non-finite state: the run's watch stops it
     }
   }
+}
+
+template <int dim> SpringTurns WarpedFilter<dim>::turns() {
+  static_assert(dim == 2 || dim == 3);
+  if constexpr (dim == 2) return SpringTurns{&m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_polar};
+  return SpringTurns{nullptr, nullptr, nullptr, nullptr};
+}
+
+template <int dim> void WarpedFilter<dim>::turn_rotations() {
   if constexpr (dim == 2) {
+    const auto& net = m_model.net;
     // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so
-    // (cos, sin) = (a, b) / |(a, b)| (no atan2), node by node without a branch so that the
-    // square roots and divisions overlap; identity where (a, b) is zero or not finite (a
-    // non-finite state: the run's watch stops it), in a pass of its own that rarely finds one.
+    // (cos, sin) = (a, b) / |(a, b)| (no atan2), in one vector loop without the divider
+    // (detail::unit_pairs); identity where (a, b) is zero or not finite (a non-finite state:
+    // the run's watch stops it), in a pass of its own that rarely finds one.
     const int n = net.num_nodes();
-    bool bad = false;
-    for (int i = 0; i < n; ++i) {
-      const double a = m_polar(0, i), b = m_polar(1, i);
-      const double inv = 1 / std::sqrt(a * a + b * b);
-      m_polar(0, i) = a * inv;
-      m_polar(1, i) = b * inv;
-      bad |= !(std::abs(inv * (a + b)) < std::numeric_limits<double>::infinity()); // NaN or inf
-    }
-    for (int i = 0; bad && i < n; ++i)
-      if (!std::isfinite(m_polar(0, i) + m_polar(1, i))) m_polar.col(i) << 1.0, 0.0;
+    if (detail::unit_pairs(n, m_polar.data()))
+      for (int i = 0; i < n; ++i) {
+        const double a = m_polar(0, i), b = m_polar(1, i), x = a * a + b * b;
+        if (x >= detail::kTinyPair && x < std::numeric_limits<double>::infinity()) continue; // scaled
+        const double inv = 1 / std::sqrt(x);
+        if (std::isfinite(a * inv) && std::isfinite(b * inv))
+          m_polar.col(i) << a * inv, b * inv; // a denormal sum
+        else
+          m_polar.col(i) << 1.0, 0.0;
+      }
     // Each spring's ends' (cos, sin) summed, for the scan.
     for (int s = 0; s < net.num_springs(); ++s) {
       const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
@@ -408,6 +407,15 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 
 template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {
   rotations(u);
+  return follow(u);
+}
+
+template <int dim> double WarpedFilter<dim>::prepare_turned(const Nodal<dim>& u) {
+  turn_rotations();
+  return follow(u);
+}
+
+template <int dim> double WarpedFilter<dim>::follow(const Nodal<dim>& u) {
   bool outgrown = false;
   const double mismatch = scan(u, &outgrown);
   if (!(mismatch <= kTrustedMismatch)) return mismatch;

@@ -27,14 +27,15 @@ VTB_VECTOR_CLONES void voigt_coefficients(int n, const double* l2, const double*
   }
 }
 
-} // namespace
-
+/// The spring kernel, with the springs' turns (2D) where `turns` is given.
 template <int dim>
-void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
-                         double extra_damping_per_k) {
+void forces_kernel(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
+                   double extra_damping_per_k, const SpringTurns* turns) {
   const int ns = net.num_springs();
   const auto* e = net.edge.data();
   alignas(64) double d[kChunk * dim], l2[kChunk], dot[kChunk], g[kChunk];
+  if constexpr (dim == 2)
+    if (turns) turns->sums->setZero();
   for (int s0 = 0; s0 < ns; s0 += kChunk) {
     const int n = std::min(kChunk, ns - s0);
     // Gather: the spring's vector d = x_j - x_i and d . (v_j - v_i).
@@ -51,14 +52,76 @@ void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
       Eigen::Map<Vec<dim>>(d + dim * s) = ds;
       l2[s] = ds.squaredNorm();
       dot[s] = ds.dot(v.col(j) - vi);
+      if constexpr (dim == 2)
+        if (turns) {
+          const Vec<2> D = net.rest.col(j) - net.rest.col(i);
+          turns->p[s0 + s] = ds.dot(D);
+          turns->q[s0 + s] = D.x() * ds.y() - D.y() * ds.x();
+          turns->w[s0 + s] = l2[s] * D.squaredNorm();
+        }
     }
     voigt_coefficients(n, l2, dot, net.rest_length.data() + s0, net.stiffness.data() + s0, net.damping.data() + s0,
                        extra_damping_per_k, g);
-    // Scatter, node i's force summed over its run of springs (add_by_first_node_runs).
+    // Scatter, node i's force summed over its run of springs (add_by_first_node_runs); with
+    // the turns, their sums in the same run.
+    if constexpr (dim == 2) {
+      if (turns) {
+        Eigen::Matrix2Xd& sums = *turns->sums;
+        const double *p = turns->p + s0, *q = turns->q + s0;
+        int a = e[s0][0];
+        Vec<2> fa = Vec<2>::Zero(), ta = Vec<2>::Zero();
+        for (int k = 0; k < n; ++k) {
+          if (e[s0 + k][0] != a) {
+            f.col(a) += fa;
+            sums.col(a) += ta;
+            a = e[s0 + k][0];
+            fa.setZero();
+            ta.setZero();
+          }
+          const int b = e[s0 + k][1];
+          const Vec<2> t = g[k] * Eigen::Map<const Vec<2>>(d + 2 * k), pq(p[k], q[k]);
+          fa += t;
+          ta += pq;
+          f.col(b) -= t;
+          sums.col(b) += pq;
+        }
+        f.col(a) += fa;
+        sums.col(a) += ta;
+        continue;
+      }
+    }
     add_by_first_node_runs<-1>(net, s0, n, f,
                                [&](int s) -> Vec<dim> { return g[s] * Eigen::Map<const Vec<dim>>(d + dim * s); });
   }
   if (net.mass_damping != 0) f.noalias() -= net.mass_damping * (v * net.mass.asDiagonal());
+}
+
+} // namespace
+
+template <int dim>
+void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
+                         double extra_damping_per_k) {
+  forces_kernel(net, u, v, f, extra_damping_per_k, nullptr);
+}
+
+void add_internal_forces_and_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const Nodal<2>& v, Nodal<2>& f,
+                                   double extra_damping_per_k, const SpringTurns& turns) {
+  forces_kernel(net, u, v, f, extra_damping_per_k, &turns);
+}
+
+void spring_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const SpringTurns& turns) {
+  // The turns' own pass: each spring's (p, q) added to both ends (add_by_first_node_runs).
+  Eigen::Matrix2Xd& sums = *turns.sums;
+  sums.setZero();
+  add_by_first_node_runs<+1>(net, 0, net.num_springs(), sums, [&](int s) -> Vec<2> {
+    const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+    // d as the force kernel makes it, so that both passes give the same turns to the bit
+    const Vec<2> D = net.rest.col(j) - net.rest.col(i), d = (net.rest.col(j) + u.col(j)) - (net.rest.col(i) + u.col(i));
+    turns.p[s] = d.dot(D);
+    turns.q[s] = D.x() * d.y() - D.y() * d.x();
+    turns.w[s] = d.squaredNorm() * D.squaredNorm();
+    return Vec<2>(turns.p[s], turns.q[s]);
+  });
 }
 
 template void add_internal_forces<2>(const SpringNetwork<2>&, const Nodal<2>&, const Nodal<2>&, Nodal<2>&, double);

@@ -83,6 +83,11 @@ public:
   /// The rotations at displacement u and the largest direction mismatch, which it returns; the
   /// cover follows it while it is trusted.
   double prepare(const Nodal<dim>& u);
+  /// 2D: prepare(u) where the springs' turns at u are already in turns(), made by the force
+  /// pass (add_internal_forces_and_turns), so that the rotations need no pass of their own.
+  double prepare_turned(const Nodal<dim>& u);
+  /// 2D: where the springs' turns go (per spring p, q, w and per node their sums).
+  SpringTurns turns();
   /// dv (dim x free nodes) = dt R H'^-1 R^T F at the prepared displacement (F: dim x nodes,
   /// including the couplings' forces and their -dt k v term), H' = H_t + c I at each node with
   /// a `coupling` coefficient c = dt^2 k + dt b > 0 (per node; empty: none).
@@ -123,6 +128,10 @@ public:
   double direction_mismatch(const Nodal<dim>& u) const;
 
 private:
+  /// 2D: each node's rotation from the turns' sums, and each spring's ends' (cos, sin) summed.
+  void turn_rotations();
+  /// The mismatch at u after the rotations, and the cover that follows it (prepare's rest).
+  double follow(const Nodal<dim>& u);
   /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and refactorises.
   void cover(const Nodal<dim>& u, double mismatch);
   /// The largest mismatch at u; `outgrown` (if given): whether a spring passed its trigger.

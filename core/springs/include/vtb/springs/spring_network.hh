@@ -58,6 +58,25 @@ template <int dim>
 void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
                          double extra_damping_per_k = 0.0);
 
+/// What the 2D tensor filter's rotations read of the springs (warped_filter.cc), per spring
+/// s = (i, j): p = d . D and q = D x d (d = x_j - x_i now, D = X_j - X_i at rest; both the
+/// same from either end) and w = |d|^2 |D|^2; per node, (sum p, sum q) over its springs, whose
+/// angle is that of the polar factor of its neighbourhood's sum of d D^T.
+struct SpringTurns {
+  double* p;              ///< per spring
+  double* q;              ///< per spring
+  double* w;              ///< per spring
+  Eigen::Matrix2Xd* sums; ///< per node (set, not added to)
+};
+
+/// add_internal_forces in 2D, and the springs' turns in the same pass: the tensor filter's
+/// rotations then cost no gather and no loop of their own (docs/performance.md item 12).
+void add_internal_forces_and_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const Nodal<2>& v, Nodal<2>& f,
+                                   double extra_damping_per_k, const SpringTurns& turns);
+
+/// The springs' turns alone (no forces).
+void spring_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const SpringTurns& turns);
+
 /// For springs s0 + k, k in [0, n): adds term(k) (a Vec<dim>) to f's column of the spring's
 /// first node and kSecond * term(k) to its second node's (-1: a pair of opposite forces, +1: a
 /// quantity both ends share). Springs come sorted by their first node (unique_edges), so that
