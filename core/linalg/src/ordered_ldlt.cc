@@ -2,6 +2,8 @@
 
 #include <Eigen/OrderingMethods>
 #include <algorithm>
+#include <functional>
+#include <queue>
 #include <stdexcept>
 
 namespace vtb {
@@ -20,7 +22,48 @@ Eigen::SparseMatrix<double> block_graph(const Eigen::SparseMatrix<double>& A, in
   return G;
 }
 
+/// The upper triangle of A's pattern under the ordering `perm` (original row -> ordered row).
+Eigen::SparseMatrix<double> ordered_upper(const Eigen::SparseMatrix<double>& A, const std::vector<int>& perm) {
+  std::vector<Eigen::Triplet<double>> upper;
+  upper.reserve(static_cast<std::size_t>(A.nonZeros()));
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) {
+      const int r = perm[static_cast<std::size_t>(it.row())], cc = perm[static_cast<std::size_t>(it.col())];
+      if (r <= cc) upper.emplace_back(r, cc, it.value());
+    }
+  Eigen::SparseMatrix<double> U(A.rows(), A.cols());
+  U.setFromTriplets(upper.begin(), upper.end());
+  U.makeCompressed();
+  return U;
+}
+
 } // namespace
+
+std::vector<int> interleaved_order(const int* parent, int n) {
+  std::vector<int> pending(static_cast<std::size_t>(n), 0); // children not yet listed
+  for (int i = 0; i < n; ++i)
+    if (parent[i] >= 0) ++pending[static_cast<std::size_t>(parent[i])];
+  std::priority_queue<int, std::vector<int>, std::greater<>> ready; // smallest given position first
+  for (int i = 0; i < n; ++i)
+    if (pending[static_cast<std::size_t>(i)] == 0) ready.push(i);
+  std::vector<int> order;
+  order.reserve(static_cast<std::size_t>(n));
+  int last = -1;
+  while (!ready.empty()) {
+    int pick = ready.top();
+    ready.pop();
+    if (last >= 0 && pick == parent[last] && !ready.empty()) { // it would wait on the row just listed
+      const int other = ready.top();
+      ready.pop();
+      ready.push(pick);
+      pick = other;
+    }
+    order.push_back(pick);
+    last = pick;
+    if (parent[pick] >= 0 && --pending[static_cast<std::size_t>(parent[pick])] == 0) ready.push(parent[pick]);
+  }
+  return order;
+}
 
 OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A, int block) {
   const auto n = A.rows();
@@ -33,19 +76,21 @@ OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A, int block) {
     Eigen::AMDOrdering<int>()(block_graph(A, block), Pinv);
   }
   const Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> P = Pinv.inverse();
+  // AMD's order of the blocks, then interleaved on the blocks' elimination tree.
+  const auto nb = static_cast<int>(n / block);
+  std::vector<int> amd(static_cast<std::size_t>(nb));
+  for (int b = 0; b < nb; ++b) amd[static_cast<std::size_t>(b)] = P.indices()[b];
+  Factor tree;
+  tree.analyzePattern(ordered_upper(block == 1 ? A : block_graph(A, block), amd));
+  const std::vector<int> order = interleaved_order(tree.parent(), nb); // order[k]: AMD position listed k-th
+  std::vector<int> position(static_cast<std::size_t>(nb));
+  for (int k = 0; k < nb; ++k) position[static_cast<std::size_t>(order[static_cast<std::size_t>(k)])] = k;
   m_perm.resize(static_cast<std::size_t>(n));
   for (Eigen::Index r = 0; r < n; ++r)
-    m_perm[static_cast<std::size_t>(r)] = P.indices()[r / block] * block + static_cast<int>(r % block);
-  std::vector<Eigen::Triplet<double>> upper;
-  upper.reserve(static_cast<std::size_t>(A.nonZeros()));
-  for (int c = 0; c < A.outerSize(); ++c)
-    for (Eigen::SparseMatrix<double>::InnerIterator it(A, c); it; ++it) {
-      const int r = ordered(static_cast<int>(it.row())), cc = ordered(static_cast<int>(it.col()));
-      if (r <= cc) upper.emplace_back(r, cc, it.value());
-    }
-  m_upper.resize(n, n);
-  m_upper.setFromTriplets(upper.begin(), upper.end());
-  m_upper.makeCompressed();
+    m_perm[static_cast<std::size_t>(r)] =
+        position[static_cast<std::size_t>(amd[static_cast<std::size_t>(r / block)])] * block +
+        static_cast<int>(r % block);
+  m_upper = ordered_upper(A, m_perm);
   m_factor.analyzePattern(m_upper);
 }
 

@@ -1,13 +1,24 @@
 #pragma once
 /// \file
-/// A sparse LDL^T for matrices of fixed pattern: ordered once (AMD), then factorised and
-/// solved without allocating, which the time step requires. Wraps Eigen's SimplicialLDLT.
+/// A sparse LDL^T for matrices of fixed pattern: ordered once (AMD, then interleaved: below),
+/// then factorised and solved without allocating, which the time step requires. Wraps Eigen's
+/// SimplicialLDLT.
+///
+/// The triangular sweeps of a small factor are bound by latency: a row that needs the row just
+/// solved waits for it, where two rows that do not need each other overlap. So AMD's order is
+/// rearranged (interleaved_order) so that a row rarely follows its elimination-tree child: any
+/// order that lists each node after its children has the same fill (docs/performance.md).
 
 #include <Eigen/SparseCholesky>
 
 #include <vector>
 
 namespace vtb {
+
+/// A topological order of the elimination tree `parent` (-1 at a root) over n nodes: the
+/// nodes ready (their children listed) in their given order, except that a node does not come
+/// right after its own child while another node is ready.
+std::vector<int> interleaved_order(const int* parent, int n);
 
 class OrderedLDLT {
 public:
@@ -42,6 +53,8 @@ private:
     /// D of L D L^T by reference (vectorD() returns a copy).
     const Eigen::VectorXd& diagonal() const { return this->m_diag; }
     const Eigen::SparseMatrix<double>& lower() const { return this->m_matrix; }
+    /// The elimination tree after analyzePattern: each column's parent, -1 at a root.
+    const int* parent() const { return this->m_parent.data(); }
   };
   std::vector<int> m_perm;
   Eigen::SparseMatrix<double> m_upper;
