@@ -149,7 +149,11 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   for (Eigen::Index a = 0; a < nf; ++a) x.col(a) = model.net.rest.col(model.free_nodes[static_cast<std::size_t>(a)]);
   m_h = make_warped_system<dim>(tensor_filter_matrix(model, dt, 0.0), x, multigrid);
   m_index.resize(static_cast<std::size_t>(nf) * dim);
-  for (int r = 0; r < static_cast<int>(nf) * dim; ++r) m_index[static_cast<std::size_t>(r)] = m_h->index(r);
+  for (int r = 0; r < static_cast<int>(nf) * dim; ++r) {
+    m_index[static_cast<std::size_t>(r)] = m_h->index(r);
+    if (m_index[static_cast<std::size_t>(r)] != m_index[static_cast<std::size_t>(r - r % dim)] + r % dim)
+      throw std::logic_error("WarpedFilter: the system does not keep a node's values consecutive");
+  }
   m_rhs = Eigen::MatrixXd::Zero(m_h->size(), 1);
   m_z = Eigen::MatrixXd::Zero(m_h->size(), kMaxCoupled * dim);
   m_base.assign(m_h->values(), m_h->values() + m_h->value_count());
@@ -428,17 +432,22 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   couple(coupling);
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<int>(free.size());
+  // Each node's dim values sit together in the solve's vector, from m_index[dim a] on (both
+  // systems keep a node's values consecutive); raw pointers, so that no store makes the loop
+  // reload a vector's data pointer.
+  double* __restrict y = m_rhs.data();
+  const int* __restrict at = m_index.data();
   for (int a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
     const Vec<dim> f = rotation(i).transpose() * force.col(i);
-    for (int p = 0; p < dim; ++p) m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0) = f[p];
+    for (int p = 0; p < dim; ++p) y[at[a * dim] + p] = f[p];
   }
   m_h->solve(m_rhs.col(0));
   correct_for_couplings(m_rhs);
+  double* __restrict out = dv.data();
   for (int a = 0; a < nf; ++a) {
-    Vec<dim> x;
-    for (int p = 0; p < dim; ++p) x[p] = m_rhs(m_index[static_cast<std::size_t>(a * dim + p)], 0);
-    dv.col(a) = dt * (rotation(free[static_cast<std::size_t>(a)]) * x);
+    const Vec<dim> x = dt * (rotation(free[static_cast<std::size_t>(a)]) * Eigen::Map<const Vec<dim>>(y + at[a * dim]));
+    for (int p = 0; p < dim; ++p) out[a * dim + p] = x[p];
   }
 }
 

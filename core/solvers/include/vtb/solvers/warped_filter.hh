@@ -53,7 +53,8 @@ namespace vtb {
 template <int dim> class WarpedSystem {
 public:
   virtual ~WarpedSystem() = default;
-  /// Length of the solve's vector, and the position of dof r (dim a + p) in it.
+  /// Length of the solve's vector, and the position of dof r (dim a + p) in it: index(dim a)
+  /// + p (a node's values consecutive, which the filter's gathers rely on).
   virtual Eigen::Index size() const = 0;
   virtual int index(int r) const = 0;
   /// H's stored values, and the offset of entry (r, c) among them (-1: not stored).
