@@ -5,14 +5,15 @@
 
 namespace vtb {
 
-template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress) {
+template <int dim>
+Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress, bool check_loads) {
   Model<dim> model;
   static_cast<Problem<dim>&>(model) = build_problem<dim>(scene, std::move(mesh));
   std::vector<int> supports; // the fit trains on the body as the scene holds it
   for (int v = 0; v < model.num_nodes(); ++v)
     if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
   model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress);
-  model.net.calibration_load_error = static_load_error<dim>(model, model.net, scene.material);
+  if (check_loads) model.net.calibration_load_error = static_load_error<dim>(model, model.net, scene.material);
   return model;
 }
 
@@ -37,7 +38,7 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
 
 template RunReport spring_report<2>(const Model<2>&, const std::string&);
 template RunReport spring_report<3>(const Model<3>&, const std::string&);
-template Model<2> build_model<2>(const Scene&, Mesh<2>, const FitProgress&);
-template Model<3> build_model<3>(const Scene&, Mesh<3>, const FitProgress&);
+template Model<2> build_model<2>(const Scene&, Mesh<2>, const FitProgress&, bool);
+template Model<3> build_model<3>(const Scene&, Mesh<3>, const FitProgress&, bool);
 
 } // namespace vtb

@@ -11,8 +11,12 @@ namespace vtb {
 template <int dim> struct Model : Problem<dim> { SpringNetwork<dim> net; };
 
 /// The problem (build_problem) and its spring network ([solver].springs calibration;
-/// `progress` is told how a fit advances).
-template <int dim> Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress = {});
+/// `progress` is told how a fit advances). With `check_loads` false the springs' error on the
+/// scene's loads (static_load_error) is not measured and stays NaN: a caller that measured it
+/// for the same mesh, supports, loads, Poisson ratio and springs already has it (it does not
+/// change with Young's modulus, dt or the solver).
+template <int dim>
+Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress = {}, bool check_loads = true);
 
 /// What every spring solver reports alike (the integrators and CVODE): the solver's name, the
 /// sizes, the duration and the calibration (its name, wall time, whether it came from the
