@@ -78,9 +78,10 @@ long count_if(const Image& im, bool (*pred)(const unsigned char*)) {
   return n;
 }
 
-/// A 0.2 x 0.05 plate clamped on the left with a probe at its right end, nothing loading it.
-Scene plate() {
-  return parse_scene(test::plate_scene(16, 4, R"(
+/// A 0.2 x 0.05 plate clamped on the left with a probe at its right end, nothing loading it
+/// but what `more` adds (scene tables).
+Scene plate(const std::string& more = "") {
+  return parse_scene(test::plate_scene(16, 4, more + R"(
 [[fix]]
 group = "left"
 [[probe]]
@@ -216,18 +217,7 @@ TEST(Viewer, KeepsTheSpringsLoadErrorUntilTheSpringsChange) {
   // (measuring it took about 2 s at 10k nodes). Other springs are measured again.
   const test::FreshDir cache;
   ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
-  const Scene scene = parse_scene(test::plate_scene(16, 4, R"(
-[[fix]]
-group = "left"
-[[load]]
-group = "right"
-total_force = [0.0, -0.5]
-[solver]
-kind = "filtered"
-dt = 1e-3
-)",
-                                                    0.02),
-                                  "plate.toml", ".");
+  const Scene scene = plate("[[load]]\ngroup = \"right\"\ntotal_force = [0.0, -0.5]\n");
   viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
   const double first = sim.model().net.calibration_load_error;
   ASSERT_TRUE(std::isfinite(first));
