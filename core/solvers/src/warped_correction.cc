@@ -64,7 +64,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   };
   // r = b - A x at x = dv: b = dt F' plus the transverse part of dt^2 K v (F' holds its axial
   // part, the filter's dt k term), A x = the diagonal's plus the springs' B (x_i - x_j).
-  // e0 = x . A x, the step's own energy, for the gain below.
+  // e0 = x . A x, the step's own energy, for the gain below (which the V-cycle does not read).
   m_iterate.setZero();
   m_residual = dt * force;
   double e0 = 0;
@@ -91,7 +91,8 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     }
     correction_terms(n, dt, l2, dw, de, net.rest_length.data() + s0, net.stiffness.data() + s0, net.damping.data() + s0,
                      g, m_spring_q.data() + s0, m_spring_at.data() + s0);
-    for (int s = 0; s < n; ++s) e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
+    if (!m_multigrid)
+      for (int s = 0; s < n; ++s) e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
     add_by_first_node_runs<-1>(net, s0, n, m_residual, [&](int s) -> Vec<dim> {
       return g[s] * m_spring_d.col(s0 + s) + m_spring_at[s0 + s] * Eigen::Map<const Vec<dim>>(ew + dim * s);
     });
