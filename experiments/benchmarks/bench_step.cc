@@ -19,6 +19,9 @@
 #include <Eigen/CholmodSupport>
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <chrono>
+
 namespace vtb {
 namespace {
 
@@ -115,6 +118,64 @@ VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterFull, filtered_full
 VTB_STEP_BENCH(plate517, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
 
+/// One integrator stepping on its own state, put back every 1000 steps as run_steps does.
+template <int dim> struct Stepper {
+  std::unique_ptr<Integrator<dim>> integ;
+  State<dim> s, saved;
+  long n = 0;
+  Stepper(const Model<dim>& model, const std::string& filter) {
+    IntegratorOptions o;
+    o.kind = solvers::kFiltered;
+    o.filter = filter;
+    o.dt = 1e-3;
+    integ = make_integrator(model, o);
+    s = initial_state(model);
+    for (int k = 0; k < 10; ++k) integ->step(s); // warm up
+    saved = s;
+  }
+  /// Seconds for `steps` steps (the state put back outside the clock).
+  double run(int steps) {
+    double t = 0;
+    for (int k = 0; k < steps; ++k) {
+      const auto a = std::chrono::steady_clock::now();
+      integ->step(s);
+      t += std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+      if (++n % 1000 == 0) s = saved;
+    }
+    return t;
+  }
+};
+
+/// Issue 26's ratios in one process: filter `a`'s step over filter `b`'s, timed in alternating
+/// rounds of `steps` steps each, so that both see the same minute of a machine whose speed
+/// drifts (separate benchmarks a few seconds apart differed by up to 1.4x). Counters: each
+/// filter's median step over the rounds (us) and the median of the rounds' ratios.
+template <int dim>
+void paired_ratio(benchmark::State& st, const Model<dim>& model, const std::string& a, const std::string& b,
+                  int steps) {
+  Stepper<dim> sa(model, a), sb(model, b);
+  std::vector<double> ta, tb, ratio;
+  for (auto _ : st) {
+    const double x = sa.run(steps), y = sb.run(steps);
+    ta.push_back(1e6 * x / steps);
+    tb.push_back(1e6 * y / steps);
+    ratio.push_back(x / y);
+  }
+  const auto median = [](std::vector<double> v) {
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+    return v[v.size() / 2];
+  };
+  st.counters["a_us"] = median(ta);
+  st.counters["b_us"] = median(tb);
+  st.counters["ratio"] = median(ratio);
+}
+
+/// The tensor filter's step over the full filter's on the 517-node plate (goal: at most 2).
+void BM_ratio_plate517_tensor_over_full(benchmark::State& st) {
+  paired_ratio(st, plate517(), solvers::kFilterTensor, solvers::kFilterFull, 100);
+}
+BENCHMARK(BM_ratio_plate517_tensor_over_full)->Unit(benchmark::kMillisecond)->Iterations(200);
+
 /// The torque correction's cost: the full filter's step on a free plate with and without it.
 void BM_step_free_plate517_filtered_full_corrected(benchmark::State& st) {
   run_steps(st, free_plate517(), solvers::kFiltered, solvers::kFilterFull, true);
@@ -147,6 +208,11 @@ VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterFull, filtered_full)
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterMultigrid, filtered_multigrid)
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterTensorMultigrid, filtered_tensor_multigrid)
 VTB_STEP_BENCH(slab10k, solvers::kImplicitEuler, "", implicit_euler)
+/// tensor-multigrid's step over the scalar V-cycle's on the 10k slab (goal: at most 2).
+void BM_ratio_slab10k_tensor_multigrid_over_multigrid(benchmark::State& st) {
+  paired_ratio(st, slab10k(), solvers::kFilterTensorMultigrid, solvers::kFilterMultigrid, 5);
+}
+BENCHMARK(BM_ratio_slab10k_tensor_multigrid_over_multigrid)->Unit(benchmark::kMillisecond)->Iterations(40);
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
 
