@@ -1,4 +1,5 @@
 #include "vtb/linalg/block_solve.hh"
+#include "vtb/linalg/vector_clones.hh"
 
 #include <algorithm>
 #include <stdexcept>
@@ -77,7 +78,7 @@ template <int dim> void BlockSolve<dim>::refresh() {
   m_inv_diag = m_factor.diagonal().cwiseInverse();
 }
 
-template <int dim> void BlockSolve<dim>::solve_in_place(Eigen::Ref<Nodal<dim>> x) const {
+template <int dim> VTB_VECTOR_CLONES void BlockSolve<dim>::solve_in_place(Eigen::Ref<Nodal<dim>> x) const {
   using CMat = Eigen::Map<const Mat<dim>>;
   const int nb = static_cast<int>(x.cols());
   // Forward, L y = b by tile rows: r = b_I - sum_J L_IJ y_J, then the unit lower L_II.
