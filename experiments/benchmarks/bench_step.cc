@@ -258,6 +258,20 @@ void BM_kernel_forces_box1701(benchmark::State& st) {
 BENCHMARK(BM_kernel_forces_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_forces_box1701)->Unit(benchmark::kMicrosecond);
 
+/// The 2D tensor filter's force pass: the forces and the springs' turns its rotations read
+/// (add_internal_forces_and_turns), against BM_kernel_forces_plate517 alone.
+void BM_kernel_forces_and_turns_plate517(benchmark::State& st) {
+  const Model<2>& model = plate517();
+  const State<2> s = midrun_state(model);
+  WarpedFilter<2> filter(model, 1e-3);
+  Nodal<2> f = Nodal<2>::Zero(2, model.num_nodes());
+  for (auto _ : st) {
+    add_internal_forces_and_turns(model.net, s.u, s.v, f, 1e-3, filter.turns());
+    benchmark::DoNotOptimize(f.data());
+  }
+}
+BENCHMARK(BM_kernel_forces_and_turns_plate517)->Unit(benchmark::kMicrosecond);
+
 template <int dim> void solve(benchmark::State& st, const Model<dim>& model, bool nodal) {
   OrderedLDLT factor(filter_system_matrix(model, 1e-3));
   factor.factorize();
@@ -297,18 +311,26 @@ BENCHMARK(BM_kernel_solve_nodal_box1701)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_solve_eigen_box1701)->Unit(benchmark::kMicrosecond);
 
 // The tensor filter's two per-step kernels on a mid-run state: prepare (each node's rotation
-// and the springs' direction mismatch) and the solve with its H (node-ordered factor, tile by
-// tile, with the rotations applied), beside the forces and the scalar solve above.
+// and the springs' direction mismatch; in 2D what the step runs after its force pass made the
+// turns, prepare_turned, so forces_and_turns + prepare is the step's share) and the solve with
+// its H (node-ordered factor, tile by tile, with the rotations applied), beside the forces and
+// the scalar solve above.
 template <int dim> void tensor_kernel(benchmark::State& st, const Model<dim>& model, bool prepare) {
   const State<dim> s = midrun_state(model);
   WarpedFilter<dim> filter(model, 1e-3);
   filter.prepare(s.u);
+  if constexpr (dim == 2) { // the step's force pass, once: prepare_turned reads its turns
+    Nodal<2> forces = Nodal<2>::Zero(2, model.num_nodes());
+    add_internal_forces_and_turns(model.net, s.u, s.v, forces, 1e-3, filter.turns());
+  }
   const Nodal<dim> f = Nodal<dim>::Random(dim, model.num_nodes());
   Nodal<dim> dv(dim, static_cast<Eigen::Index>(model.free_nodes.size()));
   const Eigen::VectorXd none;
   for (auto _ : st) {
     if (prepare) {
-      benchmark::DoNotOptimize(filter.prepare(s.u));
+      // 2D: normalising the turns' sums in place leaves unit pairs, which normalise to
+      // themselves, so each iteration does the step's work on the same values.
+      benchmark::DoNotOptimize(dim == 2 ? filter.prepare_turned(s.u) : filter.prepare(s.u));
     } else {
       filter.solve(f, none, 1e-3, dv);
       benchmark::DoNotOptimize(dv.data());

@@ -109,11 +109,15 @@ TEST(SpringForces, MakeTheTurnsInTheirOwnPass) {
     v.data()[c] = h * r(gen);
   }
   Eigen::VectorXd p(ns), q(ns), w(ns), p2(ns), q2(ns), w2(ns);
+  Nodal<2> rest(2, ns); // each spring's rest vector D, which the turns are given
+  for (int s = 0; s < ns; ++s)
+    rest.col(s) =
+        net.rest.col(net.edge[static_cast<std::size_t>(s)][1]) - net.rest.col(net.edge[static_cast<std::size_t>(s)][0]);
   Eigen::Matrix2Xd sums = Eigen::Matrix2Xd::Constant(2, n, 7.0), sums2(2, n); // set, not added to
   Nodal<2> f = Nodal<2>::Zero(2, n), f2 = Nodal<2>::Zero(2, n);
-  add_internal_forces_and_turns(net, u, v, f, 1e-3, SpringTurns{p.data(), q.data(), w.data(), &sums});
+  add_internal_forces_and_turns(net, u, v, f, 1e-3, SpringTurns{rest.data(), p.data(), q.data(), w.data(), &sums});
   add_internal_forces(net, u, v, f2, 1e-3);
-  spring_turns(net, u, SpringTurns{p2.data(), q2.data(), w2.data(), &sums2});
+  spring_turns(net, u, SpringTurns{rest.data(), p2.data(), q2.data(), w2.data(), &sums2});
   EXPECT_TRUE(f == f2);
   EXPECT_TRUE(p == p2);
   EXPECT_TRUE(q == q2);

@@ -378,8 +378,8 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 
 template <int dim> SpringTurns WarpedFilter<dim>::turns() {
   static_assert(dim == 2 || dim == 3);
-  if constexpr (dim == 2) return SpringTurns{&m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_polar};
-  return SpringTurns{nullptr, nullptr, nullptr, nullptr};
+  if constexpr (dim == 2) return SpringTurns{m_spring_rest.data(), &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_polar};
+  return SpringTurns{nullptr, nullptr, nullptr, nullptr, nullptr};
 }
 
 template <int dim> void WarpedFilter<dim>::turn_rotations() {

@@ -63,6 +63,7 @@ void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
 /// same from either end) and w = |d|^2 |D|^2; per node, (sum p, sum q) over its springs, whose
 /// angle is that of the polar factor of its neighbourhood's sum of d D^T.
 struct SpringTurns {
+  const double* rest;     ///< per spring, given: D (2 values)
   double* p;              ///< per spring
   double* q;              ///< per spring
   double* w;              ///< per spring
