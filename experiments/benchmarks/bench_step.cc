@@ -52,33 +52,61 @@ Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = tru
     return build_model<3>(s, generate_box({0.2, 0.05, 0.05}, div));
 }
 
+/// One integrator stepping on its own state from a warmed-up start, put back there every 1000
+/// steps so that the state stays in the same regime.
+template <int dim> struct Stepper {
+  std::unique_ptr<Integrator<dim>> integ;
+  State<dim> s, saved;
+  long n = 0;
+  Stepper(const Model<dim>& model, const std::string& kind, const std::string& filter, bool correct = true) {
+    IntegratorOptions o;
+    o.kind = kind;
+    o.filter = filter;
+    o.momentum_correction = correct;
+    o.dt = kind == solvers::kExplicit ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
+    integ = make_integrator(model, o);
+    s = initial_state(model);
+    for (int k = 0; k < 10; ++k) integ->step(s); // warm up
+    saved = s;
+  }
+  /// One step; true when the state is due to be put back (put_back(), outside any clock).
+  bool step() {
+    integ->step(s);
+    return ++n % 1000 == 0;
+  }
+  void put_back() { s = saved; }
+  /// Seconds for `steps` steps.
+  double run(int steps) {
+    double t = 0;
+    for (int k = 0; k < steps; ++k) {
+      const auto a = std::chrono::steady_clock::now();
+      const bool due = step();
+      t += std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
+      if (due) put_back();
+    }
+    return t;
+  }
+};
+
 template <int dim>
 void run_steps(benchmark::State& st, const Model<dim>& model, const std::string& kind, const std::string& filter,
                bool correct = true) {
-  IntegratorOptions o;
-  o.kind = kind;
-  o.filter = filter;
-  o.momentum_correction = correct;
-  o.dt = kind == solvers::kExplicit ? 0.5 * explicit_critical_dt(max_omega_squared(model, false), 0.05, 0.0) : 1e-3;
-  auto integ = make_integrator(model, o);
-  State<dim> s = initial_state(model);
-  for (int k = 0; k < 10; ++k) integ->step(s); // warm up
-  const State<dim> saved = s;
-  const auto* cg = dynamic_cast<const ImplicitEulerCG<dim>*>(integ.get());
-  long n = 0, iterations = 0;
+  Stepper<dim> stepper(model, kind, filter, correct);
+  const auto* cg = dynamic_cast<const ImplicitEulerCG<dim>*>(stepper.integ.get());
+  long iterations = 0;
   for (auto _ : st) {
-    integ->step(s);
+    const bool due = stepper.step();
     if (cg) iterations += cg->last_iterations();
-    if (++n % 1000 == 0) {
+    if (due) {
       st.PauseTiming();
-      s = saved; // keep the state in the same regime
+      stepper.put_back();
       st.ResumeTiming();
     }
   }
   st.counters["nodes"] = model.num_nodes();
   st.counters["springs"] = model.net.num_springs();
-  st.counters["dt"] = o.dt;
-  if (cg) st.counters["cg_iterations"] = static_cast<double>(iterations) / static_cast<double>(n);
+  st.counters["dt"] = stepper.integ->dt();
+  if (cg) st.counters["cg_iterations"] = static_cast<double>(iterations) / static_cast<double>(stepper.n);
 }
 
 const Model<2>& plate126() {
@@ -118,34 +146,6 @@ VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterFull, filtered_full
 VTB_STEP_BENCH(plate517, solvers::kImplicitEuler, "", implicit_euler)
 VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
 
-/// One integrator stepping on its own state, put back every 1000 steps as run_steps does.
-template <int dim> struct Stepper {
-  std::unique_ptr<Integrator<dim>> integ;
-  State<dim> s, saved;
-  long n = 0;
-  Stepper(const Model<dim>& model, const std::string& filter) {
-    IntegratorOptions o;
-    o.kind = solvers::kFiltered;
-    o.filter = filter;
-    o.dt = 1e-3;
-    integ = make_integrator(model, o);
-    s = initial_state(model);
-    for (int k = 0; k < 10; ++k) integ->step(s); // warm up
-    saved = s;
-  }
-  /// Seconds for `steps` steps (the state put back outside the clock).
-  double run(int steps) {
-    double t = 0;
-    for (int k = 0; k < steps; ++k) {
-      const auto a = std::chrono::steady_clock::now();
-      integ->step(s);
-      t += std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
-      if (++n % 1000 == 0) s = saved;
-    }
-    return t;
-  }
-};
-
 /// Issue 26's ratios in one process: filter `a`'s step over filter `b`'s, timed in alternating
 /// rounds of `steps` steps each, so that both see the same minute of a machine whose speed
 /// drifts (separate benchmarks a few seconds apart differed by up to 1.4x). Counters: each
@@ -153,7 +153,7 @@ template <int dim> struct Stepper {
 template <int dim>
 void paired_ratio(benchmark::State& st, const Model<dim>& model, const std::string& a, const std::string& b,
                   int steps) {
-  Stepper<dim> sa(model, a), sb(model, b);
+  Stepper<dim> sa(model, solvers::kFiltered, a), sb(model, solvers::kFiltered, b);
   std::vector<double> ta, tb, ratio;
   for (auto _ : st) {
     const double x = sa.run(steps), y = sb.run(steps);
