@@ -3,22 +3,39 @@
 #include "vtb/linalg/vector_clones.hh"
 #include "vtb/springs/spring_kernels.hh"
 
+#include <cmath>
 #include <limits>
 
 namespace vtb::detail {
 
-VTB_VECTOR_CLONES bool unit_pairs(int n, double* ab) {
-  constexpr double inf = std::numeric_limits<double>::infinity();
+namespace {
+
+/// Whether unit_pairs' vector loop scales a pair with a^2 + b^2 = x (false for NaN); `&`, not
+/// `&&`, so that the loop has no branch.
+inline bool scalable(double x) {
+  return (x >= 1e-280) & (x < std::numeric_limits<double>::infinity());
+}
+
+} // namespace
+
+VTB_VECTOR_CLONES void unit_pairs(int n, double* ab) {
   long odd = 0;
   for (int i = 0; i < n; ++i) {
     const double a = ab[2 * i], b = ab[2 * i + 1], x = a * a + b * b;
-    const bool ok = (x >= kTinyPair) & (x < inf); // false for NaN
+    const bool ok = scalable(x);
     const double inv = ok ? newton_inverse_sqrt(x) : 1.0;
     ab[2 * i] = a * inv;
     ab[2 * i + 1] = b * inv;
     odd |= !ok;
   }
-  return odd != 0;
+  for (int i = 0; odd && i < n; ++i) { // the rare pairs the loop left as they were
+    const double a = ab[2 * i], b = ab[2 * i + 1], x = a * a + b * b;
+    if (scalable(x)) continue;
+    const double inv = 1 / std::sqrt(x);
+    const bool finite = std::isfinite(a * inv) && std::isfinite(b * inv);
+    ab[2 * i] = finite ? a * inv : 1.0;
+    ab[2 * i + 1] = finite ? b * inv : 0.0;
+  }
 }
 
 VTB_VECTOR_CLONES void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx,

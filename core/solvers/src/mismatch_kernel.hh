@@ -10,15 +10,13 @@ namespace vtb::detail {
 /// between d and t into s2 (0 where d . t <= 0, |d| |t| = 0 or not finite: `rare` is then set,
 /// and the caller's exact pass takes them) and sets `outgrown` when a spring's sin^2 passes its
 /// trigger. No gather and no branch: the loop vectorises.
-/// Each of n pairs (a, b), stored one after the other, scaled to unit length: (cos, sin) of
-/// its angle, by newton_inverse_sqrt (no square root, no division: the loop vectorises where
-/// a square root and a division per node waited on the divider, docs/performance.md). A pair
-/// with a^2 + b^2 not within [kTiny, inf) (zero, denormal, not finite) is left as it is and
-/// the function returns true: the caller's exact pass takes it.
-bool unit_pairs(int n, double* ab);
-
-/// The smallest a^2 + b^2 unit_pairs scales (its seed's exponent trick needs a normal number).
-inline constexpr double kTinyPair = 1e-280;
+/// Each of n pairs (a, b), stored one after the other, made the (cos, sin) of its angle: in one
+/// vector loop by newton_inverse_sqrt (no square root, no division: a square root and a
+/// division per node waited on the divider, docs/performance.md), then, for the rare pair whose
+/// a^2 + b^2 is not a normal finite number (its seed's exponent trick needs one), exactly: a
+/// denormal pair by a square root and a division, a zero or non-finite one as (1, 0) (a
+/// non-finite state: the run's watch stops it).
+void unit_pairs(int n, double* ab);
 
 void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx, const double* cy,
                    const double* trigger, double* s2, bool& outgrown, bool& rare);

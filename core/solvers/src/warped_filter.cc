@@ -386,20 +386,10 @@ template <int dim> void WarpedFilter<dim>::turn_rotations() {
   if constexpr (dim == 2) {
     const auto& net = m_model.net;
     // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so
-    // (cos, sin) = (a, b) / |(a, b)| (no atan2), in one vector loop without the divider
-    // (detail::unit_pairs); identity where (a, b) is zero or not finite (a non-finite state:
-    // the run's watch stops it), in a pass of its own that rarely finds one.
+    // (cos, sin) = (a, b) / |(a, b)| (no atan2), in one vector loop without the divider;
+    // identity where (a, b) is zero or not finite (detail::unit_pairs).
     const int n = net.num_nodes();
-    if (detail::unit_pairs(n, m_polar.data()))
-      for (int i = 0; i < n; ++i) {
-        const double a = m_polar(0, i), b = m_polar(1, i), x = a * a + b * b;
-        if (x >= detail::kTinyPair && x < std::numeric_limits<double>::infinity()) continue; // scaled
-        const double inv = 1 / std::sqrt(x);
-        if (std::isfinite(a * inv) && std::isfinite(b * inv))
-          m_polar.col(i) << a * inv, b * inv; // a denormal sum
-        else
-          m_polar.col(i) << 1.0, 0.0;
-      }
+    detail::unit_pairs(n, m_polar.data());
     // Each spring's ends' (cos, sin) summed, for the scan.
     for (int s = 0; s < net.num_springs(); ++s) {
       const auto [i, j] = net.edge[static_cast<std::size_t>(s)];

@@ -71,7 +71,7 @@ struct SpringTurns {
 };
 
 /// add_internal_forces in 2D, and the springs' turns in the same pass: the tensor filter's
-/// rotations then cost no gather and no loop of their own (docs/performance.md item 12).
+/// rotations then cost no gather and no loop of their own (docs/performance.md item 14).
 void add_internal_forces_and_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const Nodal<2>& v, Nodal<2>& f,
                                    double extra_damping_per_k, const SpringTurns& turns);
 
