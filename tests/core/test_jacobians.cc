@@ -21,6 +21,9 @@
 #include <Eigen/SVD>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <limits>
+#include <numeric>
 #include <random>
 
 namespace vtb {
@@ -229,6 +232,52 @@ template <int dim> void expect_block_solve_matches_dense(const Model<dim>& m) {
 TEST(BlockSolve, MatchesADenseSolveOfTheTensorFilterBeforeAndAfterARefactorisation) {
   expect_block_solve_matches_dense(model_of<2>(kPlate2));
   expect_block_solve_matches_dense(model_of<3>(kBox3));
+}
+
+TEST(BlockSolve, TurnsTheValuesInAndOutInItsSweepsAsSeparatePassesWould) {
+  // solve_turned (the 2D tensor filter's solve) against the passes it replaces: b_I = R_i^T
+  // f_i for the node i = node[I], solve_in_place, then out's column slot[I] = scale R_i y_I.
+  // y: the same operations in the same order, equal to the bit. out: the same products,
+  // associated with the scale as Eigen's expression may not be, so within a few roundings of
+  // scale |y| (4 eps).
+  const Model<2> m = model_of<2>(kPlate2);
+  const Eigen::SparseMatrix<double> H = tensor_filter_matrix(m, 0.01, 0.0);
+  OrderedLDLT factor(H, 2);
+  ASSERT_TRUE(factor.factorize());
+  const BlockSolve<2> solve(factor);
+  const int nb = static_cast<int>(H.rows()) / 2, nodes = nb + 3; // three nodes outside the system
+  std::vector<int> node(static_cast<std::size_t>(nodes)), slot(static_cast<std::size_t>(nb));
+  std::iota(node.begin(), node.end(), 0);
+  std::shuffle(node.begin(), node.end(), std::mt19937(5)); // the first nb: the system's nodes
+  for (int I = 0; I < nb; ++I) slot[static_cast<std::size_t>(I)] = nb - 1 - I;
+  const Nodal<2> force = Nodal<2>::Random(2, nodes);
+  Nodal<2> turn = Nodal<2>::Random(2, nodes);
+  turn.colwise().normalize();
+  Nodal<2> b(2, nb);
+  for (int I = 0; I < nb; ++I) {
+    const int i = node[static_cast<std::size_t>(I)];
+    Mat<2> R;
+    R << turn(0, i), -turn(1, i), turn(1, i), turn(0, i);
+    b.col(I) = R.transpose() * force.col(i);
+  }
+  Nodal<2> expected_y = b;
+  solve.solve_in_place(expected_y);
+  Nodal<2> expected_out(2, nb);
+  for (int I = 0; I < nb; ++I) {
+    const int i = node[static_cast<std::size_t>(I)];
+    Mat<2> R;
+    R << turn(0, i), -turn(1, i), turn(1, i), turn(0, i);
+    expected_out.col(slot[static_cast<std::size_t>(I)]) = 0.01 * (R * expected_y.col(I));
+  }
+  Nodal<2> y = Nodal<2>::Zero(2, nb), out = Nodal<2>::Zero(2, nb);
+  solve.solve_turned(force.data(), turn.data(), node.data(), slot.data(), 0.01, y.data(), out.data());
+  EXPECT_EQ(y, expected_y);
+  const double eps = std::numeric_limits<double>::epsilon();
+  EXPECT_LE((out - expected_out).cwiseAbs().maxCoeff(), 4 * eps * 0.01 * expected_y.cwiseAbs().maxCoeff());
+  EXPECT_GT(out.cwiseAbs().maxCoeff(), 0.0);
+  Nodal<2> y_only = Nodal<2>::Zero(2, nb); // without out: y alone
+  solve.solve_turned(force.data(), turn.data(), node.data(), slot.data(), 0.01, y_only.data(), nullptr);
+  EXPECT_EQ(y_only, expected_y);
 }
 
 TEST(TensorFilter, RigidRotationLeavesNoMismatch) {

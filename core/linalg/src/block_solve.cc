@@ -1,8 +1,11 @@
 #include "vtb/linalg/block_solve.hh"
 #include "vtb/linalg/vector_clones.hh"
 
+#include "lanes.hh"
+
 #include <algorithm>
 #include <stdexcept>
+#include <utility>
 
 namespace vtb {
 
@@ -64,6 +67,7 @@ template <int dim> BlockSolve<dim>::BlockSolve(const OrderedLDLT& factor) : m_fa
   m_row_val.resize(ntiles * kTile);
   m_diag_val.resize(static_cast<std::size_t>(nb) * kTile);
   m_inv_diag.resize(L.cols());
+  if (dim == 2) m_spread.assign(static_cast<std::size_t>(nb) * 4, 0.0);
   refresh();
 }
 
@@ -75,7 +79,99 @@ template <int dim> void BlockSolve<dim>::refresh() {
   for (std::size_t t = 0; t < m_row_tile.size(); ++t)
     std::copy_n(m_col_val.begin() + static_cast<std::ptrdiff_t>(m_row_tile[t]) * kTile, kTile,
                 m_row_val.begin() + static_cast<std::ptrdiff_t>(t) * kTile);
+  // The backward sweep multiplies by L_IJ^T: its tiles stored transposed (column-major L_IJ^T).
+  for (std::size_t t = 0; t < m_col_row.size(); ++t) {
+    Eigen::Map<Mat<dim>> tile(&m_col_val[t * kTile]);
+    tile.transposeInPlace();
+  }
   m_inv_diag = m_factor.diagonal().cwiseInverse();
+}
+
+namespace {
+
+/// sum over the tiles t in [begin, end) of tile_t * spread(col_t), each 2 x 2 tile
+/// column-major (a, b, c, d) times the 2-vector (x, y) spread as (x, x, y, y): lanes (a x, b x,
+/// c y, d y), whose halves add up to the product. One multiply and one add per tile where a
+/// tile times a vector took two of each in a row: the sweeps are bound by the add's latency
+/// (docs/performance.md). Two interleaved sums: two dependency chains of half the length.
+[[gnu::always_inline]] inline detail::Lane<4> spread_tile_sum(int begin, int end, const double* __restrict val,
+                                                              const int* __restrict col,
+                                                              const double* __restrict spread) {
+  using detail::load;
+  detail::Lane<4> a = {0, 0, 0, 0}, b = a;
+  int t = begin;
+  for (; t + 1 < end; t += 2) {
+    a += load<4>(val + 4 * t) * load<4>(spread + 4 * col[t]);
+    b += load<4>(val + 4 * (t + 1)) * load<4>(spread + 4 * col[t + 1]);
+  }
+  if (t < end) a += load<4>(val + 4 * t) * load<4>(spread + 4 * col[t]);
+  return a + b;
+}
+
+} // namespace
+
+template <int dim>
+template <class In, class Out>
+[[gnu::always_inline]] inline void BlockSolve<dim>::spread_solve(int nb, In in, Out out) const {
+  static_assert(dim == 2);
+  // The nodes' values spread as (x, x, y, y) in m_spread for spread_tile_sum, written as each
+  // node's value is found.
+  double* __restrict S = m_spread.data();
+  const double* D = m_diag_val.data(); // per node the unit lower tile's (1, 0) entry at D[4 I + 1]
+  for (int I = 0; I < nb; ++I) {
+    const detail::Lane<4> s =
+        spread_tile_sum(m_row_ptr[static_cast<std::size_t>(I)], m_row_ptr[static_cast<std::size_t>(I) + 1],
+                        m_row_val.data(), m_row_col.data(), S);
+    const auto [b0, b1] = in(I);
+    const double r0 = b0 - (s[0] + s[2]);
+    const double r1 = b1 - (s[1] + s[3]) - D[4 * I + 1] * r0;
+    detail::store<4>(S + 4 * I, detail::Lane<4>{r0, r0, r1, r1});
+  }
+  for (int J = nb - 1; J >= 0; --J) {
+    const detail::Lane<4> s =
+        spread_tile_sum(m_col_ptr[static_cast<std::size_t>(J)], m_col_ptr[static_cast<std::size_t>(J) + 1],
+                        m_col_val.data(), m_col_row.data(), S);
+    const double r1 = m_inv_diag[2 * J + 1] * S[4 * J + 2] - (s[1] + s[3]);
+    const double r0 = m_inv_diag[2 * J] * S[4 * J] - (s[0] + s[2]) - D[4 * J + 1] * r1;
+    detail::store<4>(S + 4 * J, detail::Lane<4>{r0, r0, r1, r1});
+    out(J, r0, r1);
+  }
+}
+
+template <> VTB_VECTOR_CLONES void BlockSolve<2>::solve_in_place(Eigen::Ref<Nodal<2>> x) const {
+  spread_solve(
+      static_cast<int>(x.cols()),
+      [&](int I) {
+        return std::pair{x(0, I), x(1, I)};
+      },
+      [&](int J, double r0, double r1) {
+        x(0, J) = r0;
+        x(1, J) = r1;
+      });
+}
+
+template <>
+VTB_VECTOR_CLONES void BlockSolve<2>::solve_turned(const double* __restrict force, const double* __restrict turn,
+                                                   const int* __restrict node, const int* __restrict slot, double scale,
+                                                   double* __restrict y, double* __restrict out) const {
+  // As WarpedFilter::solve's loops did, operation for operation: R^T f = (c f0 + s f1, c f1 -
+  // s f0) in, scale (c y0 - s y1, s y0 + c y1) out.
+  spread_solve(
+      static_cast<int>(m_inv_diag.size() / 2),
+      [&](int I) {
+        const int i = node[I];
+        const double c = turn[2 * i], sn = turn[2 * i + 1], f0 = force[2 * i], f1 = force[2 * i + 1];
+        return std::pair{c * f0 + sn * f1, -sn * f0 + c * f1};
+      },
+      [&](int J, double r0, double r1) {
+        y[2 * J] = r0;
+        y[2 * J + 1] = r1;
+        if (!out) return;
+        const int i = node[J], a = slot[J];
+        const double c = turn[2 * i], sn = turn[2 * i + 1];
+        out[2 * a] = scale * (c * r0 + -sn * r1);
+        out[2 * a + 1] = scale * (sn * r0 + c * r1);
+      });
 }
 
 template <int dim> VTB_VECTOR_CLONES void BlockSolve<dim>::solve_in_place(Eigen::Ref<Nodal<dim>> x) const {
@@ -111,14 +207,14 @@ template <int dim> VTB_VECTOR_CLONES void BlockSolve<dim>::solve_in_place(Eigen:
     int t = m_col_ptr[static_cast<std::size_t>(J)];
     const int end = m_col_ptr[static_cast<std::size_t>(J) + 1];
     for (; t + 1 < end; t += 2) {
-      a.noalias() += CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]).transpose() *
-                     x.col(m_col_row[static_cast<std::size_t>(t)]);
-      b.noalias() += CMat(&m_col_val[static_cast<std::size_t>(t + 1) * kTile]).transpose() *
-                     x.col(m_col_row[static_cast<std::size_t>(t) + 1]);
+      a.noalias() +=
+          CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t)]);
+      b.noalias() +=
+          CMat(&m_col_val[static_cast<std::size_t>(t + 1) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t) + 1]);
     }
     if (t < end)
-      a.noalias() += CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]).transpose() *
-                     x.col(m_col_row[static_cast<std::size_t>(t)]);
+      a.noalias() +=
+          CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t)]);
     double r[dim];
     const double* D = &m_diag_val[static_cast<std::size_t>(J) * kTile];
     for (int q = dim - 1; q >= 0; --q) {

@@ -3,6 +3,7 @@
 #include "vtb/linalg/vector_clones.hh"
 #include "vtb/springs/spring_kernels.hh"
 
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -38,20 +39,95 @@ VTB_VECTOR_CLONES void unit_pairs(int n, double* ab) {
   }
 }
 
-VTB_VECTOR_CLONES void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx,
-                                     const double* cy, const double* trigger, double* s2, bool& outgrown, bool& rare) {
-  long out = 0, odd = 0;
-  for (int s = 0; s < n; ++s) {
-    const double cross = cy[s] * p[s] - cx[s] * q[s], dot = cx[s] * p[s] + cy[s] * q[s];
-    const double den = w[s] * (cx[s] * cx[s] + cy[s] * cy[s]), cross2 = cross * cross;
-    const bool ok = (dot > 0) & (den > 0); // false for NaN
-    const double r = cross2 / den;
-    s2[s] = ok ? r : 0.0;
-    out |= cross2 > trigger[s] * den;
-    odd |= !ok;
+namespace {
+
+typedef double Doubles __attribute__((vector_size(32), aligned(8), may_alias));
+typedef long Mask __attribute__((vector_size(32)));
+
+/// Four springs' lanes from four consecutive values.
+[[gnu::always_inline]] inline Doubles lanes(const double* x) {
+  return *reinterpret_cast<const Doubles*>(x);
+}
+
+/// Per lane the largest sin^2 so far as a fraction num / den (compared by cross products: no
+/// division per spring, the divider bounded this loop), and whether a spring outgrew its
+/// trigger or was not ok (see largest_sin2).
+struct LargestSin2 {
+  Doubles num = {0, 0, 0, 0}, den = {1, 1, 1, 1};
+  Mask out = {0, 0, 0, 0}, odd = {0, 0, 0, 0};
+};
+
+/// Adds four springs' lanes (`lane`: which of them are springs).
+[[gnu::always_inline]] inline void add_lanes(LargestSin2& b, Doubles P, Doubles Q, Doubles W, Doubles X, Doubles Y,
+                                             Doubles T, Mask lane) {
+  const double inf = std::numeric_limits<double>::infinity();
+  const Doubles cross = Y * P - X * Q, dot = X * P + Y * Q;
+  const Doubles d = W * (X * X + Y * Y), c2 = cross * cross;
+  const Mask ok = (dot > 0) & (d > 0) & (d < inf); // false for NaN
+  const Doubles nu = ok ? c2 : 0.0, de = ok ? d : 1.0;
+  const Mask bigger = nu * b.den > b.num * de;
+  b.num = bigger ? nu : b.num;
+  b.den = bigger ? de : b.den;
+  b.out |= (c2 > T * d) & lane;
+  b.odd |= ~ok & lane;
+}
+
+/// Two doubles, loaded as one vector.
+typedef double Pair __attribute__((vector_size(16), aligned(8), may_alias));
+[[gnu::always_inline]] inline Pair pair(const double* x) {
+  return *reinterpret_cast<const Pair*>(x);
+}
+
+/// Four springs' ends' (cos, sin) summed, as the lanes (cx...) and (cy...).
+[[gnu::always_inline]] inline void gather_ends(const std::array<int, 2>* e, const double* turn, Doubles& X,
+                                               Doubles& Y) {
+  const Pair c0 = pair(turn + 2 * e[0][0]) + pair(turn + 2 * e[0][1]);
+  const Pair c1 = pair(turn + 2 * e[1][0]) + pair(turn + 2 * e[1][1]);
+  const Pair c2 = pair(turn + 2 * e[2][0]) + pair(turn + 2 * e[2][1]);
+  const Pair c3 = pair(turn + 2 * e[3][0]) + pair(turn + 2 * e[3][1]);
+  X = Doubles{c0[0], c1[0], c2[0], c3[0]};
+  Y = Doubles{c0[1], c1[1], c2[1], c3[1]};
+}
+
+} // namespace
+
+VTB_VECTOR_CLONES double largest_sin2(int n, const double* p, const double* q, const double* w,
+                                      const std::array<int, 2>* edge, const double* turn, const double* trigger,
+                                      bool& outgrown, bool& rare) {
+  LargestSin2 b;
+  int s = 0;
+  for (; s + 4 <= n; s += 4) {
+    Doubles X, Y;
+    gather_ends(edge + s, turn, X, Y);
+    add_lanes(b, lanes(p + s), lanes(q + s), lanes(w + s), X, Y, lanes(trigger + s), Mask{-1, -1, -1, -1});
   }
-  outgrown = out != 0;
-  rare = odd != 0;
+  if (s < n) { // the last springs, in lanes padded with zeros (w 0: not ok, masked out)
+    double pad[6][4] = {};
+    for (int k = 0; s + k < n; ++k) {
+      const auto [i, j] = edge[s + k];
+      pad[0][k] = p[s + k];
+      pad[1][k] = q[s + k];
+      pad[2][k] = w[s + k];
+      pad[3][k] = turn[2 * i] + turn[2 * j];
+      pad[4][k] = turn[2 * i + 1] + turn[2 * j + 1];
+      pad[5][k] = trigger[s + k];
+    }
+    const Mask lane = {0 < n - s ? -1 : 0, 1 < n - s ? -1 : 0, 2 < n - s ? -1 : 0, 3 < n - s ? -1 : 0};
+    add_lanes(b, lanes(pad[0]), lanes(pad[1]), lanes(pad[2]), lanes(pad[3]), lanes(pad[4]), lanes(pad[5]), lane);
+  }
+  long any_out = 0, any_odd = 0;
+  double best_num = 0, best_den = 1;
+  for (int k = 0; k < 4; ++k) {
+    any_out |= b.out[k];
+    any_odd |= b.odd[k];
+    if (b.num[k] * best_den > best_num * b.den[k]) {
+      best_num = b.num[k];
+      best_den = b.den[k];
+    }
+  }
+  outgrown = any_out != 0;
+  rare = any_odd != 0;
+  return best_num / best_den;
 }
 
 } // namespace vtb::detail

@@ -2,14 +2,10 @@
 // The 2D tensor filter's per-spring direction mismatch, as one vector loop (warped_filter.cc's
 // scan; docs/performance.md item 12).
 
+#include <array>
+
 namespace vtb::detail {
 
-/// Over springs laid out column by column: p = d . D, q = D x d, w = |d|^2 |D|^2 and the ends'
-/// summed (cos, sin) c = (cx, cy), so that with t = (R_i + R_j) D: d . t = cx p + cy q,
-/// d x t = cy p - cx q and |d|^2 |t|^2 = w |c|^2. Writes each spring's sin^2 of the angle
-/// between d and t into s2 (0 where d . t <= 0, |d| |t| = 0 or not finite: `rare` is then set,
-/// and the caller's exact pass takes them) and sets `outgrown` when a spring's sin^2 passes its
-/// trigger. No gather and no branch: the loop vectorises.
 /// Each of n pairs (a, b), stored one after the other, made the (cos, sin) of its angle: in one
 /// vector loop by newton_inverse_sqrt (no square root, no division: a square root and a
 /// division per node waited on the divider, docs/performance.md), then, for the rare pair whose
@@ -18,7 +14,16 @@ namespace vtb::detail {
 /// non-finite state: the run's watch stops it).
 void unit_pairs(int n, double* ab);
 
-void mismatch_sin2(int n, const double* p, const double* q, const double* w, const double* cx, const double* cy,
-                   const double* trigger, double* s2, bool& outgrown, bool& rare);
+/// Over springs laid out column by column: p = d . D, q = D x d, w = |d|^2 |D|^2, with the
+/// ends' summed (cos, sin) c = (cx, cy) gathered from `turn` (2 x nodes) by `edge` (the springs'
+/// node pairs), so that with t = (R_i + R_j) D: d . t = cx p + cy q, d x t = cy p
+/// - cx q and |d|^2 |t|^2 = w |c|^2. Returns the largest sin^2 of the angle between d and t over
+/// the springs with d . t > 0 and |d| |t| positive and finite (0 if none); sets `rare` when a
+/// spring is not one of them (the caller's exact pass then takes them all), and `outgrown` when
+/// a spring's sin^2 passes its trigger. Four springs per vector, no branch and no division but
+/// one; the ends' sums are made here rather than stored by a pass of their own (the passes'
+/// per-spring arrays did not fit L1, docs/performance.md).
+double largest_sin2(int n, const double* p, const double* q, const double* w, const std::array<int, 2>* edge,
+                    const double* turn, const double* trigger, bool& outgrown, bool& rare);
 
 } // namespace vtb::detail

@@ -154,6 +154,15 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
     if (m_index[static_cast<std::size_t>(r)] != m_index[static_cast<std::size_t>(r - r % dim)] + r % dim)
       throw std::logic_error("WarpedFilter: the system does not keep a node's values consecutive");
   }
+  m_node_at.assign(static_cast<std::size_t>(m_h->size() / dim), -1);
+  m_slot_at.assign(m_node_at.size(), -1);
+  for (int a = 0; a < static_cast<int>(nf); ++a)
+    if (m_index[static_cast<std::size_t>(a) * dim] % dim == 0 &&
+        m_index[static_cast<std::size_t>(a) * dim] / dim < static_cast<int>(m_node_at.size())) {
+      m_node_at[static_cast<std::size_t>(m_index[static_cast<std::size_t>(a) * dim] / dim)] =
+          model.free_nodes[static_cast<std::size_t>(a)];
+      m_slot_at[static_cast<std::size_t>(m_index[static_cast<std::size_t>(a) * dim] / dim)] = a;
+    }
   m_rhs = Eigen::MatrixXd::Zero(m_h->size(), 1);
   m_z = Eigen::MatrixXd::Zero(m_h->size(), kMaxCoupled * dim);
   m_base.assign(m_h->values(), m_h->values() + m_h->value_count());
@@ -199,7 +208,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   m_spring_at.resize(ns);
   if constexpr (dim == 2) {
     m_polar.resize(2, net.num_nodes());
-    m_pq.resize(ns, 6);
+    m_pq.resize(ns, 3);
   }
 }
 
@@ -227,21 +236,24 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
   const int ns = m_model.net.num_springs();
   if constexpr (dim == 2) {
     // From the springs' products that rotations() left in m_pq (p = d . D, q = D x d, w =
-    // |d|^2 |D|^2, c = (cos, sin)_i + (cos, sin)_j): with t = (R_i + R_j) D and R_i + R_j =
+    // |d|^2 |D|^2) and the ends' (cos, sin) summed, c: with t = (R_i + R_j) D and R_i + R_j =
     // [cx -cy; cy cx], d . t = cx p + cy q, d x t = cy p - cx q and |t|^2 = |c|^2 |D|^2, so u
     // is not read again. The rare spring past 90 degrees (or of length 0, or not finite) sends
     // the scan to the tracker's exact pass.
     (void)u;
     bool rare = false;
-    detail::mismatch_sin2(ns, &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_pq(0, 3), &m_pq(0, 4), m_trigger.data(),
-                          &m_pq(0, 5), out, rare);
+    const auto& edge = m_model.net.edge;
+    const double sin2 = detail::largest_sin2(ns, &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), edge.data(), m_polar.data(),
+                                             m_trigger.data(), out, rare);
     if (!rare) {
       if (outgrown) *outgrown = out;
-      return MismatchTracker::from_sin2(m_pq.col(5).maxCoeff());
+      return MismatchTracker::from_sin2(sin2);
     }
     out = false;
     for (int s = 0; s < ns; ++s) {
-      const double p = m_pq(s, 0), q = m_pq(s, 1), cx = m_pq(s, 3), cy = m_pq(s, 4);
+      const auto [i, j] = edge[static_cast<std::size_t>(s)];
+      const double p = m_pq(s, 0), q = m_pq(s, 1), cx = m_polar(0, i) + m_polar(0, j),
+                   cy = m_polar(1, i) + m_polar(1, j);
       const double cross = cy * p - cx * q;
       out |= worst.add_terms(cx * p + cy * q, cross * cross, m_pq(s, 2) * (cx * cx + cy * cy),
                              m_trigger[static_cast<std::size_t>(s)]);
@@ -390,12 +402,6 @@ template <int dim> void WarpedFilter<dim>::turn_rotations() {
     // identity where (a, b) is zero or not finite (detail::unit_pairs).
     const int n = net.num_nodes();
     detail::unit_pairs(n, m_polar.data());
-    // Each spring's ends' (cos, sin) summed, for the scan.
-    for (int s = 0; s < net.num_springs(); ++s) {
-      const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
-      m_pq(s, 3) = m_polar(0, i) + m_polar(0, j);
-      m_pq(s, 4) = m_polar(1, i) + m_polar(1, j);
-    }
   }
 }
 
@@ -427,6 +433,17 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   // reload a vector's data pointer.
   double* __restrict y = m_rhs.data();
   const int* __restrict at = m_index.data();
+  if constexpr (dim == 2) {
+    // The factor turns the values into and out of its sweeps (out of them only without
+    // couplings, whose correction comes between the solve and the turn out).
+    if (m_h->solve_turned(force.data(), m_polar.data(), m_node_at.data(), m_slot_at.data(), dt, y,
+                          m_coupled == 0 ? dv.data() : nullptr)) {
+      if (m_coupled == 0) return;
+      correct_for_couplings(m_rhs);
+      turn_out(dt, dv);
+      return;
+    }
+  }
   for (int a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
     const Vec<dim> f = rotation(i).transpose() * force.col(i);
@@ -434,6 +451,14 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& co
   }
   m_h->solve(m_rhs.col(0));
   correct_for_couplings(m_rhs);
+  turn_out(dt, dv);
+}
+
+template <int dim> void WarpedFilter<dim>::turn_out(double dt, Nodal<dim>& dv) const {
+  const auto& free = m_model.free_nodes;
+  const auto nf = static_cast<int>(free.size());
+  const double* __restrict y = m_rhs.data();
+  const int* __restrict at = m_index.data();
   double* __restrict out = dv.data();
   for (int a = 0; a < nf; ++a) {
     const Vec<dim> x = dt * (rotation(free[static_cast<std::size_t>(a)]) * Eigen::Map<const Vec<dim>>(y + at[a * dim]));

@@ -37,6 +37,14 @@ public:
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
     m_blocks.solve_in_place(Eigen::Map<Nodal<dim>>(y.data(), dim, y.size() / dim)); // tile k = rows k dim ..
   }
+  bool solve_turned(const double* force, const double* turn, const int* node, const int* slot, double scale, double* y,
+                    double* out) override {
+    if constexpr (dim == 2) {
+      m_blocks.solve_turned(force, turn, node, slot, scale, y, out);
+      return true;
+    }
+    return false;
+  }
 
 private:
   OrderedLDLT m_h;

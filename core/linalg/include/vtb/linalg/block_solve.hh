@@ -25,20 +25,33 @@ public:
   /// Copies the factor's values again after factor.factorize() (same pattern).
   void refresh();
 
-  /// x <- A^-1 x; x's column k holds the factor's rows k dim .. k dim + dim - 1.
+  /// x <- A^-1 x; x's column k holds the factor's rows k dim .. k dim + dim - 1. Not
+  /// reentrant in 2D (a scratch vector held here).
   void solve_in_place(Eigen::Ref<Nodal<dim>> x) const;
+
+  /// 2D, with each tile's node turned (the tensor filter's solve, WarpedFilter::solve, in the
+  /// sweeps instead of passes of their own): y <- A^-1 b, b_I = R_i^T f_i for i = node[I], R_i
+  /// the rotation by (cos, sin) = turn's column i, f = force's column i (both 2 x nodes); and
+  /// where out is given, out's column slot[I] = scale R_i y_I.
+  void solve_turned(const double* force, const double* turn, const int* node, const int* slot, double scale, double* y,
+                    double* out) const;
 
   /// Tiles of L below the diagonal (each dim x dim).
   std::size_t tiles() const { return m_col_row.size(); }
 
 private:
+  /// 2D: both sweeps, b_I = in(I) (a pair), out(I, x0, x1) with each solved node.
+  template <class In, class Out> void spread_solve(int nb, In in, Out out) const;
   static constexpr int kTile = dim * dim;
   const OrderedLDLT& m_factor;
   std::vector<int> m_col_ptr, m_col_row; ///< tile columns: the tile rows below the diagonal
   std::vector<int> m_row_ptr, m_row_col; ///< tile rows: the tile columns left of the diagonal
   std::vector<int> m_row_tile;           ///< per tile in row order, its index in column order
   std::vector<int> m_source;             ///< per tile value (column order, then diagonal tiles): L's offset, or -1
-  std::vector<double> m_col_val, m_row_val, m_diag_val; ///< tiles (column-major), diagonal tiles' strict lower part
+  std::vector<double> m_row_val;         ///< tiles L_IJ in row order, column-major
+  std::vector<double> m_col_val;         ///< tiles in column order, transposed: column-major L_IJ^T
+  std::vector<double> m_diag_val;        ///< diagonal tiles' strict lower part (column-major)
+  mutable std::vector<double> m_spread;  ///< 2D: the solve's scratch, each node's (x, y) as (x, x, y, y)
   Eigen::VectorXd m_inv_diag;
 };
 

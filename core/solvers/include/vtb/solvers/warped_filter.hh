@@ -65,6 +65,13 @@ public:
   virtual void refresh() = 0;
   /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
   virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
+  /// 2D, where the system can (the factor: BlockSolve::solve_turned): y <- H^-1 b with node
+  /// node[I]'s values turned into and, where out is given, out of the solve in its sweeps.
+  /// False where it cannot (y untouched): the caller turns them in loops of its own.
+  virtual bool solve_turned(const double* /*force*/, const double* /*turn*/, const int* /*node*/, const int* /*slot*/,
+                            double /*scale*/, double* /*y*/, double* /*out*/) {
+    return false;
+  }
 };
 
 /// H's factor, or (multigrid) one block V-cycle on H with the rigid modes at positions x.
@@ -129,7 +136,9 @@ public:
   double direction_mismatch(const Nodal<dim>& u) const;
 
 private:
-  /// 2D: each node's rotation from the turns' sums, and each spring's ends' (cos, sin) summed.
+  /// dv = dt R y, y the solve's vector (m_rhs) after the solve.
+  void turn_out(double dt, Nodal<dim>& dv) const;
+  /// 2D: each node's rotation from the turns' sums.
   void turn_rotations();
   /// The mismatch at u after the rotations, and the cover that follows it (prepare's rest).
   double follow(const Nodal<dim>& u);
@@ -150,13 +159,13 @@ private:
   const Model<dim>& m_model;
   std::unique_ptr<WarpedSystem<dim>> m_h; ///< H's factor or V-cycle
   std::vector<int> m_index;               ///< per free dof (dim a + p): its position in the solve's vector
+  std::vector<int> m_node_at, m_slot_at;  ///< per node position in the solve's vector: the node, its free index
   std::vector<Mat<dim>> m_rotation;       ///< 3D, per node (2D: m_polar)
   Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
   Nodal<dim> m_adj_rest;    ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
   Eigen::Matrix2Xd m_polar; ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
-  /// 2D, per spring (row) at the last rotations(), column by column: d . D, D x d, |d|^2 |D|^2,
-  /// the ends' (cos, sin) summed, and (the scan's scratch) the spring's sin^2.
-  mutable Eigen::Matrix<double, Eigen::Dynamic, 6> m_pq;
+  /// 2D, per spring (row) at the last rotations(), column by column: d . D, D x d, |d|^2 |D|^2.
+  Eigen::Matrix<double, Eigen::Dynamic, 3> m_pq;
   std::vector<double> m_base; ///< H(0)'s stored values
   /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
   /// k in [m_tptr[s], m_tptr[s + 1]).
