@@ -85,6 +85,27 @@ template <int dim> void BlockSolve<dim>::refresh() {
     tile.transposeInPlace();
   }
   m_inv_diag = m_factor.diagonal().cwiseInverse();
+  if constexpr (dim == 2) {
+    // 2D: each node's unit lower tile [1 0; l 1] folded into its row's tiles (L_II^-1 L_IJ,
+    // for the forward sweep) and its column's (L_JJ^-T L_IJ^T, for the backward sweep), so
+    // that a node's second value no longer waits on its first (spread_solve).
+    for (int I = 0; I + 1 < static_cast<int>(m_row_ptr.size()); ++I) {
+      const double l = m_diag_val[static_cast<std::size_t>(4 * I + 1)];
+      for (int t = m_row_ptr[static_cast<std::size_t>(I)]; t < m_row_ptr[static_cast<std::size_t>(I) + 1]; ++t) {
+        double* T = &m_row_val[static_cast<std::size_t>(4 * t)]; // [T0 T2; T1 T3]: row 1 -= l row 0
+        T[1] -= l * T[0];
+        T[3] -= l * T[2];
+      }
+    }
+    for (int J = 0; J + 1 < static_cast<int>(m_col_ptr.size()); ++J) {
+      const double l = m_diag_val[static_cast<std::size_t>(4 * J + 1)];
+      for (int t = m_col_ptr[static_cast<std::size_t>(J)]; t < m_col_ptr[static_cast<std::size_t>(J) + 1]; ++t) {
+        double* T = &m_col_val[static_cast<std::size_t>(4 * t)]; // [T0 T2; T1 T3]: row 0 -= l row 1
+        T[0] -= l * T[1];
+        T[2] -= l * T[3];
+      }
+    }
+  }
 }
 
 namespace {
@@ -116,23 +137,28 @@ template <class In, class Out>
   static_assert(dim == 2);
   // The nodes' values spread as (x, x, y, y) in m_spread for spread_tile_sum, written as each
   // node's value is found.
+  // The tiles hold the unit lower diagonal tiles [1 0; l 1] folded in (refresh()): here only
+  // the node's own values meet l, and they are known before the node's sum.
   double* __restrict S = m_spread.data();
   const double* D = m_diag_val.data(); // per node the unit lower tile's (1, 0) entry at D[4 I + 1]
   for (int I = 0; I < nb; ++I) {
+    const auto [b0, b1] = in(I);
+    const double c1 = b1 - D[4 * I + 1] * b0; // L_II^-1 b_I
     const detail::Lane<4> s =
         spread_tile_sum(m_row_ptr[static_cast<std::size_t>(I)], m_row_ptr[static_cast<std::size_t>(I) + 1],
                         m_row_val.data(), m_row_col.data(), S);
-    const auto [b0, b1] = in(I);
     const double r0 = b0 - (s[0] + s[2]);
-    const double r1 = b1 - (s[1] + s[3]) - D[4 * I + 1] * r0;
+    const double r1 = c1 - (s[1] + s[3]);
     detail::store<4>(S + 4 * I, detail::Lane<4>{r0, r0, r1, r1});
   }
   for (int J = nb - 1; J >= 0; --J) {
+    const double z1 = m_inv_diag[2 * J + 1] * S[4 * J + 2];
+    const double z0 = m_inv_diag[2 * J] * S[4 * J] - D[4 * J + 1] * z1; // L_JJ^-T D_J^-1 y_J
     const detail::Lane<4> s =
         spread_tile_sum(m_col_ptr[static_cast<std::size_t>(J)], m_col_ptr[static_cast<std::size_t>(J) + 1],
                         m_col_val.data(), m_col_row.data(), S);
-    const double r1 = m_inv_diag[2 * J + 1] * S[4 * J + 2] - (s[1] + s[3]);
-    const double r0 = m_inv_diag[2 * J] * S[4 * J] - (s[0] + s[2]) - D[4 * J + 1] * r1;
+    const double r1 = z1 - (s[1] + s[3]);
+    const double r0 = z0 - (s[0] + s[2]);
     detail::store<4>(S + 4 * J, detail::Lane<4>{r0, r0, r1, r1});
     out(J, r0, r1);
   }
