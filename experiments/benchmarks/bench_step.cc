@@ -353,6 +353,13 @@ BENCHMARK(BM_kernel_tensor_prepare_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_tensor_solve_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_tensor_prepare_box1701)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_tensor_solve_box1701)->Unit(benchmark::kMicrosecond);
+// A 3D factor whose tiles stay in L2 (the 1,701-node box's 10 MB of tiles per sweep do not):
+// the sweeps' own speed, beside BM_step_box275_filtered_full.
+void BM_kernel_tensor_solve_box275(benchmark::State& st) {
+  tensor_kernel(st, box275(), false);
+}
+BENCHMARK(BM_kernel_tensor_solve_box275)->Unit(benchmark::kMicrosecond);
+VTB_STEP_BENCH(box275, solvers::kFiltered, solvers::kFilterTensor, filtered_tensor)
 
 // CHOLMOD's supernodal Cholesky of the same H (Eigen's CholmodSupernodalLLT, CHOLMOD's own
 // ordering), against OrderedLDLT (Eigen's simplicial LDL^T, AMD) with the nodal solve: the

@@ -63,8 +63,9 @@ template <int dim> BlockSolve<dim>::BlockSolve(const OrderedLDLT& factor) : m_fa
       m_row_col[at] = J;
       m_row_tile[at] = t;
     }
-  m_col_val.resize(ntiles * kTile);
-  m_row_val.resize(ntiles * kTile);
+  // One value of padding: 3D reads a tile's last column as four values (tile_sum3).
+  m_col_val.assign(ntiles * kTile + 1, 0.0);
+  m_row_val.assign(ntiles * kTile + 1, 0.0);
   m_diag_val.resize(static_cast<std::size_t>(nb) * kTile);
   m_inv_diag.resize(L.cols());
   if (dim == 2) m_spread.assign(static_cast<std::size_t>(nb) * 4, 0.0);
@@ -73,7 +74,7 @@ template <int dim> BlockSolve<dim>::BlockSolve(const OrderedLDLT& factor) : m_fa
 
 template <int dim> void BlockSolve<dim>::refresh() {
   const double* val = m_factor.lower().valuePtr();
-  const std::size_t n = m_col_val.size();
+  const std::size_t n = m_col_row.size() * kTile;
   for (std::size_t k = 0; k < n; ++k) m_col_val[k] = m_source[k] >= 0 ? val[m_source[k]] : 0.0;
   for (std::size_t k = 0; k < m_diag_val.size(); ++k) m_diag_val[k] = m_source[n + k] >= 0 ? val[m_source[n + k]] : 0.0;
   for (std::size_t t = 0; t < m_row_tile.size(); ++t)
@@ -85,26 +86,27 @@ template <int dim> void BlockSolve<dim>::refresh() {
     tile.transposeInPlace();
   }
   m_inv_diag = m_factor.diagonal().cwiseInverse();
-  if constexpr (dim == 2) {
-    // 2D: each node's unit lower tile [1 0; l 1] folded into its row's tiles (L_II^-1 L_IJ,
-    // for the forward sweep) and its column's (L_JJ^-T L_IJ^T, for the backward sweep), so
-    // that a node's second value no longer waits on its first (spread_solve).
-    for (int I = 0; I + 1 < static_cast<int>(m_row_ptr.size()); ++I) {
-      const double l = m_diag_val[static_cast<std::size_t>(4 * I + 1)];
-      for (int t = m_row_ptr[static_cast<std::size_t>(I)]; t < m_row_ptr[static_cast<std::size_t>(I) + 1]; ++t) {
-        double* T = &m_row_val[static_cast<std::size_t>(4 * t)]; // [T0 T2; T1 T3]: row 1 -= l row 0
-        T[1] -= l * T[0];
-        T[3] -= l * T[2];
+  // Each node's unit lower tile L_II folded into its row's tiles (L_II^-1 L_IJ, for the
+  // forward sweep) and its column's (L_JJ^-T L_IJ^T, for the backward sweep), so that a node's
+  // values no longer wait on each other through L_II in the sweeps (spread_solve,
+  // solve_in_place in 3D): only the node's own b_I (known before its sum) meets L_II.
+  for (int I = 0; I + 1 < static_cast<int>(m_row_ptr.size()); ++I) {
+    const double* L = &m_diag_val[static_cast<std::size_t>(I) * kTile]; // L(p, q) = L[q dim + p]
+    for (int t = m_row_ptr[static_cast<std::size_t>(I)]; t < m_row_ptr[static_cast<std::size_t>(I) + 1]; ++t)
+      for (int c = 0; c < dim; ++c) {
+        double* T = &m_row_val[static_cast<std::size_t>(t) * kTile + static_cast<std::size_t>(c * dim)];
+        for (int p = 1; p < dim; ++p)
+          for (int q = 0; q < p; ++q) T[p] -= L[q * dim + p] * T[q];
       }
-    }
-    for (int J = 0; J + 1 < static_cast<int>(m_col_ptr.size()); ++J) {
-      const double l = m_diag_val[static_cast<std::size_t>(4 * J + 1)];
-      for (int t = m_col_ptr[static_cast<std::size_t>(J)]; t < m_col_ptr[static_cast<std::size_t>(J) + 1]; ++t) {
-        double* T = &m_col_val[static_cast<std::size_t>(4 * t)]; // [T0 T2; T1 T3]: row 0 -= l row 1
-        T[0] -= l * T[1];
-        T[2] -= l * T[3];
+  }
+  for (int J = 0; J + 1 < static_cast<int>(m_col_ptr.size()); ++J) {
+    const double* L = &m_diag_val[static_cast<std::size_t>(J) * kTile];
+    for (int t = m_col_ptr[static_cast<std::size_t>(J)]; t < m_col_ptr[static_cast<std::size_t>(J) + 1]; ++t)
+      for (int c = 0; c < dim; ++c) {
+        double* T = &m_col_val[static_cast<std::size_t>(t) * kTile + static_cast<std::size_t>(c * dim)];
+        for (int p = dim - 2; p >= 0; --p)
+          for (int q = dim - 1; q > p; --q) T[p] -= L[p * dim + q] * T[q];
       }
-    }
   }
 }
 
@@ -200,54 +202,58 @@ VTB_VECTOR_CLONES void BlockSolve<2>::solve_turned(const double* __restrict forc
       });
 }
 
-template <int dim> VTB_VECTOR_CLONES void BlockSolve<dim>::solve_in_place(Eigen::Ref<Nodal<dim>> x) const {
-  using CMat = Eigen::Map<const Mat<dim>>;
-  const int nb = static_cast<int>(x.cols());
-  // Forward, L y = b by tile rows: r = b_I - sum_J L_IJ y_J, then the unit lower L_II.
-  for (int I = 0; I < nb; ++I) {
-    Vec<dim> a = Vec<dim>::Zero(), b = Vec<dim>::Zero(); // two chains: the sweep is latency bound
-    int t = m_row_ptr[static_cast<std::size_t>(I)];
-    const int end = m_row_ptr[static_cast<std::size_t>(I) + 1];
-    for (; t + 1 < end; t += 2) {
-      a.noalias() +=
-          CMat(&m_row_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_row_col[static_cast<std::size_t>(t)]);
-      b.noalias() +=
-          CMat(&m_row_val[static_cast<std::size_t>(t + 1) * kTile]) * x.col(m_row_col[static_cast<std::size_t>(t) + 1]);
-    }
-    if (t < end)
-      a.noalias() +=
-          CMat(&m_row_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_row_col[static_cast<std::size_t>(t)]);
-    // Scalars, not a Vec: a Vec's elements went through the stack, and writing one of them
-    // and then reading the whole stalled store forwarding (a third of the solve's time).
-    double r[dim];
-    const double* D = &m_diag_val[static_cast<std::size_t>(I) * kTile]; // column-major
-    for (int p = 0; p < dim; ++p) {
-      r[p] = x(p, I) - a[p] - b[p];
-      for (int q = 0; q < p; ++q) r[p] -= D[q * dim + p] * r[q];
-    }
-    for (int p = 0; p < dim; ++p) x(p, I) = r[p];
+namespace {
+
+/// 3D: sum over the tiles t in [begin, end) of tile_t x(col_t), each 3 x 3 tile column-major:
+/// its columns read as four values from offsets 0, 3 and 6 (the fourth lane is the next
+/// column's, or the next tile's, or the padding: never used) times x's three values, in three
+/// sums (one per column: three dependency chains of one add per tile).
+[[gnu::always_inline]] inline detail::Lane<4> tile_sum3(int begin, int end, const double* __restrict val,
+                                                        const int* __restrict col, const double* __restrict X,
+                                                        Eigen::Index stride) {
+  using detail::load;
+  detail::Lane<4> a = {0, 0, 0, 0}, b = a, c = a;
+  for (int t = begin; t < end; ++t) {
+    const double* T = val + 9 * t;
+    const double* x = X + stride * col[t];
+    a += load<4>(T) * x[0];
+    b += load<4>(T + 3) * x[1];
+    c += load<4>(T + 6) * x[2];
   }
-  // Backward, L^T x = D^-1 y by tile columns: r = D_J^-1 y_J - sum_I L_IJ^T x_I, then L_JJ^T.
+  return (a + b) + c;
+}
+
+} // namespace
+
+template <> VTB_VECTOR_CLONES void BlockSolve<3>::solve_in_place(Eigen::Ref<Nodal<3>> x) const {
+  const int nb = static_cast<int>(x.cols());
+  const Eigen::Index st = x.outerStride();
+  double* X = x.data();
+  const double* L = m_diag_val.data(); // per node the unit lower tile, column-major: L(p, q) at 9 I + 3 q + p
+  // Forward: y_I = L_II^-1 b_I - sum_J (L_II^-1 L_IJ) y_J (the tiles folded, refresh()).
+  for (int I = 0; I < nb; ++I) {
+    double* xi = X + st * I;
+    const double* l = L + 9 * I;
+    const double c0 = xi[0], c1 = xi[1] - l[1] * c0, c2 = xi[2] - l[2] * c0 - l[5] * c1;
+    const detail::Lane<4> s =
+        tile_sum3(m_row_ptr[static_cast<std::size_t>(I)], m_row_ptr[static_cast<std::size_t>(I) + 1], m_row_val.data(),
+                  m_row_col.data(), X, st);
+    xi[0] = c0 - s[0];
+    xi[1] = c1 - s[1];
+    xi[2] = c2 - s[2];
+  }
+  // Backward: x_J = L_JJ^-T D_J^-1 y_J - sum_I (L_JJ^-T L_IJ^T) x_I.
   for (int J = nb - 1; J >= 0; --J) {
-    Vec<dim> a = Vec<dim>::Zero(), b = Vec<dim>::Zero();
-    int t = m_col_ptr[static_cast<std::size_t>(J)];
-    const int end = m_col_ptr[static_cast<std::size_t>(J) + 1];
-    for (; t + 1 < end; t += 2) {
-      a.noalias() +=
-          CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t)]);
-      b.noalias() +=
-          CMat(&m_col_val[static_cast<std::size_t>(t + 1) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t) + 1]);
-    }
-    if (t < end)
-      a.noalias() +=
-          CMat(&m_col_val[static_cast<std::size_t>(t) * kTile]) * x.col(m_col_row[static_cast<std::size_t>(t)]);
-    double r[dim];
-    const double* D = &m_diag_val[static_cast<std::size_t>(J) * kTile];
-    for (int q = dim - 1; q >= 0; --q) {
-      r[q] = m_inv_diag[J * dim + q] * x(q, J) - a[q] - b[q];
-      for (int p = q + 1; p < dim; ++p) r[q] -= D[q * dim + p] * r[p];
-    }
-    for (int q = 0; q < dim; ++q) x(q, J) = r[q];
+    double* xj = X + st * J;
+    const double* l = L + 9 * J;
+    const double z0 = m_inv_diag[3 * J] * xj[0], z1 = m_inv_diag[3 * J + 1] * xj[1];
+    const double w2 = m_inv_diag[3 * J + 2] * xj[2], w1 = z1 - l[5] * w2, w0 = z0 - l[1] * w1 - l[2] * w2;
+    const detail::Lane<4> s =
+        tile_sum3(m_col_ptr[static_cast<std::size_t>(J)], m_col_ptr[static_cast<std::size_t>(J) + 1], m_col_val.data(),
+                  m_col_row.data(), X, st);
+    xj[0] = w0 - s[0];
+    xj[1] = w1 - s[1];
+    xj[2] = w2 - s[2];
   }
 }
 
