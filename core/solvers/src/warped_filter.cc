@@ -1,6 +1,7 @@
 #include "vtb/solvers/warped_filter.hh"
 
 #include "mismatch_kernel.hh"
+#include "polar_kernel.hh"
 
 #include "vtb/springs/force_jacobian.hh"
 
@@ -54,48 +55,6 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
 }
 
 namespace {
-
-/// The rotation R nearest to A (its polar factor) where det A > 0, by Newton's iteration
-/// X <- (g X + (g X)^-T) / 2 with Higham's determinant scaling g = det(X)^(-1/3) while X is
-/// far from orthogonal; X^-T = cof(X) / det(X) (the columns' cross products), so an
-/// iteration is three cross products and no division but one. It converges quadratically:
-/// 5-7 iterations at the strains the tensor filter trusts, against a Jacobi SVD per node that
-/// made the 3D step's prepare 2.3x its solve (docs/performance.md). False (R undefined) when
-/// det A <= 0 or it has not converged in 30 iterations.
-/// About x^(-1/3) for x > 0 (within 3.2e-4 for normal x): the exponent divided by -3 in the
-/// bits, then two Newton steps y <- y (4 - x y^3) / 3. The polar iteration's scaling needs no
-/// more (any g > 0 leaves the polar factor as it is, and the scaling stops near convergence),
-/// and libm's cbrt took a fifth of the 3D tensor step (docs/performance.md).
-double approx_inverse_cbrt(double x) {
-  if (!(x > 1e-200 && x < 1e200)) return std::cbrt(1 / x); // far from the normalised A's det of about 1
-  std::uint64_t bits;
-  std::memcpy(&bits, &x, sizeof bits);
-  bits = 0x5540000000000000ull - bits / 3;
-  double y;
-  std::memcpy(&y, &bits, sizeof bits);
-  for (int it = 0; it < 2; ++it) y = y * (4 - x * y * y * y) * (1.0 / 3.0);
-  return y;
-}
-
-bool polar_rotation(const Mat<3>& A, Mat<3>& R) {
-  Mat<3> X = A;
-  bool scaled = true;
-  for (int it = 0; it < 30; ++it) {
-    Mat<3> C;
-    C.col(0) = X.col(1).cross(X.col(2));
-    C.col(1) = X.col(2).cross(X.col(0));
-    C.col(2) = X.col(0).cross(X.col(1));
-    const double det = X.col(0).dot(C.col(0));
-    if (!(det > 0) || !std::isfinite(det)) return false;
-    const double g = scaled ? approx_inverse_cbrt(det) : 1.0;
-    R = 0.5 * (g * X + C * (1 / (g * det)));
-    const double change = (R - X).squaredNorm();
-    if (change < 1e-30) return true; // |R| = sqrt(3): a change of 1e-15, at round-off
-    scaled = change > 1e-4;          // near orthogonal, unscaled steps converge quadratically
-    X = R;
-  }
-  return false;
-}
 
 /// The largest direction mismatch |d/|d| - t/|t|| over pairs (d, t): a spring's current
 /// vector d and its rest vector turned by both ends' rotations, t = (R_i + R_j) D (their
@@ -218,6 +177,8 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
     // Per node 3 / sum |X_j - X_i|^2 = 3 / tr A_rest: A scaled by it has singular values near 1
     // (its polar factor unchanged), where the polar iteration needs few steps.
     m_adj_scale.assign(static_cast<std::size_t>(net.num_nodes()), 1.0);
+    m_polar_a.assign(9 * static_cast<std::size_t>(net.num_nodes()), 0.0);
+    m_polar_ok.assign(static_cast<std::size_t>(net.num_nodes()), 0);
     for (int i = 0; i < net.num_nodes(); ++i) {
       double trace = 0;
       for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
@@ -392,7 +353,8 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
     turn_rotations();
   }
   if constexpr (dim == 3) {
-    for (int i = 0; i < net.num_nodes(); ++i) {
+    const int n = net.num_nodes();
+    for (int i = 0; i < n; ++i) {
       const int begin = net.adj_ptr[static_cast<std::size_t>(i)];
       const int end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
       const auto ui = u.col(i);
@@ -402,9 +364,15 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
         const Vec<dim> d = D + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
         A.noalias() += d * D.transpose();
       }
-      A *= m_adj_scale[static_cast<std::size_t>(i)];
+      Eigen::Map<Mat<dim>> scaled(&m_polar_a[9 * static_cast<std::size_t>(i)]);
+      scaled = A * m_adj_scale[static_cast<std::size_t>(i)];
+    }
+    // The polar factors, four nodes per vector (detail::polar_rotations).
+    detail::polar_rotations(n, m_polar_a.data(), m_rotation.data()->data(), m_polar_ok.data());
+    for (int i = 0; i < n; ++i) {
       Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
-      if (!polar_rotation(A, R)) { // an inverted or flat neighbourhood: the SVD decides
+      if (!m_polar_ok[static_cast<std::size_t>(i)]) { // an inverted or flat neighbourhood: the SVD decides
+        const Mat<dim> A = Eigen::Map<const Mat<dim>>(&m_polar_a[9 * static_cast<std::size_t>(i)]);
         const Eigen::JacobiSVD<Mat<dim>> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
         Mat<dim> U = svd.matrixU();
         if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(dim - 1) *= -1;

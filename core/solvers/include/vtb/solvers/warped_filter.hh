@@ -164,7 +164,9 @@ private:
   Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
   Nodal<dim> m_adj_rest;           ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
   std::vector<double> m_adj_scale; ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
-  Eigen::Matrix2Xd m_polar;        ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
+  std::vector<double> m_polar_a;   ///< 3D, per node: its scaled A (9 values), the rotations' scratch
+  std::vector<unsigned char> m_polar_ok; ///< 3D, per node: whether the polar iteration converged
+  Eigen::Matrix2Xd m_polar;              ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
   /// 2D, per spring (row) at the last rotations(), column by column: d . D, D x d, |d|^2 |D|^2.
   Eigen::Matrix<double, Eigen::Dynamic, 3> m_pq;
   std::vector<double> m_base; ///< H(0)'s stored values
