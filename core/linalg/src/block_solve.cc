@@ -138,9 +138,8 @@ template <class In, class Out>
 [[gnu::always_inline]] inline void BlockSolve<dim>::spread_solve(int nb, In in, Out out) const {
   static_assert(dim == 2);
   // The nodes' values spread as (x, x, y, y) in m_spread for spread_tile_sum, written as each
-  // node's value is found.
-  // The tiles hold the unit lower diagonal tiles [1 0; l 1] folded in (refresh()): here only
-  // the node's own values meet l, and they are known before the node's sum.
+  // node's value is found. The tiles hold the unit lower diagonal tiles [1 0; l 1] folded in
+  // (refresh()): here only the node's own values meet l, known before the node's sum.
   double* __restrict S = m_spread.data();
   const double* D = m_diag_val.data(); // per node the unit lower tile's (1, 0) entry at D[4 I + 1]
   for (int I = 0; I < nb; ++I) {
