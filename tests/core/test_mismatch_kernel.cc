@@ -17,7 +17,7 @@ namespace {
 
 /// Springs laid out as the kernel reads them, on `nodes` nodes with unit (cos, sin) each.
 struct Springs {
-  std::vector<double> p, q, w, trigger, turn;
+  std::vector<double> p, q, trigger, turn;
   std::vector<std::array<int, 2>> edge;
 
   Springs(int n, int nodes, std::mt19937& rng) {
@@ -29,11 +29,10 @@ struct Springs {
       turn.push_back(std::sin(a));
     }
     for (int s = 0; s < n; ++s) {
-      // (p, q) = |d| |D| (cos, sin) of the angle from D to d; w = |d|^2 |D|^2.
+      // (p, q) = |d| |D| (cos, sin) of the angle from D to d.
       const double a = angle(rng), l = len(rng);
       p.push_back(l * std::cos(a));
       q.push_back(l * std::sin(a));
-      w.push_back(l * l);
       trigger.push_back(tr(rng));
       edge.push_back({pick(rng), pick(rng)});
     }
@@ -46,11 +45,11 @@ struct Springs {
     const auto k = static_cast<std::size_t>(s);
     dot = cx * p[k] + cy * q[k];
     const double cross = cy * p[k] - cx * q[k];
-    return cross * cross / (w[k] * (cx * cx + cy * cy));
+    return cross * cross / ((p[k] * p[k] + q[k] * q[k]) * (cx * cx + cy * cy));
   }
 
   double largest(bool& outgrown, bool& rare) const {
-    return detail::largest_sin2(static_cast<int>(p.size()), p.data(), q.data(), w.data(), edge.data(), turn.data(),
+    return detail::largest_sin2(static_cast<int>(p.size()), p.data(), q.data(), edge.data(), turn.data(),
                                 trigger.data(), outgrown, rare);
   }
 };

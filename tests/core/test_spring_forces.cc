@@ -91,7 +91,7 @@ TEST(SpringForces, EqualTheElementKernelSummedOnABox) {
 TEST(SpringForces, MakeTheTurnsInTheirOwnPass) {
   // add_internal_forces_and_turns gives add_internal_forces' forces to the bit and spring_turns'
   // per-spring turns to the bit (the same operations in the same order), and the turns are
-  // their definition: per spring p = d . D, q = D x d, w = |d|^2 |D|^2; per node the sums over
+  // their definition: per spring p = d . D, q = D x d; per node the sums over
   // its springs, which the two passes add in different orders (the fused pass flushes a node's
   // run at each chunk's end), as the definition does below. A sum of m terms in any order is
   // within (m - 1) eps sum |terms| of the exact one; m <= 8 here, so two orders differ by at
@@ -108,20 +108,19 @@ TEST(SpringForces, MakeTheTurnsInTheirOwnPass) {
     u.data()[c] = 0.2 * h * r(gen);
     v.data()[c] = h * r(gen);
   }
-  Eigen::VectorXd p(ns), q(ns), w(ns), p2(ns), q2(ns), w2(ns);
+  Eigen::VectorXd p(ns), q(ns), p2(ns), q2(ns);
   Nodal<2> rest(2, ns); // each spring's rest vector D, which the turns are given
   for (int s = 0; s < ns; ++s)
     rest.col(s) =
         net.rest.col(net.edge[static_cast<std::size_t>(s)][1]) - net.rest.col(net.edge[static_cast<std::size_t>(s)][0]);
   Eigen::Matrix2Xd sums = Eigen::Matrix2Xd::Constant(2, n, 7.0), sums2(2, n); // set, not added to
   Nodal<2> f = Nodal<2>::Zero(2, n), f2 = Nodal<2>::Zero(2, n);
-  add_internal_forces_and_turns(net, u, v, f, 1e-3, SpringTurns{rest.data(), p.data(), q.data(), w.data(), &sums});
+  add_internal_forces_and_turns(net, u, v, f, 1e-3, SpringTurns{rest.data(), p.data(), q.data(), &sums});
   add_internal_forces(net, u, v, f2, 1e-3);
-  spring_turns(net, u, SpringTurns{rest.data(), p2.data(), q2.data(), w2.data(), &sums2});
+  spring_turns(net, u, SpringTurns{rest.data(), p2.data(), q2.data(), &sums2});
   EXPECT_TRUE(f == f2);
   EXPECT_TRUE(p == p2);
   EXPECT_TRUE(q == q2);
-  EXPECT_TRUE(w == w2);
   Eigen::Matrix2Xd ref = Eigen::Matrix2Xd::Zero(2, n), size = Eigen::Matrix2Xd::Zero(2, n);
   int terms = 0;
   for (int s = 0; s < ns; ++s) {
@@ -129,7 +128,6 @@ TEST(SpringForces, MakeTheTurnsInTheirOwnPass) {
     const Vec<2> D = net.rest.col(j) - net.rest.col(i), d = (net.rest.col(j) + u.col(j)) - (net.rest.col(i) + u.col(i));
     EXPECT_EQ(p[s], d.dot(D));
     EXPECT_EQ(q[s], D.x() * d.y() - D.y() * d.x());
-    EXPECT_EQ(w[s], d.squaredNorm() * D.squaredNorm());
     for (const int node : {i, j}) {
       ref.col(node) += Vec<2>(p[s], q[s]);
       size.col(node) += Vec<2>(std::abs(p[s]), std::abs(q[s]));

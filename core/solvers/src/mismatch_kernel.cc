@@ -58,12 +58,12 @@ struct LargestSin2 {
 };
 
 /// Adds four springs' lanes (`lane`: which of them are springs).
-[[gnu::always_inline]] inline void add_lanes(LargestSin2& b, Doubles P, Doubles Q, Doubles W, Doubles X, Doubles Y,
-                                             Doubles T, Mask lane) {
+[[gnu::always_inline]] inline void add_lanes(LargestSin2& b, Doubles P, Doubles Q, Doubles X, Doubles Y, Doubles T,
+                                             Mask lane) {
   const double inf = std::numeric_limits<double>::infinity();
   const Doubles cross = Y * P - X * Q, dot = X * P + Y * Q;
-  const Doubles d = W * (X * X + Y * Y), c2 = cross * cross;
-  const Mask ok = (dot > 0) & (d > 0) & (d < inf); // false for NaN
+  const Doubles d = (P * P + Q * Q) * (X * X + Y * Y), c2 = cross * cross; // |d|^2 |D|^2 |c|^2
+  const Mask ok = (dot > 0) & (d > 0) & (d < inf);                         // false for NaN
   const Doubles nu = ok ? c2 : 0.0, de = ok ? d : 1.0;
   const Mask bigger = nu * b.den > b.num * de;
   b.num = bigger ? nu : b.num;
@@ -91,29 +91,27 @@ typedef double Pair __attribute__((vector_size(16), aligned(8), may_alias));
 
 } // namespace
 
-VTB_VECTOR_CLONES double largest_sin2(int n, const double* p, const double* q, const double* w,
-                                      const std::array<int, 2>* edge, const double* turn, const double* trigger,
-                                      bool& outgrown, bool& rare) {
+VTB_VECTOR_CLONES double largest_sin2(int n, const double* p, const double* q, const std::array<int, 2>* edge,
+                                      const double* turn, const double* trigger, bool& outgrown, bool& rare) {
   LargestSin2 b;
   int s = 0;
   for (; s + 4 <= n; s += 4) {
     Doubles X, Y;
     gather_ends(edge + s, turn, X, Y);
-    add_lanes(b, lanes(p + s), lanes(q + s), lanes(w + s), X, Y, lanes(trigger + s), Mask{-1, -1, -1, -1});
+    add_lanes(b, lanes(p + s), lanes(q + s), X, Y, lanes(trigger + s), Mask{-1, -1, -1, -1});
   }
-  if (s < n) { // the last springs, in lanes padded with zeros (w 0: not ok, masked out)
-    double pad[6][4] = {};
+  if (s < n) { // the last springs, in lanes padded with zeros (p = q = 0: not ok, masked out)
+    double pad[5][4] = {};
     for (int k = 0; s + k < n; ++k) {
       const auto [i, j] = edge[s + k];
       pad[0][k] = p[s + k];
       pad[1][k] = q[s + k];
-      pad[2][k] = w[s + k];
-      pad[3][k] = turn[2 * i] + turn[2 * j];
-      pad[4][k] = turn[2 * i + 1] + turn[2 * j + 1];
-      pad[5][k] = trigger[s + k];
+      pad[2][k] = turn[2 * i] + turn[2 * j];
+      pad[3][k] = turn[2 * i + 1] + turn[2 * j + 1];
+      pad[4][k] = trigger[s + k];
     }
     const Mask lane = {0 < n - s ? -1 : 0, 1 < n - s ? -1 : 0, 2 < n - s ? -1 : 0, 3 < n - s ? -1 : 0};
-    add_lanes(b, lanes(pad[0]), lanes(pad[1]), lanes(pad[2]), lanes(pad[3]), lanes(pad[4]), lanes(pad[5]), lane);
+    add_lanes(b, lanes(pad[0]), lanes(pad[1]), lanes(pad[2]), lanes(pad[3]), lanes(pad[4]), lane);
   }
   long any_out = 0, any_odd = 0;
   double best_num = 0, best_den = 1;

@@ -14,16 +14,17 @@ namespace vtb::detail {
 /// non-finite state: the run's watch stops it).
 void unit_pairs(int n, double* ab);
 
-/// Over springs laid out column by column: p = d . D, q = D x d, w = |d|^2 |D|^2, with the
-/// ends' summed (cos, sin) c = (cx, cy) gathered from `turn` (2 x nodes) by `edge` (the springs'
-/// node pairs), so that with t = (R_i + R_j) D: d . t = cx p + cy q, d x t = cy p
-/// - cx q and |d|^2 |t|^2 = w |c|^2. Returns the largest sin^2 of the angle between d and t over
-/// the springs with d . t > 0 and |d| |t| positive and finite (0 if none); sets `rare` when a
-/// spring is not one of them (the caller's exact pass then takes them all), and `outgrown` when
-/// a spring's sin^2 passes its trigger. Four springs per vector, no branch and no division but
-/// one; the ends' sums are made here rather than stored by a pass of their own (the passes'
-/// per-spring arrays did not fit L1, docs/performance.md).
-double largest_sin2(int n, const double* p, const double* q, const double* w, const std::array<int, 2>* edge,
-                    const double* turn, const double* trigger, bool& outgrown, bool& rare);
+/// Over springs laid out column by column: p = d . D and q = D x d (so p^2 + q^2 = |d|^2
+/// |D|^2, no third array), with the ends' summed (cos, sin) c = (cx, cy) gathered from `turn`
+/// (2 x nodes) by `edge` (the springs' node pairs), so that with t = (R_i + R_j) D: d . t = cx
+/// p + cy q, d x t = cy p - cx q and |d|^2 |t|^2 = (p^2 + q^2) |c|^2. Returns the largest sin^2
+/// of the angle between d and t over the springs with d . t > 0 and |d| |t| positive and
+/// finite (0 if none); sets `rare` when a spring is not one of them (the caller's exact pass
+/// then takes them all), and `outgrown` when a spring's sin^2 passes its trigger. Four springs
+/// per vector, no branch and no division but one; the ends' sums are made here rather than
+/// stored by a pass of their own (the passes' per-spring arrays did not fit L1,
+/// docs/performance.md item 15).
+double largest_sin2(int n, const double* p, const double* q, const std::array<int, 2>* edge, const double* turn,
+                    const double* trigger, bool& outgrown, bool& rare);
 
 } // namespace vtb::detail

@@ -195,7 +195,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   m_spring_at.resize(ns);
   if constexpr (dim == 2) {
     m_polar.resize(2, net.num_nodes());
-    m_pq.resize(ns, 3);
+    m_pq.resize(ns, 2);
   }
 }
 
@@ -222,16 +222,16 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
   bool out = false;
   const int ns = m_model.net.num_springs();
   if constexpr (dim == 2) {
-    // From the springs' products that rotations() left in m_pq (p = d . D, q = D x d, w =
-    // |d|^2 |D|^2) and the ends' (cos, sin) summed, c: with t = (R_i + R_j) D and R_i + R_j =
-    // [cx -cy; cy cx], d . t = cx p + cy q, d x t = cy p - cx q and |t|^2 = |c|^2 |D|^2, so u
-    // is not read again. The rare spring past 90 degrees (or of length 0, or not finite) sends
+    // From the springs' products that rotations() left in m_pq (p = d . D, q = D x d, so that
+    // p^2 + q^2 = |d|^2 |D|^2) and the ends' (cos, sin) summed, c: with t = (R_i + R_j) D and
+    // R_i + R_j = [cx -cy; cy cx], d . t = cx p + cy q, d x t = cy p - cx q and |t|^2 = |c|^2
+    // |D|^2, so u is not read again. The rare spring past 90 degrees (or of length 0, or not finite) sends
     // the scan to the tracker's exact pass.
     (void)u;
     bool rare = false;
     const auto& edge = m_model.net.edge;
-    const double sin2 = detail::largest_sin2(ns, &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), edge.data(), m_polar.data(),
-                                             m_trigger.data(), out, rare);
+    const double sin2 =
+        detail::largest_sin2(ns, &m_pq(0, 0), &m_pq(0, 1), edge.data(), m_polar.data(), m_trigger.data(), out, rare);
     if (!rare) {
       if (outgrown) *outgrown = out;
       return MismatchTracker::from_sin2(sin2);
@@ -242,7 +242,7 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
       const double p = m_pq(s, 0), q = m_pq(s, 1), cx = m_polar(0, i) + m_polar(0, j),
                    cy = m_polar(1, i) + m_polar(1, j);
       const double cross = cy * p - cx * q;
-      out |= worst.add_terms(cx * p + cy * q, cross * cross, m_pq(s, 2) * (cx * cx + cy * cy),
+      out |= worst.add_terms(cx * p + cy * q, cross * cross, (p * p + q * q) * (cx * cx + cy * cy),
                              m_trigger[static_cast<std::size_t>(s)]);
     }
   } else {
@@ -385,8 +385,8 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 
 template <int dim> SpringTurns WarpedFilter<dim>::turns() {
   static_assert(dim == 2 || dim == 3);
-  if constexpr (dim == 2) return SpringTurns{m_spring_rest.data(), &m_pq(0, 0), &m_pq(0, 1), &m_pq(0, 2), &m_polar};
-  return SpringTurns{nullptr, nullptr, nullptr, nullptr, nullptr};
+  if constexpr (dim == 2) return SpringTurns{m_spring_rest.data(), &m_pq(0, 0), &m_pq(0, 1), &m_polar};
+  return SpringTurns{nullptr, nullptr, nullptr, nullptr};
 }
 
 template <int dim> void WarpedFilter<dim>::turn_rotations() {

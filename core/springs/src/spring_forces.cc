@@ -27,16 +27,14 @@ VTB_VECTOR_CLONES void voigt_coefficients(int n, const double* l2, const double*
   }
 }
 
-/// The springs' turns from their vectors d now (2 per spring) and D at rest, with l2 = |d|^2:
-/// p = d . D, q = D x d, w = l2 |D|^2. No gather, no branch: the loop vectorises.
+/// The springs' turns from their vectors d now (2 per spring) and D at rest: p = d . D, q = D
+/// x d. No gather, no branch: the loop vectorises.
 VTB_VECTOR_CLONES void turn_terms(int n, const double* __restrict d, const double* __restrict rest,
-                                  const double* __restrict l2, double* __restrict p, double* __restrict q,
-                                  double* __restrict w) {
+                                  double* __restrict p, double* __restrict q) {
   for (int s = 0; s < n; ++s) {
     const double dx = d[2 * s], dy = d[2 * s + 1], Dx = rest[2 * s], Dy = rest[2 * s + 1];
     p[s] = dx * Dx + dy * Dy;
     q[s] = Dx * dy - Dy * dx;
-    w[s] = l2[s] * (Dx * Dx + Dy * Dy);
   }
 }
 
@@ -67,7 +65,7 @@ void forces_kernel(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nod
       dot[s] = ds.dot(v.col(j) - vi);
     }
     if constexpr (dim == 2)
-      if (turns) turn_terms(n, d, turns->rest + 2 * s0, l2, turns->p + s0, turns->q + s0, turns->w + s0);
+      if (turns) turn_terms(n, d, turns->rest + 2 * s0, turns->p + s0, turns->q + s0);
     voigt_coefficients(n, l2, dot, net.rest_length.data() + s0, net.stiffness.data() + s0, net.damping.data() + s0,
                        extra_damping_per_k, g);
     // Scatter, node i's force summed over its run of springs (add_by_first_node_runs); with
@@ -125,8 +123,7 @@ void spring_turns(const SpringNetwork<2>& net, const Nodal<2>& u, const SpringTu
   add_by_first_node_runs<+1>(net, 0, net.num_springs(), sums, [&](int s) -> Vec<2> {
     const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
     const Vec<2> d = (net.rest.col(j) + u.col(j)) - (net.rest.col(i) + u.col(i));
-    double l2 = d.squaredNorm();
-    turn_terms(1, d.data(), turns.rest + 2 * s, &l2, turns.p + s, turns.q + s, turns.w + s);
+    turn_terms(1, d.data(), turns.rest + 2 * s, turns.p + s, turns.q + s);
     return Vec<2>(turns.p[s], turns.q[s]);
   });
 }

@@ -94,7 +94,7 @@ public:
   /// 2D: prepare(u) where the springs' turns at u are already in turns(), made by the force
   /// pass (add_internal_forces_and_turns), so that the rotations need no pass of their own.
   double prepare_turned(const Nodal<dim>& u);
-  /// 2D: where the springs' turns go (per spring p, q, w and per node their sums).
+  /// 2D: where the springs' turns go (per spring p, q and per node their sums).
   SpringTurns turns();
   /// dv (dim x free nodes) = dt R H'^-1 R^T F at the prepared displacement (F: dim x nodes,
   /// including the couplings' forces and their -dt k v term), H' = H_t + c I at each node with
@@ -167,8 +167,8 @@ private:
   std::vector<double> m_polar_a;   ///< 3D, per node: its scaled A (9 values), the rotations' scratch
   std::vector<unsigned char> m_polar_ok; ///< 3D, per node: whether the polar iteration converged
   Eigen::Matrix2Xd m_polar;              ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
-  /// 2D, per spring (row) at the last rotations(), column by column: d . D, D x d, |d|^2 |D|^2.
-  Eigen::Matrix<double, Eigen::Dynamic, 3> m_pq;
+  /// 2D, per spring (row) at the last rotations(), column by column: d . D and D x d.
+  Eigen::Matrix<double, Eigen::Dynamic, 2> m_pq;
   std::vector<double> m_base; ///< H(0)'s stored values
   /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
   /// k in [m_tptr[s], m_tptr[s + 1]).

@@ -60,13 +60,13 @@ void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
 
 /// What the 2D tensor filter's rotations read of the springs (warped_filter.cc), per spring
 /// s = (i, j): p = d . D and q = D x d (d = x_j - x_i now, D = X_j - X_i at rest; both the
-/// same from either end) and w = |d|^2 |D|^2; per node, (sum p, sum q) over its springs, whose
+/// same from either end; p^2 + q^2 = |d|^2 |D|^2, which the scan reads from them instead of a
+/// third array, docs/performance.md item 15); per node, (sum p, sum q) over its springs, whose
 /// angle is that of the polar factor of its neighbourhood's sum of d D^T.
 struct SpringTurns {
   const double* rest;     ///< per spring, given: D (2 values)
   double* p;              ///< per spring
   double* q;              ///< per spring
-  double* w;              ///< per spring
   Eigen::Matrix2Xd* sums; ///< per node (set, not added to)
 };
 
