@@ -11,8 +11,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdint>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -130,15 +128,16 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
     if (m_index[static_cast<std::size_t>(r)] != m_index[static_cast<std::size_t>(r - r % dim)] + r % dim)
       throw std::logic_error("WarpedFilter: the system does not keep a node's values consecutive");
   }
+  // Per node position in the solve's vector, its node and free index (what solve_turned reads;
+  // meaningful where the system keeps a node's values at a multiple of dim, as the factor does).
   m_node_at.assign(static_cast<std::size_t>(m_h->size() / dim), -1);
   m_slot_at.assign(m_node_at.size(), -1);
-  for (int a = 0; a < static_cast<int>(nf); ++a)
-    if (m_index[static_cast<std::size_t>(a) * dim] % dim == 0 &&
-        m_index[static_cast<std::size_t>(a) * dim] / dim < static_cast<int>(m_node_at.size())) {
-      m_node_at[static_cast<std::size_t>(m_index[static_cast<std::size_t>(a) * dim] / dim)] =
-          model.free_nodes[static_cast<std::size_t>(a)];
-      m_slot_at[static_cast<std::size_t>(m_index[static_cast<std::size_t>(a) * dim] / dim)] = a;
-    }
+  for (int a = 0; a < static_cast<int>(nf); ++a) {
+    const int at = m_index[static_cast<std::size_t>(a) * dim];
+    if (at % dim != 0 || at / dim >= static_cast<int>(m_node_at.size())) continue;
+    m_node_at[static_cast<std::size_t>(at / dim)] = model.free_nodes[static_cast<std::size_t>(a)];
+    m_slot_at[static_cast<std::size_t>(at / dim)] = a;
+  }
   m_rhs = Eigen::MatrixXd::Zero(m_h->size(), 1);
   m_z = Eigen::MatrixXd::Zero(m_h->size(), kMaxCoupled * dim);
   m_base.assign(m_h->values(), m_h->values() + m_h->value_count());
@@ -225,8 +224,8 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
     // From the springs' products that rotations() left in m_pq (p = d . D, q = D x d, so that
     // p^2 + q^2 = |d|^2 |D|^2) and the ends' (cos, sin) summed, c: with t = (R_i + R_j) D and
     // R_i + R_j = [cx -cy; cy cx], d . t = cx p + cy q, d x t = cy p - cx q and |t|^2 = |c|^2
-    // |D|^2, so u is not read again. The rare spring past 90 degrees (or of length 0, or not finite) sends
-    // the scan to the tracker's exact pass.
+    // |D|^2, so u is not read again. The rare spring past 90 degrees (or of length 0, or not
+    // finite) sends the scan to the tracker's exact pass.
     (void)u;
     bool rare = false;
     const auto& edge = m_model.net.edge;

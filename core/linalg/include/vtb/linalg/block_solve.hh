@@ -7,6 +7,9 @@
 /// scalar factor, L is kept by tile rows for the forward sweep and by tile columns for the
 /// backward sweep, so that both are gathers that accumulate a node's dim values in registers:
 /// one index per dim^2 values instead of one per value, and no scatter (docs/performance.md).
+/// Each node's unit lower tile is folded into its row's and column's tiles, so that a node's
+/// values do not wait on each other in the sweeps; in 2D a tile multiplies the node's values
+/// spread as (x, x, y, y), in 3D its columns multiply x's values (items 15 and 16 there).
 /// refresh() copies a refactorised factor's values in place; nothing allocates after the
 /// constructor.
 
@@ -48,8 +51,8 @@ private:
   std::vector<int> m_row_ptr, m_row_col; ///< tile rows: the tile columns left of the diagonal
   std::vector<int> m_row_tile;           ///< per tile in row order, its index in column order
   std::vector<int> m_source;             ///< per tile value (column order, then diagonal tiles): L's offset, or -1
-  std::vector<double> m_row_val;         ///< tiles L_IJ in row order, column-major
-  std::vector<double> m_col_val;         ///< tiles in column order, transposed: column-major L_IJ^T
+  std::vector<double> m_row_val;         ///< tiles in row order, L_II^-1 L_IJ column-major (one value of padding)
+  std::vector<double> m_col_val;         ///< tiles in column order, L_JJ^-T L_IJ^T column-major (one value of padding)
   std::vector<double> m_diag_val;        ///< diagonal tiles' strict lower part (column-major)
   mutable std::vector<double> m_spread;  ///< 2D: the solve's scratch, each node's (x, y) as (x, x, y, y)
   Eigen::VectorXd m_inv_diag;
