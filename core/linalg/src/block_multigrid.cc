@@ -1,7 +1,7 @@
 #include "vtb/linalg/block_multigrid.hh"
 
 #include "aggregation.hh"
-#include "lanes.hh"
+#include "vtb/linalg/lanes.hh"
 #include "vtb/linalg/vector_clones.hh"
 
 #include <Eigen/Dense>

@@ -1,7 +1,7 @@
 #include "vtb/linalg/block_solve.hh"
 #include "vtb/linalg/vector_clones.hh"
 
-#include "lanes.hh"
+#include "vtb/linalg/lanes.hh"
 
 #include <algorithm>
 #include <stdexcept>

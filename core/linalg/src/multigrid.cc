@@ -1,6 +1,6 @@
 #include "vtb/linalg/multigrid.hh"
 #include "aggregation.hh"
-#include "lanes.hh"
+#include "vtb/linalg/lanes.hh"
 #include "vtb/linalg/ordered_ldlt.hh"
 
 #include "vtb/linalg/vector_clones.hh"

@@ -1,5 +1,6 @@
 #include "mismatch_kernel.hh"
 
+#include "vtb/linalg/lanes.hh"
 #include "vtb/linalg/vector_clones.hh"
 #include "vtb/springs/spring_kernels.hh"
 
@@ -41,12 +42,12 @@ VTB_VECTOR_CLONES void unit_pairs(int n, double* ab) {
 
 namespace {
 
-typedef double Doubles __attribute__((vector_size(32), aligned(8), may_alias));
-typedef long Mask __attribute__((vector_size(32)));
+using Doubles = Lane<4>;
+using Mask = LaneMask<4>;
 
 /// Four springs' lanes from four consecutive values.
 [[gnu::always_inline]] inline Doubles lanes(const double* x) {
-  return *reinterpret_cast<const Doubles*>(x);
+  return load<4>(x);
 }
 
 /// Per lane the largest sin^2 so far as a fraction num / den (compared by cross products: no
@@ -72,19 +73,13 @@ struct LargestSin2 {
   b.odd |= ~ok & lane;
 }
 
-/// Two doubles, loaded as one vector.
-typedef double Pair __attribute__((vector_size(16), aligned(8), may_alias));
-[[gnu::always_inline]] inline Pair pair(const double* x) {
-  return *reinterpret_cast<const Pair*>(x);
-}
-
 /// Four springs' ends' (cos, sin) summed, as the lanes (cx...) and (cy...).
 [[gnu::always_inline]] inline void gather_ends(const std::array<int, 2>* e, const double* turn, Doubles& X,
                                                Doubles& Y) {
-  const Pair c0 = pair(turn + 2 * e[0][0]) + pair(turn + 2 * e[0][1]);
-  const Pair c1 = pair(turn + 2 * e[1][0]) + pair(turn + 2 * e[1][1]);
-  const Pair c2 = pair(turn + 2 * e[2][0]) + pair(turn + 2 * e[2][1]);
-  const Pair c3 = pair(turn + 2 * e[3][0]) + pair(turn + 2 * e[3][1]);
+  const Lane<2> c0 = load<2>(turn + 2 * e[0][0]) + load<2>(turn + 2 * e[0][1]);
+  const Lane<2> c1 = load<2>(turn + 2 * e[1][0]) + load<2>(turn + 2 * e[1][1]);
+  const Lane<2> c2 = load<2>(turn + 2 * e[2][0]) + load<2>(turn + 2 * e[2][1]);
+  const Lane<2> c3 = load<2>(turn + 2 * e[3][0]) + load<2>(turn + 2 * e[3][1]);
   X = Doubles{c0[0], c1[0], c2[0], c3[0]};
   Y = Doubles{c0[1], c1[1], c2[1], c3[1]};
 }

@@ -1,5 +1,6 @@
 #include "polar_kernel.hh"
 
+#include "vtb/linalg/lanes.hh"
 #include "vtb/linalg/vector_clones.hh"
 
 #include <cmath>
@@ -21,8 +22,8 @@ double approx_inverse_cbrt(double x) {
 
 namespace {
 
-typedef double V __attribute__((vector_size(32)));
-typedef long M __attribute__((vector_size(32)));
+using V = Lane<4>;
+using M = LaneMask<4>;
 
 /// c = a x b, each a column of three lanes.
 [[gnu::always_inline]] inline void cross(const V* a, const V* b, V* c) {
