@@ -3,10 +3,8 @@
 #include "overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
-#include "vtb/fem/kelvin_voigt.hh"
-#include "vtb/harness/bullet.hh"
+#include "vtb/harness/solvers.hh"
 #include "vtb/harness/ranks.hh"
-#include "vtb/solvers/simulation.hh"
 #include "vtb/springs/load_check.hh"
 
 #include <cmath>
@@ -45,10 +43,7 @@ Action add_run(CLI::App& app) {
     const Scene run = with_overrides(scene, ov);
     // Under mpirun the FEM spreads its mesh over the ranks; a spring solver runs on rank 0 alone.
     if (run.solver.kind != solvers::kFem && !harness::world().root()) return 0;
-    const RunReport r = run.solver.kind == solvers::kFem ? fem::run_scene(run, out, o->frames)
-                        : run.solver.kind == solvers::kBullet
-                            ? harness::run_bullet_scene(run, out, o->frames)
-                            : run_scene(run, out, o->frames, fit_progress_line(std::cerr, isatty(2) != 0));
+    const RunReport r = harness::run(run, out, o->frames, fit_progress_line(std::cerr, isatty(2) != 0)).report;
     std::string filter; // what a filtered run ran, and whether auto picked it
     if (!r.filter.empty())
       filter = " (" + r.filter +

@@ -13,8 +13,7 @@ Action add_sweep(CLI::App& app) {
   struct Opts {
     std::string scene, out;
     std::vector<double> dts, scales{1.0};
-    std::vector<std::string> solvers{solvers::kExplicit, solvers::kFilteredNeighbors, solvers::kFilteredFull,
-                                     solvers::kImplicitEuler};
+    std::vector<std::string> solvers = harness::default_sweep_solvers();
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand("sweep", "Stability map over time step and stiffness scale (stability.csv)");

@@ -8,24 +8,6 @@
 
 namespace vtb::cli {
 
-Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
-  Scene scene = scene_in;
-  // Any registry name: a kind, or a kind with its filter (filtered-tensor).
-  if (ov.solver) solvers::select(*ov.solver, "--solver", scene.solver.kind, scene.solver.filter);
-  if (ov.dt) {
-    if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
-    scene.solver.dt = *ov.dt;
-  }
-  if (ov.duration) {
-    if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");
-    scene.duration = *ov.duration;
-    scene.output_interval = std::min(scene.output_interval, scene.duration);
-  }
-  if (scene.solver.dt > scene.duration)
-    throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
-  return scene;
-}
-
 HapticsOptions::Fault parse_fault(const std::string& spec, double& time) {
   const auto at = spec.find('@');
   const std::string kind = spec.substr(0, at);

@@ -1,8 +1,9 @@
 #pragma once
 /// \file
-/// The CLI's own parsing that turns options into what the libraries take: `vtb run`'s
-/// overrides of a scene, and `vtb haptics --fault`.
+/// The CLI's own parsing that turns options into what the libraries take: `vtb haptics
+/// --fault` (`vtb run`'s overrides are the harness's, vtb/harness/solvers.hh).
 
+#include "vtb/harness/solvers.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/problem/scene.hh"
 
@@ -11,16 +12,8 @@
 
 namespace vtb::cli {
 
-/// Options of `vtb run` that override the scene.
-struct RunOverrides {
-  std::optional<std::string> solver;
-  std::optional<double> dt;
-  std::optional<double> duration;
-};
-
-/// The scene with `vtb run`'s overrides applied; InputError for a non-positive or
-/// non-finite --dt/--duration, or a step longer than the run.
-Scene with_overrides(const Scene& scene, const RunOverrides& overrides);
+using harness::RunOverrides;
+using harness::with_overrides;
 
 /// Parses "stall@T" or "nan@T" (T >= 0 in seconds) into the fault and its time; InputError
 /// naming --fault otherwise.

@@ -49,12 +49,17 @@ template <int dim> void LiveSim<dim>::rebuild() {
   m_integ = std::move(integ);
   m_model = std::move(model);
   if (!same_size || !m_failure.empty()) {
-    m_state = initial_state(*m_model);
+    restart();
     m_failure.clear();
   }
-  m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
-  m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
-  m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
+  if (!same_size) {
+    m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
+    m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
+    m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
+    m_external_force = Nodal<dim>::Zero(dim, m_model->num_nodes());
+    m_external_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
+    m_external_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
+  }
   const double tau = m_model->net.stiffness.size() ? m_model->net.damping[0] / m_model->net.stiffness[0] : 0.0;
   m_courant_dt = explicit_critical_dt(max_omega_squared(*m_model, false), tau, m_model->net.mass_damping);
   m_probe_node = m_model->probes.empty() ? -1 : m_model->probes.front().second;
@@ -72,11 +77,18 @@ template <int dim> void LiveSim<dim>::configure(const SimControls& controls) {
   }
 }
 
+template <int dim> void LiveSim<dim>::restart() {
+  const State<dim> s0 = initial_state(*m_model);
+  m_state.t = s0.t;
+  m_state.u = s0.u; // same size: Eigen copies into the storage it has
+  m_state.v = s0.v;
+}
+
 template <int dim> void LiveSim<dim>::reset() {
-  m_state = initial_state(*m_model);
-  m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
-  m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
-  m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
+  restart();
+  m_state.applied.setZero();
+  m_state.applied_stiffness.setZero();
+  m_state.applied_damping.setZero();
   m_failure.clear();
   m_stats = SimStats{};
   m_trace_count = m_trace_head = 0;
@@ -90,9 +102,9 @@ template <int dim> Vec<dim> LiveSim<dim>::pull_force(int k) const {
 
 template <int dim> void LiveSim<dim>::step_once() {
   using clock = std::chrono::steady_clock;
-  m_state.applied.setZero();
-  m_state.applied_stiffness.setZero(); // each pull's spring, for the solvers that take it implicitly
-  m_state.applied_damping.setZero();
+  m_state.applied = m_external_force;
+  m_state.applied_stiffness = m_external_stiffness; // and each pull's spring, for the solvers that take it implicitly
+  m_state.applied_damping = m_external_damping;
   for (int k = 0; k < m_num_pulls; ++k) {
     const int node = m_pulls[static_cast<std::size_t>(k)].node;
     m_state.applied.col(node) += pull_force(k);
@@ -105,7 +117,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   m_step_us[static_cast<std::size_t>(m_step_count % static_cast<int>(m_step_us.size()))] = us;
   ++m_step_count;
   ++m_stats.steps;
-  check();
+  check(false);
   if (m_probe_node >= 0) {
     m_trace[static_cast<std::size_t>(m_trace_head)] = static_cast<float>(m_state.u.col(m_probe_node).norm());
     m_trace_head = (m_trace_head + 1) % kTrace;
@@ -113,8 +125,9 @@ template <int dim> void LiveSim<dim>::step_once() {
   }
 }
 
-template <int dim> void LiveSim<dim>::check() {
+template <int dim> void LiveSim<dim>::check(bool strain_now) {
   const bool finite = m_state.u.allFinite() && m_state.v.allFinite();
+  if (finite && !strain_now && m_step_count % kStrainCheckSteps != 0) return;
   const double strain = finite ? max_strain(m_model->net, m_state.u) : INFINITY;
   if (!finite || !(strain <= kRunawayStrain)) {
     std::ostringstream os;
@@ -130,18 +143,33 @@ template <int dim> void LiveSim<dim>::advance(double sim_seconds, double wall_bu
   using clock = std::chrono::steady_clock;
   if (!m_failure.empty()) return;
   const auto start = clock::now();
-  const int steps = static_cast<int>(std::floor(sim_seconds / m_controls.dt + 1e-9));
-  int done = 0;
+  const long count = static_cast<long>(std::floor(sim_seconds / m_controls.dt + 1e-9));
+  long done = 0;
   m_stats.behind = false;
-  for (; done < steps && m_failure.empty(); ++done) {
+  for (; done < count && m_failure.empty(); ++done) {
     if (std::chrono::duration<double>(clock::now() - start).count() > wall_budget) {
       m_stats.behind = true;
       break;
     }
     step_once();
   }
+  if (done > 0 && m_failure.empty()) check(true);
   const double wall = std::chrono::duration<double>(clock::now() - start).count();
-  m_stats.realtime_factor = wall > 0 ? done * m_controls.dt / wall : 0.0;
+  m_stats.realtime_factor = wall > 0 ? static_cast<double>(done) * m_controls.dt / wall : 0.0;
+  refresh_stats();
+}
+
+template <int dim> long LiveSim<dim>::steps(long n) {
+  using clock = std::chrono::steady_clock;
+  const auto start = clock::now();
+  long done = 0;
+  for (; done < n && m_failure.empty(); ++done) step_once();
+  const double wall = std::chrono::duration<double>(clock::now() - start).count();
+  m_stats.realtime_factor = wall > 0 ? static_cast<double>(done) * m_controls.dt / wall : 0.0;
+  return done;
+}
+
+template <int dim> void LiveSim<dim>::refresh_stats() {
   const int n = std::min(m_step_count, static_cast<int>(m_step_us.size()));
   if (n > 0) {
     std::array<double, 256> tmp = m_step_us;

@@ -1,9 +1,12 @@
 #pragma once
 /// \file
-/// The physics behind `vtb view`: one spring solver advancing a scene at its fixed dt,
+/// The physics behind `vtb view` and the Python module's `vtb.Simulation` (its own target,
+/// `vtb::live_sim`, free of any window): one spring solver advancing a scene at its fixed dt,
 /// decoupled from the frame rate (substeps within a wall-time budget), with forces applied
-/// by hand (pulls through a virtual coupling), live solver switching, and a watch that catches
-/// a diverging solver instead of dying with it. Allocation-free per step.
+/// by hand (pulls through a virtual coupling) or set from outside between steps, live solver
+/// switching, and a watch that catches a diverging solver instead of dying with it.
+/// Allocation-free per step; the state's u and v keep their storage for the simulation's life
+/// (reset and reconfiguring copy into it), so views of them stay valid.
 
 #include "vtb/problem/scene.hh"
 #include "vtb/problem/solver_registry.hh"
@@ -84,6 +87,14 @@ public:
   void advance(double sim_seconds, double wall_budget);
   /// Exactly one step (when paused); nothing once unstable.
   void single_step();
+  /// `n` steps, whatever their wall time (stopping at a failure: a non-finite state at once, a
+  /// runaway strain within kStrainCheckSteps steps); only the step count and the
+  /// real-time factor of stats() follow (refresh_stats() updates the rest, which costs a pass
+  /// over the springs). Returns the steps taken.
+  long steps(long n);
+  /// Brings stats() up to date: the step median, energy, max strain, fallback steps (advance()
+  /// does it at the end of every call).
+  void refresh_stats();
   void reset();
 
   /// Pulls: add one at the node (returns its index, or -1 when all slots are used).
@@ -96,6 +107,14 @@ public:
   /// The force the pull exerts on the body now, N.
   Vec<dim> pull_force(int k) const;
   double coupling_stiffness = 0; ///< N/m, set from the network's stiffness at construction
+  /// Forces set from outside between steps (a script's controller, a user's device loop), per
+  /// node, added to the pulls' at every step until changed; with, per node, the stiffness
+  /// (N/m) and damping (N s/m) of the coupling that makes them (0 for a plain force), which the
+  /// implicit solvers take implicitly as they do a pull's. Sized to the mesh; kept across
+  /// configure and reset.
+  Nodal<dim>& external_force() { return m_external_force; }
+  Eigen::VectorXd& external_stiffness() { return m_external_stiffness; }
+  Eigen::VectorXd& external_damping() { return m_external_damping; }
   /// The hook called before each step (not owned; nullptr for none).
   void set_hook(StepHook<dim>* hook) { m_hook = hook; }
 
@@ -116,7 +135,11 @@ public:
 private:
   void rebuild();
   void step_once();
-  void check(); ///< non-finite or runaway state -> failure
+  /// After each step: a non-finite state is a failure at once; a runaway strain (a pass over
+  /// the springs) is looked for every kStrainCheckSteps steps and when a call ends.
+  void check(bool strain_now);
+  static constexpr int kStrainCheckSteps = 16;
+  void restart(); ///< the model's initial state, copied into the state's storage
 
   Scene m_scene;
   Mesh<dim> m_mesh;
@@ -124,6 +147,8 @@ private:
   std::unique_ptr<Model<dim>> m_model;
   std::unique_ptr<Integrator<dim>> m_integ;
   State<dim> m_state;
+  Nodal<dim> m_external_force;
+  Eigen::VectorXd m_external_stiffness, m_external_damping;
   std::array<Pull<dim>, kMaxPulls> m_pulls{};
   int m_num_pulls = 0;
   SimStats m_stats;

@@ -3,8 +3,9 @@
 
 namespace vtb::fem {
 
-RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames, RunTables* tables) {
   FemOptions o = options_from(scene.solver);
+  frames = frames && !out_dir.empty();
   if (frames) o.frames_dir = out_dir / "frames";
   return with_problem(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
@@ -12,11 +13,11 @@ RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bo
     if (mpi_size() > 1) {
       if (frames) throw InputError("--frames is not available under MPI yet");
       const RunReport rep = simulate_distributed<dim>(model, scene.material, o, traj);
-      if (mpi_rank() == 0) write_run_outputs(out_dir, model, traj, rep, scene.name);
+      if (mpi_rank() == 0) finish_run(out_dir, model, traj, rep, scene.name, tables);
       return rep;
     }
     const RunReport rep = simulate<dim>(model, scene.material, o, traj);
-    write_run_outputs(out_dir, model, traj, rep, scene.name);
+    finish_run(out_dir, model, traj, rep, scene.name, tables);
     if (frames) write_pvd(out_dir, traj.t);
     return rep;
   });

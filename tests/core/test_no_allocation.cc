@@ -8,6 +8,9 @@
 #include "vtb/meshes/generate.hh"
 
 #include <gtest/gtest.h>
+#ifdef VTB_HAVE_LIVE_SIM
+#include "live_sim.hh"
+#endif
 
 #include <algorithm>
 #include <cstdlib>
@@ -209,3 +212,38 @@ TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
 
 } // namespace
 } // namespace vtb
+
+#ifdef VTB_HAVE_LIVE_SIM
+namespace vtb {
+namespace {
+
+/// The Python module's step (vtb.Simulation.step: LiveSim::steps) with forces set from outside
+/// between steps, with their couplings' stiffness and damping, and a pull: nothing allocated,
+/// for each stepper the module offers.
+TEST(NoAllocation, InteractiveStepsWithExternalForcesAllocateNothing) {
+  for (const char* solver : {"filtered", "implicit-euler", "explicit"}) {
+    const Scene scene = parse_scene(test::pulled_plate(12, 3, "[solver]\nsprings = \"lloyd\"\n"), "test.toml", ".");
+    viewer::SimControls c;
+    c.solver = solver;
+    c.springs = "lloyd";
+    c.dt = std::string(solver) == "explicit" ? 1e-6 : 1e-3;
+    viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), c);
+    sim.add_pull(5, Vec<2>(0.1, 0.0));
+    sim.steps(2); // warm up
+    g_allocations = 0;
+    g_counting = true;
+    for (int k = 0; k < 20; ++k) {
+      sim.external_force().col(30) = Vec<2>(0.0, -0.01 * k); // what a Python controller writes
+      sim.external_stiffness()[30] = 50.0;
+      sim.external_damping()[30] = 0.5;
+      sim.steps(1);
+    }
+    g_counting = false;
+    EXPECT_EQ(g_allocations, 0) << solver;
+    EXPECT_TRUE(sim.failure().empty()) << solver << ": " << sim.failure();
+  }
+}
+
+} // namespace
+} // namespace vtb
+#endif // VTB_HAVE_LIVE_SIM

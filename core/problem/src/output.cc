@@ -118,6 +118,43 @@ void write_run_outputs(const std::filesystem::path& dir, const Problem<dim>& mod
                                {"summary.json", with_probes(summary_json(report, scene_name), model)}});
 }
 
+template <int dim>
+RunTables run_tables(const Problem<dim>& model, const Trajectory<dim>& traj, const RunReport& report,
+                     const std::string& scene_name) {
+  RunTables out;
+  out.dim = dim;
+  out.report = report;
+  const auto padded = [](const Vec<dim>& x) { return std::array<double, 3>{x[0], x[1], dim == 3 ? x[dim - 1] : 0.0}; };
+  for (std::size_t k = 0; k < traj.t.size(); ++k) {
+    for (std::size_t p = 0; p < model.probes.size(); ++p) {
+      out.probe_t.push_back(traj.t[k]);
+      out.probe_name.push_back(model.probes[p].first);
+      out.probe_u.push_back(padded(traj.probe_u[k][p]));
+    }
+    for (std::size_t q = 0; q < model.supports.size(); ++q) {
+      out.reaction_t.push_back(traj.t[k]);
+      out.region.push_back(model.supports[q].name);
+      out.reaction_f.push_back(padded(traj.reaction[k][q]));
+    }
+  }
+  out.summary_json = with_probes(summary_json(report, scene_name), model);
+  return out;
+}
+
+template <int dim>
+void finish_run(const std::filesystem::path& dir, const Problem<dim>& model, const Trajectory<dim>& traj,
+                const RunReport& report, const std::string& scene_name, RunTables* tables) {
+  if (!dir.empty()) write_run_outputs(dir, model, traj, report, scene_name);
+  if (tables) *tables = run_tables(model, traj, report, scene_name);
+}
+
+template void finish_run<2>(const std::filesystem::path&, const Problem<2>&, const Trajectory<2>&, const RunReport&,
+                            const std::string&, RunTables*);
+template void finish_run<3>(const std::filesystem::path&, const Problem<3>&, const Trajectory<3>&, const RunReport&,
+                            const std::string&, RunTables*);
+template RunTables run_tables<2>(const Problem<2>&, const Trajectory<2>&, const RunReport&, const std::string&);
+template RunTables run_tables<3>(const Problem<3>&, const Trajectory<3>&, const RunReport&, const std::string&);
+
 template void write_run_outputs<2>(const std::filesystem::path&, const Problem<2>&, const Trajectory<2>&,
                                    const RunReport&, const std::string&);
 template void write_run_outputs<3>(const std::filesystem::path&, const Problem<3>&, const Trajectory<3>&,

@@ -62,6 +62,10 @@ ImplicitEuler<dim>::ImplicitEuler(const Model<dim>& model, double dt)
     m_diag_slot[static_cast<std::size_t>(d)] = m_solver.offset(m_solver.ordered(d), m_solver.ordered(d));
   m_force.resize(dim, model.num_nodes());
   m_rhs.resize(n, 1);
+  // One factorisation of the pattern's values sizes the factor's own workspace (Eigen sizes its
+  // diagonal at the first factorize), so that no step allocates, the first included: the tensor
+  // filter's safety net may take its first step at any time (its outcome does not matter here).
+  m_solver.factorize();
 }
 
 template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {

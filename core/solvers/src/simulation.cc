@@ -169,16 +169,16 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
 }
 
 RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames,
-                    const FitProgress& progress) {
+                    const FitProgress& progress, RunTables* tables) {
   const IntegratorOptions o = integrator_options(scene.solver);
   return with_model(
       scene,
       [&](const auto& model) {
         constexpr int dim = std::decay_t<decltype(model)>::dimension;
         Trajectory<dim> traj;
-        RunReport rep = simulate(model, o, traj, frames);
-        write_run_outputs(out_dir, model, traj, rep, scene.name);
-        if (frames) write_frames(model, traj, out_dir);
+        RunReport rep = simulate(model, o, traj, frames && !out_dir.empty());
+        finish_run(out_dir, model, traj, rep, scene.name, tables);
+        if (frames && !out_dir.empty()) write_frames(model, traj, out_dir);
         return rep;
       },
       progress);

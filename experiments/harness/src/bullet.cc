@@ -58,13 +58,13 @@ template <int dim> RunReport run_bullet(const Scene& scene, const Model<dim>& mo
   return rep;
 }
 
-RunReport run_bullet_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames) {
+RunReport run_bullet_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames, RunTables* tables) {
   return with_model(scene, [&](const auto& model) {
     constexpr int dim = std::decay_t<decltype(model)>::dimension;
     Trajectory<dim> traj;
     const RunReport rep = run_bullet(scene, model, scene.solver.dt, traj);
-    write_run_outputs(out_dir, model, traj, rep, scene.name);
-    if (frames) write_frames(model, traj, out_dir);
+    finish_run(out_dir, model, traj, rep, scene.name, tables);
+    if (frames && !out_dir.empty()) write_frames(model, traj, out_dir);
     return rep;
   });
 }

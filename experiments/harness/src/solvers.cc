@@ -3,6 +3,7 @@
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/fem/kelvin_voigt.hh"
+#include "vtb/meshes/input_error.hh"
 #include "vtb/solvers/explicit_euler.hh"
 
 #include <algorithm>
@@ -33,6 +34,34 @@ RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::str
   RunReport r = simulate(model, o, out, true);
   if (solver != o.kind) r.solver = solver;
   return r;
+}
+
+Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
+  Scene scene = scene_in;
+  if (ov.solver) solvers::select(*ov.solver, "--solver", scene.solver.kind, scene.solver.filter);
+  if (ov.dt) {
+    if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
+    scene.solver.dt = *ov.dt;
+  }
+  if (ov.duration) {
+    if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");
+    scene.duration = *ov.duration;
+    scene.output_interval = std::min(scene.output_interval, scene.duration);
+  }
+  if (scene.solver.dt > scene.duration)
+    throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
+  return scene;
+}
+
+RunTables run(const Scene& scene, const std::filesystem::path& out_dir, bool frames, const FitProgress& progress) {
+  RunTables tables;
+  if (scene.solver.kind == solvers::kFem)
+    fem::run_scene(scene, out_dir, frames, &tables);
+  else if (scene.solver.kind == solvers::kBullet)
+    run_bullet_scene(scene, out_dir, frames, &tables);
+  else
+    run_scene(scene, out_dir, frames, progress, &tables);
+  return tables;
 }
 
 template RunReport run_solver<2>(const Scene&, const Model<2>&, const std::string&, double, Trajectory<2>&);

@@ -136,6 +136,10 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
   });
 }
 
+std::vector<std::string> default_sweep_solvers() {
+  return {solvers::kExplicit, solvers::kFilteredNeighbors, solvers::kFilteredFull, solvers::kImplicitEuler};
+}
+
 void write_sweep(const std::vector<SweepCell>& cells, const std::filesystem::path& file) {
   write_file_atomically(file, [&](std::ostream& f) {
     f << std::setprecision(6);

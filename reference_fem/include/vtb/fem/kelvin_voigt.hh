@@ -5,6 +5,7 @@
 /// spring model uses. The public interface carries no deal.II type.
 
 #include "vtb/problem/problem.hh"
+#include "vtb/problem/output.hh"
 #include "vtb/problem/run_report.hh"
 
 #include <filesystem>
@@ -66,6 +67,8 @@ int mpi_rank(); ///< 0 without MPI
 
 /// `vtb run SCENE --solver fem`: same files as the spring solvers (distributed when run under
 /// mpirun with more than one rank; rank 0 writes).
-RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false);
+/// An empty `out_dir` writes nothing; `tables`, when set, receives what the files hold.
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false,
+                    RunTables* tables = nullptr);
 
 } // namespace vtb::fem

@@ -2,6 +2,7 @@
 /// \file
 /// Running a scene with a spring solver: the time loop, sampling, stability watch, timing.
 
+#include "vtb/problem/output.hh"
 #include "vtb/problem/run_report.hh"
 #include "vtb/solvers/integrator.hh"
 #include "vtb/springs/model.hh"
@@ -63,8 +64,9 @@ IntegratorOptions integrator_options(const Entry& entry, const SolverDesc& solve
 /// Everything `vtb run` does with a spring solver: load mesh, build model, simulate, write
 /// probes.csv, reactions.csv and summary.json into `out_dir` (all or nothing), and with
 /// `frames` frames.pvd + frames/frame_NNNN.vtu, one per sample; `progress` is told how a
-/// spring fit advances. Returns the report.
+/// spring fit advances. An empty `out_dir` writes nothing; `tables`, when set, receives what
+/// the files hold (finish_run). Returns the report.
 RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false,
-                    const FitProgress& progress = {});
+                    const FitProgress& progress = {}, RunTables* tables = nullptr);
 
 } // namespace vtb

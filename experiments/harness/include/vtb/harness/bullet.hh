@@ -3,6 +3,7 @@
 /// The harness's `bullet` solver: Bullet's deformable mass-spring world (experiments/peers)
 /// with its one stiffness fitted to the FEM's static answer (docs/peers.md).
 
+#include "vtb/problem/output.hh"
 #include "vtb/problem/run_report.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/springs/model.hh"
@@ -24,6 +25,7 @@ template <int dim> RunReport run_bullet(const Scene& scene, const Model<dim>& mo
 
 /// What `vtb run --solver bullet` does: run_bullet on the scene's model at its dt, and the
 /// outputs of every `vtb run` (probes.csv, reactions.csv, summary.json, frames if asked).
-RunReport run_bullet_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames);
+RunReport run_bullet_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames,
+                           RunTables* tables = nullptr);
 
 } // namespace vtb::harness

@@ -1,9 +1,17 @@
 #pragma once
 /// \file
 /// Every solver of the testbed behind one call, for the harness: the spring integrators,
-/// CVODE and the deal.II reference, each recording the full nodal field at sample times.
+/// CVODE and the deal.II reference, each recording the full nodal field at sample times; and
+/// `vtb run` as a call (the CLI and the Python module both go through `run`, so their numbers
+/// are one run's).
 
+#include "vtb/problem/output.hh"
+#include "vtb/problem/scene.hh"
 #include "vtb/solvers/simulation.hh"
+
+#include <filesystem>
+#include <optional>
+#include <string>
 
 namespace vtb::harness {
 
@@ -12,5 +20,22 @@ namespace vtb::harness {
 template <int dim>
 RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::string& solver, double dt,
                      Trajectory<dim>& out);
+
+/// Options of `vtb run` that override the scene.
+struct RunOverrides {
+  std::optional<std::string> solver; ///< any registry name: a kind, or a kind with its filter
+  std::optional<double> dt;
+  std::optional<double> duration;
+};
+
+/// The scene with the overrides applied; InputError for an unknown solver, a non-positive or
+/// non-finite --dt/--duration, or a step longer than the run.
+Scene with_overrides(const Scene& scene, const RunOverrides& overrides);
+
+/// Runs the scene with the solver of its [solver].kind. With `out_dir` set, writes probes.csv,
+/// reactions.csv and summary.json there (all or nothing; `frames`: the VTU frames too); an
+/// empty `out_dir` writes nothing. Returns the tables those files hold.
+RunTables run(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false,
+              const FitProgress& progress = {});
 
 } // namespace vtb::harness

@@ -31,6 +31,9 @@ std::vector<SweepCell> run_sweep(const Scene& scene, const std::vector<double>& 
                                  const std::vector<std::string>& solvers, std::ostream* progress = nullptr,
                                  bool across_ranks = true);
 
+/// The solvers a sweep maps when none are named: the explicit scheme, the paper's neighbour
+/// filter, the full filter and implicit Euler (where each one's stability ends).
+std::vector<std::string> default_sweep_solvers();
 void write_sweep(const std::vector<SweepCell>& cells, const std::filesystem::path& file);
 
 } // namespace vtb::harness
