@@ -742,6 +742,12 @@ TEST(Integrators, TensorFilterHandsTheStepToImplicitEulerPastItsTrustedDistortio
       std::find_if(r.extra.begin(), r.extra.end(), [](const auto& e) { return e.first == "tensor_fallback_steps"; });
   ASSERT_NE(it, r.extra.end());
   EXPECT_EQ(it->second, static_cast<double>(tensor.fallback_steps()));
+  EXPECT_EQ(r.fallback_steps, tensor.fallback_steps());
+  // summary.json says which took most steps: the filter, or implicit Euler past half of them.
+  EXPECT_EQ(r.filter_most_steps, 2 * r.fallback_steps > r.steps_taken ? "implicit-euler" : "tensor");
+  const std::string summary = summary_json(r, "four-forces");
+  EXPECT_NE(summary.find("\"filter_most_steps\": \"" + r.filter_most_steps + "\""), std::string::npos) << summary;
+  EXPECT_NE(summary.find("\"fallback_share\""), std::string::npos);
   // The run is implicit Euler's from where the distortion passed the trust. The two states
   // there differ by the tensor filter's first-order error over its early steps, a few percent
   // of the field at most; the remaining retardation times (tau = 2 s) leave exp(-4) = 1.8 % of

@@ -85,3 +85,36 @@ def test_sweep_columns_are_stability_csv(tmp_path, plate_scene, cli):
             assert row[col] == f"{res['rows'][col][k]:.6g}", col
     # the explicit scheme at 1000x its limit is the map's unstable cell
     assert not res["rows"]["stable"][res["rows"]["solver"].index("explicit")]
+
+
+def test_study_columns_are_study_csv(tmp_path, plate_scene, cli):
+    """A quick study against CVODE (deterministic errors; timing columns are not compared);
+    study.csv prints 8 significant digits."""
+    solvers = ["filtered-full", "implicit-euler", "cvode"]
+    res = vtb.study(plate_scene, solvers=solvers, reference="cvode", quick=True)
+    p = run_cli(cli, "study", plate_scene, "--solvers", ",".join(solvers), "--reference", "cvode", "--quick",
+                "--out", tmp_path)
+    assert p.returncode == 0, p.stderr
+    table = rows(tmp_path / "study.csv")
+    assert [r["solver"] for r in table] == res["rows"]["solver"]
+    for k, row in enumerate(table):
+        for col in ("error_all", "error_probes"):
+            assert row[col] == f"{res['rows'][col][k]:.8g}", col
+        assert row["dt"] == f"{res['rows']['dt'][k]:.8g}"
+    assert res["rows"]["pareto"].any()  # the front has at least one run
+
+
+def test_readme_python_example_runs(source_dir, tmp_path):
+    """The README's Python example, as a user pastes it, run from the source folder."""
+    import re
+    import subprocess
+    import sys
+
+    text = (source_dir / "README.md").read_text()
+    block = re.search(r"```python\n(.*?)```", text, re.S)
+    assert block, "README has a Python example"
+    code = block.group(1)
+    assert len(code.strip().splitlines()) <= 6
+    p = subprocess.run([sys.executable, "-c", code], cwd=source_dir, capture_output=True, text=True, timeout=600)
+    assert p.returncode == 0, p.stderr
+    assert p.stdout.strip()

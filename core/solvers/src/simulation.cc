@@ -148,8 +148,12 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
   }
   rep.step_seconds = step_stats(std::move(step_time));
   // The tensor filters' steps taken by implicit Euler (their warped Jacobian past trust).
-  if (const auto* f = dynamic_cast<const FilteredImplicit<dim>*>(integrator.get()); f && f->has_fallback())
+  if (const auto* f = dynamic_cast<const FilteredImplicit<dim>*>(integrator.get()); f && f->has_fallback()) {
     rep.extra.emplace_back("tensor_fallback_steps", static_cast<double>(f->fallback_steps()));
+    rep.fallback_steps = f->fallback_steps();
+  }
+  if (!rep.filter.empty())
+    rep.filter_most_steps = 2 * rep.fallback_steps > rep.steps_taken ? std::string(solvers::kImplicitEuler) : rep.filter;
   rep.total_seconds = std::chrono::duration<double>(clock::now() - loop_start).count();
   return rep;
 }

@@ -120,13 +120,13 @@ py::dict study_dict(const harness::StudyResult& r) {
   c.number<Row>("rtol", r.rows, [](const Row& x) { return x.rtol; });
   c.number<Row>("stable", r.rows, [](const Row& x) { return x.stable ? 1.0 : 0.0; });
   c.number<Row>("skipped", r.rows, [](const Row& x) { return x.skipped ? 1.0 : 0.0; });
-  c.text<Row>("failure", r.rows, [](const Row& x) { return x.failure; });
   c.number<Row>("error_all", r.rows, [](const Row& x) { return x.error_all; });
   c.number<Row>("error_probes", r.rows, [](const Row& x) { return x.error_probes; });
-  c.number<Row>("step_median", r.rows, [](const Row& x) { return x.step_median; });
+  c.number<Row>("step_median_seconds", r.rows, [](const Row& x) { return x.step_median; });
   c.number<Row>("total_seconds", r.rows, [](const Row& x) { return x.total_seconds; });
-  c.number<Row>("cost", r.rows, [](const Row& x) { return x.cost; });
+  c.number<Row>("seconds_per_simulated_second", r.rows, [](const Row& x) { return x.cost; });
   c.number<Row>("pareto", r.rows, [](const Row& x) { return x.pareto ? 1.0 : 0.0; });
+  c.text<Row>("note", r.rows, [](const Row& x) { return x.failure; });
   py::dict out;
   out["scene"] = r.scene;
   out["reference"] = r.reference;
@@ -190,7 +190,7 @@ void bind_harness(py::module_& m) {
         }
         return compare_dict(r);
       },
-      py::arg("scene"), py::arg("solvers"), py::arg("reference") = "fem", py::arg("dt") = 0.0,
+      py::arg("scene"), py::arg("solvers"), py::arg("reference") = solvers::kFem, py::arg("dt") = 0.0,
       py::arg("out") = std::filesystem::path());
   m.def(
       "_study",
@@ -210,7 +210,7 @@ void bind_harness(py::module_& m) {
         }
         return study_dict(r);
       },
-      py::arg("scene"), py::arg("solvers") = std::vector<std::string>{}, py::arg("reference") = "fem",
+      py::arg("scene"), py::arg("solvers") = std::vector<std::string>{}, py::arg("reference") = solvers::kFem,
       py::arg("quick") = false, py::arg("out") = std::filesystem::path(), py::arg("verbose") = false);
   m.def(
       "_sweep",

@@ -49,19 +49,23 @@ private:
   std::variant<std::unique_ptr<LiveSim<2>>, std::unique_ptr<LiveSim<3>>> m_sim;
 };
 
-/// A (rows, cols) float64 view of column-major storage whose columns are the rows (Eigen's
-/// dim x n nodal matrices read as n x dim), kept alive by `owner`.
-py::array nodal_view(double* data, py::ssize_t n, py::ssize_t dim, const py::handle& owner, bool writeable) {
-  py::array a(py::dtype::of<double>(), {n, dim}, {dim * py::ssize_t(sizeof(double)), py::ssize_t(sizeof(double))}, data,
-              owner);
-  if (!writeable) a.attr("setflags")(py::arg("write") = false);
-  return a;
+/// A float64 view of an Eigen array of the simulation, kept alive by `owner`: a nodal matrix
+/// (dim x n, column-major) read as (n, dim), a vector as (n,).
+template <class Array> py::array array_view(const Array& a, const py::handle& owner, bool writeable) {
+  constexpr auto d = py::ssize_t(sizeof(double));
+  auto* data = const_cast<double*>(a.data()); // read-only views say so to numpy below
+  py::array v = Array::ColsAtCompileTime == 1 ? py::array(py::dtype::of<double>(), {py::ssize_t(a.size())}, {d}, data, owner)
+                                              : py::array(py::dtype::of<double>(), {py::ssize_t(a.cols()), py::ssize_t(a.rows())},
+                                                          {py::ssize_t(a.rows()) * d, d}, data, owner);
+  if (!writeable) v.attr("setflags")(py::arg("write") = false);
+  return v;
 }
 
-py::array vector_view(double* data, py::ssize_t n, const py::handle& owner, bool writeable) {
-  py::array a(py::dtype::of<double>(), {n}, {py::ssize_t(sizeof(double))}, data, owner);
-  if (!writeable) a.attr("setflags")(py::arg("write") = false);
-  return a;
+/// A property that views the array `pick` chooses of the simulation's LiveSim (no copy).
+template <class Pick> auto nodal_property(Pick pick, bool writeable) {
+  return [pick, writeable](const py::object& self) {
+    return self.cast<Simulation&>().visit([&](auto& s) { return array_view(pick(s), self, writeable); });
+  };
 }
 
 template <int dim> Vec<dim> to_vec(const std::vector<double>& x, const char* what) {
@@ -195,50 +199,18 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
                              "The spring constants used (lloyd, van-gelder, fitted)")
       .def_property_readonly("stable", [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure().empty(); }); })
       .def_property_readonly("failure", [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure(); }); })
-      .def_property_readonly(
-          "displacements",
-          [](py::object self) {
-            auto& sim = self.cast<Simulation&>();
-            return sim.visit([&](auto& s) {
-              auto& u = const_cast<std::decay_t<decltype(s.state().u)>&>(s.state().u);
-              return nodal_view(u.data(), u.cols(), u.rows(), self, false);
-            });
-          },
-          "u, (nodes, dim) m: a read-only view of the state (no copy)")
-      .def_property_readonly(
-          "velocities",
-          [](py::object self) {
-            auto& sim = self.cast<Simulation&>();
-            return sim.visit([&](auto& s) {
-              auto& v = const_cast<std::decay_t<decltype(s.state().v)>&>(s.state().v);
-              return nodal_view(v.data(), v.cols(), v.rows(), self, false);
-            });
-          },
-          "v, (nodes, dim) m/s: a read-only view of the state (no copy)")
-      .def_property_readonly(
-          "external_forces",
-          [](py::object self) {
-            auto& sim = self.cast<Simulation&>();
-            return sim.visit([&](auto& s) {
-              auto& f = s.external_force();
-              return nodal_view(f.data(), f.cols(), f.rows(), self, true);
-            });
-          },
-          "(nodes, dim) N: a writable view of the forces applied from outside at every step (no copy)")
-      .def_property_readonly(
-          "external_stiffness",
-          [](py::object self) {
-            auto& sim = self.cast<Simulation&>();
-            return sim.visit([&](auto& s) { return vector_view(s.external_stiffness().data(), s.external_stiffness().size(), self, true); });
-          },
-          "(nodes,) N/m: a writable view of the couplings' stiffness that makes the external forces")
-      .def_property_readonly(
-          "external_damping",
-          [](py::object self) {
-            auto& sim = self.cast<Simulation&>();
-            return sim.visit([&](auto& s) { return vector_view(s.external_damping().data(), s.external_damping().size(), self, true); });
-          },
-          "(nodes,) N s/m: a writable view of the couplings' damping")
+      .def_property_readonly("displacements", nodal_property([](auto& s) -> auto& { return s.state().u; }, false),
+                             "u, (nodes, dim) m: a read-only view of the state (no copy)")
+      .def_property_readonly("velocities", nodal_property([](auto& s) -> auto& { return s.state().v; }, false),
+                             "v, (nodes, dim) m/s: a read-only view of the state (no copy)")
+      .def_property_readonly("external_forces", nodal_property([](auto& s) -> auto& { return s.external_force(); }, true),
+                             "(nodes, dim) N: a writable view of the forces applied from outside at every step (no copy)")
+      .def_property_readonly("external_stiffness",
+                             nodal_property([](auto& s) -> auto& { return s.external_stiffness(); }, true),
+                             "(nodes,) N/m: a writable view of the couplings' stiffness that makes the external forces")
+      .def_property_readonly("external_damping",
+                             nodal_property([](auto& s) -> auto& { return s.external_damping(); }, true),
+                             "(nodes,) N s/m: a writable view of the couplings' damping")
       .def_property_readonly(
           "rest_positions",
           [](const Simulation& self) {

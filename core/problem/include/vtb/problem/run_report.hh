@@ -58,6 +58,10 @@ struct RunReport {
   double effective_poisson_ratio = 0;
   std::string filter;           ///< filtered: the filter it ran
   std::string filter_requested; ///< filtered: the scene's [solver].filter (auto, or the filter itself)
+  /// filtered: what took most of the steps: the filter, or implicit-euler where the tensor
+  /// filter's safety net took more than half of them (then the step cost is implicit Euler's).
+  std::string filter_most_steps;
+  long fallback_steps = 0; ///< filtered (tensor): the steps implicit Euler took
   bool momentum_correction = false;
   double strain_limit = 0;
   /// Solver-specific figures for summary.json (e.g. the FEM's cells, dofs, phase times).
