@@ -90,5 +90,39 @@ TEST(Calibration, NetworkHasOneSpringPerEdgeWithDashpotsTauK) {
   EXPECT_EQ(net.adj_ptr.back(), 2 * net.num_springs());
 }
 
+
+/// The FEM stiffness as it used to be assembled: every element entry a triplet, summed by
+/// setFromTriplets in the cells' order.
+template <int dim> Eigen::SparseMatrix<double> triplet_stiffness(const Mesh<dim>& mesh, double E, double nu, double t) {
+  std::vector<Eigen::Triplet<double>> trip;
+  for (const auto& c : mesh.cells) {
+    const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, t);
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b)
+        for (int i = 0; i < dim; ++i)
+          for (int j = 0; j < dim; ++j)
+            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
+                              Ke(a * dim + i, b * dim + j));
+  }
+  Eigen::SparseMatrix<double> K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
+  K.setFromTriplets(trip.begin(), trip.end());
+  return K;
+}
+
+TEST(Calibration, FemStiffnessAssembledInItsPatternEqualsTheTripletSum) {
+  // The in-pattern assembly adds each entry's element contributions in the cells' order, as
+  // setFromTriplets does: the same matrix to the bit, pattern and values, in 2D and 3D.
+  const Mesh2 plate = generate_rectangle(Eigen::Vector2d(0.2, 0.05), Eigen::Vector2i(9, 4));
+  const Mesh3 box = generate_box(Eigen::Vector3d(0.04, 0.03, 0.02), Eigen::Vector3i(4, 3, 2));
+  const auto check = [](const auto& mesh, double t) {
+    const Eigen::SparseMatrix<double> a = fem_stiffness_matrix(mesh, 5.0e4, 0.3, t);
+    const Eigen::SparseMatrix<double> b = triplet_stiffness(mesh, 5.0e4, 0.3, t);
+    ASSERT_EQ(a.nonZeros(), b.nonZeros());
+    EXPECT_EQ(Eigen::MatrixXd(a), Eigen::MatrixXd(b));
+  };
+  check(plate, 0.001);
+  check(box, 1.0);
+}
+
 } // namespace
 } // namespace vtb

@@ -77,19 +77,46 @@ Eigen::MatrixXd fem_element_stiffness(const Mesh<dim>& mesh, const typename Mesh
 
 template <int dim>
 Eigen::SparseMatrix<double> fem_stiffness_matrix(const Mesh<dim>& mesh, double E, double nu, double thickness) {
-  std::vector<Eigen::Triplet<double>> trip;
-  trip.reserve(mesh.cells.size() * (dim + 1) * (dim + 1) * dim * dim);
+  // Assembled into its sparsity pattern (each node's column holds its own and its neighbours'
+  // rows) rather than through triplets: on a 10k-node tetrahedral mesh the 144 triplets per
+  // cell and setFromTriplets' copy of them took about 200 MB at once, the peak of a run
+  // (docs/performance.md). The entries are summed cell by cell in the same order as before.
+  const int n = mesh.num_nodes();
+  std::vector<std::vector<int>> near(static_cast<std::size_t>(n));
+  for (const auto& c : mesh.cells)
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b) near[static_cast<std::size_t>(c[a])].push_back(c[b]);
+  Eigen::VectorXi per_column(dim * n);
+  for (int v = 0; v < n; ++v) {
+    auto& nb = near[static_cast<std::size_t>(v)];
+    std::sort(nb.begin(), nb.end());
+    nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+    per_column.segment<dim>(dim * v).setConstant(dim * static_cast<int>(nb.size()));
+  }
+  Eigen::SparseMatrix<double> K(dim * n, dim * n);
+  K.reserve(per_column);
+  for (int v = 0; v < n; ++v) // rows in increasing order within each column: appended in place
+    for (int j = 0; j < dim; ++j)
+      for (int w : near[static_cast<std::size_t>(v)])
+        for (int i = 0; i < dim; ++i) K.insert(dim * w + i, dim * v + j) = 0.0;
+  K.makeCompressed();
+  const int* outer = K.outerIndexPtr();
+  const int* inner = K.innerIndexPtr();
+  double* value = K.valuePtr();
   for (const auto& c : mesh.cells) {
     const Eigen::MatrixXd Ke = fem_element_stiffness(mesh, c, E, nu, thickness);
-    for (int a = 0; a <= dim; ++a)
-      for (int b = 0; b <= dim; ++b)
-        for (int i = 0; i < dim; ++i)
-          for (int j = 0; j < dim; ++j)
-            trip.emplace_back(dim * c[static_cast<std::size_t>(a)] + i, dim * c[static_cast<std::size_t>(b)] + j,
-                              Ke(a * dim + i, b * dim + j));
+    for (int b = 0; b <= dim; ++b)
+      for (int j = 0; j < dim; ++j) {
+        const int col = dim * c[static_cast<std::size_t>(b)] + j;
+        for (int a = 0; a <= dim; ++a) {
+          // Node a's rows start at its place in this column (rows of one node are consecutive).
+          const int row0 = dim * c[static_cast<std::size_t>(a)];
+          const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], row0);
+          const auto k = static_cast<std::size_t>(at - inner);
+          for (int i = 0; i < dim; ++i) value[k + static_cast<std::size_t>(i)] += Ke(a * dim + i, b * dim + j);
+        }
+      }
   }
-  Eigen::SparseMatrix<double> K(dim * mesh.num_nodes(), dim * mesh.num_nodes());
-  K.setFromTriplets(trip.begin(), trip.end());
   return K;
 }
 
