@@ -24,7 +24,6 @@ namespace {
 /// would fix a width), in the order the columns were added (the CSV's order where a CSV has them).
 class Columns {
 public:
-  explicit Columns(std::size_t rows) : m_rows(rows) {}
   template <class Row> void number(const std::string& name, const std::vector<Row>& rows, const std::function<double(const Row&)>& f) {
     py::array_t<double> a(static_cast<py::ssize_t>(rows.size()));
     auto w = a.mutable_unchecked<1>();
@@ -39,7 +38,6 @@ public:
   py::dict dict() const { return m_dict; }
 
 private:
-  std::size_t m_rows;
   py::dict m_dict;
 };
 
@@ -77,7 +75,7 @@ py::dict tables_dict(const RunTables& t) {
 
 py::dict compare_dict(const harness::CompareResult& r) {
   using Row = harness::CompareRow;
-  Columns c(r.rows.size());
+  Columns c;
   c.text<Row>("solver", r.rows, [](const Row& x) { return x.solver; });
   c.number<Row>("dt", r.rows, [](const Row& x) { return x.report.dt; });
   c.number<Row>("steps", r.rows, [](const Row& x) { return static_cast<double>(x.report.steps_taken); });
@@ -93,7 +91,7 @@ py::dict compare_dict(const harness::CompareResult& r) {
   c.number<Row>("total_seconds", r.rows, [](const Row& x) { return x.wall_seconds; });
   c.number<Row>("displacement_error_away_max", r.rows, [](const Row& x) { return x.error.displacement_away_max; });
   using Dec = harness::DecompositionRow;
-  Columns d(r.decomposition.size());
+  Columns d;
   d.text<Dec>("run", r.decomposition, [](const Dec& x) { return x.a; });
   d.text<Dec>("against", r.decomposition, [](const Dec& x) { return x.b; });
   d.text<Dec>("meaning", r.decomposition, [](const Dec& x) { return x.meaning; });
@@ -114,7 +112,7 @@ py::dict compare_dict(const harness::CompareResult& r) {
 
 py::dict study_dict(const harness::StudyResult& r) {
   using Row = harness::StudyRow;
-  Columns c(r.rows.size());
+  Columns c;
   c.text<Row>("solver", r.rows, [](const Row& x) { return x.solver; });
   c.number<Row>("dt", r.rows, [](const Row& x) { return x.dt; });
   c.number<Row>("rtol", r.rows, [](const Row& x) { return x.rtol; });
@@ -141,7 +139,7 @@ py::dict study_dict(const harness::StudyResult& r) {
 
 py::dict sweep_dict(const std::vector<harness::SweepCell>& cells) {
   using Cell = harness::SweepCell;
-  Columns c(cells.size());
+  Columns c;
   c.text<Cell>("solver", cells, [](const Cell& x) { return x.solver; });
   c.number<Cell>("dt", cells, [](const Cell& x) { return x.dt; });
   c.number<Cell>("stiffness_scale", cells, [](const Cell& x) { return x.stiffness_scale; });

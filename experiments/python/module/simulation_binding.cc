@@ -88,19 +88,15 @@ template <int dim> int node_of(const LiveSim<dim>& s, const py::handle& where) {
   return nearest_node(s.model().mesh, to_vec<dim>(where.cast<std::vector<double>>(), "point"));
 }
 
-SimControls controls_of(const Scene& scene, const std::optional<std::string>& solver,
-                        const std::optional<std::string>& filter, std::optional<double> dt,
-                        const std::optional<std::string>& springs, double stiffness_scale) {
-  SimControls c;
-  c.solver = scene.solver.kind;
-  c.filter = scene.solver.filter;
-  c.dt = scene.solver.dt;
-  c.springs = scene.solver.springs;
+/// The Simulation's arguments over `c` (each one given replaces c's value).
+SimControls with_args(SimControls c, const std::optional<std::string>& solver, const std::optional<std::string>& filter,
+                      std::optional<double> dt, const std::optional<std::string>& springs,
+                      std::optional<double> stiffness_scale) {
   if (solver) solvers::select(*solver, "solver", c.solver, c.filter);
   if (filter) c.filter = *filter;
   if (dt) c.dt = *dt;
   if (springs) c.springs = *springs;
-  c.stiffness_scale = stiffness_scale;
+  if (stiffness_scale) c.stiffness_scale = *stiffness_scale;
   return c;
 }
 
@@ -117,7 +113,12 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
       .def(py::init([](const py::object& scene, std::optional<std::string> solver, std::optional<std::string> filter,
                        std::optional<double> dt, std::optional<std::string> springs, double stiffness_scale) {
              const Scene s = to_scene(scene);
-             const SimControls c = controls_of(s, solver, filter, dt, springs, stiffness_scale);
+             SimControls scene_controls; // the scene's [solver]
+             scene_controls.solver = s.solver.kind;
+             scene_controls.filter = s.solver.filter;
+             scene_controls.dt = s.solver.dt;
+             scene_controls.springs = s.solver.springs;
+             const SimControls c = with_args(scene_controls, solver, filter, dt, springs, stiffness_scale);
              py::gil_scoped_release release; // a spring fit may take seconds
              return std::make_unique<Simulation>(s, c);
            }),
@@ -136,12 +137,7 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
           [](Simulation& self, std::optional<std::string> solver, std::optional<std::string> filter,
              std::optional<double> dt, std::optional<std::string> springs, std::optional<double> stiffness_scale) {
             self.visit([&](auto& s) {
-              SimControls c = s.controls();
-              if (solver) solvers::select(*solver, "solver", c.solver, c.filter);
-              if (filter) c.filter = *filter;
-              if (dt) c.dt = *dt;
-              if (springs) c.springs = *springs;
-              if (stiffness_scale) c.stiffness_scale = *stiffness_scale;
+              const SimControls c = with_args(s.controls(), solver, filter, dt, springs, stiffness_scale);
               py::gil_scoped_release release;
               s.configure(c);
             });
