@@ -3,8 +3,8 @@
 #include "overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
-#include "vtb/harness/solvers.hh"
 #include "vtb/harness/ranks.hh"
+#include "vtb/harness/solvers.hh"
 #include "vtb/springs/load_check.hh"
 
 #include <cmath>
@@ -54,8 +54,8 @@ Action add_run(CLI::App& app) {
           " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
     if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
     if (r.fallback_steps > 0) // the filter's claim does not hold on these steps: say so
-      std::cout << "vtb run: " << r.fallback_steps << " of " << r.steps_taken << " steps ("
-                << std::setprecision(3) << 100.0 * static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken)
+      std::cout << "vtb run: " << r.fallback_steps << " of " << r.steps_taken << " steps (" << std::setprecision(3)
+                << 100.0 * static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken)
                 << std::setprecision(6) << " %) fell back to implicit Euler (the " << r.filter
                 << " filter's rest Jacobian past its trusted distortion, docs/method.md); most steps: "
                 << r.filter_most_steps << "\n";

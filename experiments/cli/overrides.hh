@@ -3,8 +3,8 @@
 /// The CLI's own parsing that turns options into what the libraries take: `vtb haptics
 /// --fault` (`vtb run`'s overrides are the harness's, vtb/harness/solvers.hh).
 
-#include "vtb/harness/solvers.hh"
 #include "vtb/haptics/session.hh"
+#include "vtb/harness/solvers.hh"
 #include "vtb/problem/scene.hh"
 
 #include <optional>

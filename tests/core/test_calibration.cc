@@ -90,7 +90,6 @@ TEST(Calibration, NetworkHasOneSpringPerEdgeWithDashpotsTauK) {
   EXPECT_EQ(net.adj_ptr.back(), 2 * net.num_springs());
 }
 
-
 /// The FEM stiffness as it used to be assembled: every element entry a triplet, summed by
 /// setFromTriplets in the cells' order.
 template <int dim> Eigen::SparseMatrix<double> triplet_stiffness(const Mesh<dim>& mesh, double E, double nu, double t) {

@@ -66,7 +66,8 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     j["filter"] = r.filter;
     if (!r.filter_requested.empty()) j["filter_requested"] = r.filter_requested;
     if (!r.filter_most_steps.empty()) j["filter_most_steps"] = r.filter_most_steps;
-    if (r.steps_taken > 0) j["fallback_share"] = static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken);
+    if (r.steps_taken > 0)
+      j["fallback_share"] = static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken);
     j["momentum_correction"] = r.momentum_correction;
     j["strain_limit"] = r.strain_limit;
   }

@@ -153,7 +153,8 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
     rep.fallback_steps = f->fallback_steps();
   }
   if (!rep.filter.empty())
-    rep.filter_most_steps = 2 * rep.fallback_steps > rep.steps_taken ? std::string(solvers::kImplicitEuler) : rep.filter;
+    rep.filter_most_steps =
+        2 * rep.fallback_steps > rep.steps_taken ? std::string(solvers::kImplicitEuler) : rep.filter;
   rep.total_seconds = std::chrono::duration<double>(clock::now() - loop_start).count();
   return rep;
 }
@@ -172,8 +173,8 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
   return o;
 }
 
-RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames,
-                    const FitProgress& progress, RunTables* tables) {
+RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames, const FitProgress& progress,
+                    RunTables* tables) {
   const IntegratorOptions o = integrator_options(scene.solver);
   return with_model(
       scene,

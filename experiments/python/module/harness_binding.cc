@@ -24,13 +24,15 @@ namespace {
 /// would fix a width), in the order the columns were added (the CSV's order where a CSV has them).
 class Columns {
 public:
-  template <class Row> void number(const std::string& name, const std::vector<Row>& rows, const std::function<double(const Row&)>& f) {
+  template <class Row>
+  void number(const std::string& name, const std::vector<Row>& rows, const std::function<double(const Row&)>& f) {
     py::array_t<double> a(static_cast<py::ssize_t>(rows.size()));
     auto w = a.mutable_unchecked<1>();
     for (std::size_t k = 0; k < rows.size(); ++k) w(static_cast<py::ssize_t>(k)) = f(rows[k]);
     m_dict[py::str(name)] = a;
   }
-  template <class Row> void text(const std::string& name, const std::vector<Row>& rows, const std::function<std::string(const Row&)>& f) {
+  template <class Row>
+  void text(const std::string& name, const std::vector<Row>& rows, const std::function<std::string(const Row&)>& f) {
     py::list l;
     for (const auto& r : rows) l.append(f(r));
     m_dict[py::str(name)] = l;
@@ -41,7 +43,9 @@ private:
   py::dict m_dict;
 };
 
-py::array_t<double> column(const std::vector<double>& x) { return py::array_t<double>(static_cast<py::ssize_t>(x.size()), x.data()); }
+py::array_t<double> column(const std::vector<double>& x) {
+  return py::array_t<double>(static_cast<py::ssize_t>(x.size()), x.data());
+}
 
 py::array_t<double> rows3(const std::vector<std::array<double, 3>>& x) {
   py::array_t<double> a({static_cast<py::ssize_t>(x.size()), py::ssize_t(3)});
@@ -226,9 +230,11 @@ void bind_harness(py::module_& m) {
       },
       py::arg("scene"), py::arg("dt"), py::arg("stiffness_scale") = std::vector<double>{1.0},
       py::arg("solvers") = py::none(), py::arg("out") = std::filesystem::path());
-  m.def("solvers", [] { return solvers::names(); }, "Every solver name of the registry");
-  m.def("interactive_solvers", [] { return solvers::names(solvers::is_stepper); },
-        "The solvers a vtb.Simulation steps (the fixed-step spring solvers)");
+  m.def(
+      "solvers", [] { return solvers::names(); }, "Every solver name of the registry");
+  m.def(
+      "interactive_solvers", [] { return solvers::names(solvers::is_stepper); },
+      "The solvers a vtb.Simulation steps (the fixed-step spring solvers)");
 }
 
 } // namespace vtb::python

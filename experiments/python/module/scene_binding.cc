@@ -39,7 +39,8 @@ template <class Put> void put_value(const py::handle& v, const std::string& key,
   } else if (py::hasattr(v, "tolist"))
     put_value(v.attr("tolist")(), key, put);
   else
-    throw InputError("<dict>: " + key + ": a value of type " + py::str(v.get_type().attr("__name__")).cast<std::string>() +
+    throw InputError("<dict>: " + key + ": a value of type " +
+                     py::str(v.get_type().attr("__name__")).cast<std::string>() +
                      " is not a TOML value (bool, int, float, str, list, dict)");
 }
 
@@ -87,7 +88,8 @@ CLI validates it: bad input raises vtb.InputError with the CLI's error line.)")
       .def_static(
           "from_dict",
           [](const py::dict& d, const std::filesystem::path& base_dir) {
-            return parse_scene(dict_to_toml(d), "<dict>", base_dir.empty() ? std::filesystem::current_path() : base_dir);
+            return parse_scene(dict_to_toml(d), "<dict>",
+                               base_dir.empty() ? std::filesystem::current_path() : base_dir);
           },
           py::arg("tables"), py::arg("base_dir") = std::filesystem::path(),
           "A scene from a dict of the file's tables ({'scene': {...}, 'mesh': {...}, 'fix': [{...}], ...}); "

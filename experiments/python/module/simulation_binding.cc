@@ -54,9 +54,10 @@ private:
 template <class Array> py::array array_view(const Array& a, const py::handle& owner, bool writeable) {
   constexpr auto d = py::ssize_t(sizeof(double));
   auto* data = const_cast<double*>(a.data()); // read-only views say so to numpy below
-  py::array v = Array::ColsAtCompileTime == 1 ? py::array(py::dtype::of<double>(), {py::ssize_t(a.size())}, {d}, data, owner)
-                                              : py::array(py::dtype::of<double>(), {py::ssize_t(a.cols()), py::ssize_t(a.rows())},
-                                                          {py::ssize_t(a.rows()) * d, d}, data, owner);
+  py::array v = Array::ColsAtCompileTime == 1
+                    ? py::array(py::dtype::of<double>(), {py::ssize_t(a.size())}, {d}, data, owner)
+                    : py::array(py::dtype::of<double>(), {py::ssize_t(a.cols()), py::ssize_t(a.rows())},
+                                {py::ssize_t(a.rows()) * d, d}, data, owner);
   if (!writeable) v.attr("setflags")(py::arg("write") = false);
   return v;
 }
@@ -146,8 +147,9 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
           py::arg("springs") = py::none(), py::arg("stiffness_scale") = py::none(),
           "Change the solver, filter, dt, springs or stiffness between steps (the state is kept; "
           "InputError keeps the previous configuration)")
-      .def("reset", [](Simulation& self) { self.visit([](auto& s) { s.reset(); }); },
-           "Back to the initial state (the external forces are kept)")
+      .def(
+          "reset", [](Simulation& self) { self.visit([](auto& s) { s.reset(); }); },
+          "Back to the initial state (the external forces are kept)")
       .def(
           "apply_force",
           [](Simulation& self, const py::object& where, const std::vector<double>& force, double stiffness,
@@ -155,7 +157,8 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
             return self.visit([&](auto& s) {
               constexpr int dim = std::decay_t<decltype(s.model())>::dimension;
               const int node = node_of(s, where);
-              if (!(stiffness >= 0) || !(damping >= 0)) throw InputError("apply_force: stiffness and damping must be >= 0");
+              if (!(stiffness >= 0) || !(damping >= 0))
+                throw InputError("apply_force: stiffness and damping must be >= 0");
               s.external_force().col(node) = to_vec<dim>(force, "force");
               s.external_stiffness()[node] = stiffness;
               s.external_damping()[node] = damping;
@@ -184,28 +187,51 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
           },
           py::arg("point"))
       .def_property_readonly("dim", &Simulation::dim)
-      .def_property_readonly("num_nodes", [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().num_nodes(); }); })
-      .def_property_readonly("num_springs", [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().net.num_springs(); }); })
-      .def_property_readonly("time", [](const Simulation& self) { return self.visit([](const auto& s) { return s.state().t; }); })
-      .def_property_readonly("dt", [](const Simulation& self) { return self.visit([](const auto& s) { return s.controls().dt; }); })
-      .def_property_readonly("solver", [](const Simulation& self) { return self.visit([](const auto& s) { return s.controls().solver; }); })
-      .def_property_readonly("filter", [](const Simulation& self) { return self.visit([](const auto& s) { return s.running_filter(); }); },
-                             "The filter the filtered solver runs (auto resolved); empty for the other solvers")
-      .def_property_readonly("springs", [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().net.calibration; }); },
-                             "The spring constants used (lloyd, van-gelder, fitted)")
-      .def_property_readonly("stable", [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure().empty(); }); })
-      .def_property_readonly("failure", [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure(); }); })
-      .def_property_readonly("displacements", nodal_property([](auto& s) -> auto& { return s.state().u; }, false),
+      .def_property_readonly(
+          "num_nodes",
+          [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().num_nodes(); }); })
+      .def_property_readonly(
+          "num_springs",
+          [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().net.num_springs(); }); })
+      .def_property_readonly(
+          "time", [](const Simulation& self) { return self.visit([](const auto& s) { return s.state().t; }); })
+      .def_property_readonly(
+          "dt", [](const Simulation& self) { return self.visit([](const auto& s) { return s.controls().dt; }); })
+      .def_property_readonly(
+          "solver",
+          [](const Simulation& self) { return self.visit([](const auto& s) { return s.controls().solver; }); })
+      .def_property_readonly(
+          "filter", [](const Simulation& self) { return self.visit([](const auto& s) { return s.running_filter(); }); },
+          "The filter the filtered solver runs (auto resolved); empty for the other solvers")
+      .def_property_readonly(
+          "springs",
+          [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().net.calibration; }); },
+          "The spring constants used (lloyd, van-gelder, fitted)")
+      .def_property_readonly(
+          "stable",
+          [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure().empty(); }); })
+      .def_property_readonly(
+          "failure", [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure(); }); })
+      .def_property_readonly("displacements",
+                             nodal_property(
+                                 [](auto& s) -> auto& { return s.state().u; }, false),
                              "u, (nodes, dim) m: a read-only view of the state (no copy)")
-      .def_property_readonly("velocities", nodal_property([](auto& s) -> auto& { return s.state().v; }, false),
+      .def_property_readonly("velocities",
+                             nodal_property(
+                                 [](auto& s) -> auto& { return s.state().v; }, false),
                              "v, (nodes, dim) m/s: a read-only view of the state (no copy)")
-      .def_property_readonly("external_forces", nodal_property([](auto& s) -> auto& { return s.external_force(); }, true),
-                             "(nodes, dim) N: a writable view of the forces applied from outside at every step (no copy)")
+      .def_property_readonly(
+          "external_forces",
+          nodal_property(
+              [](auto& s) -> auto& { return s.external_force(); }, true),
+          "(nodes, dim) N: a writable view of the forces applied from outside at every step (no copy)")
       .def_property_readonly("external_stiffness",
-                             nodal_property([](auto& s) -> auto& { return s.external_stiffness(); }, true),
+                             nodal_property(
+                                 [](auto& s) -> auto& { return s.external_stiffness(); }, true),
                              "(nodes,) N/m: a writable view of the couplings' stiffness that makes the external forces")
       .def_property_readonly("external_damping",
-                             nodal_property([](auto& s) -> auto& { return s.external_damping(); }, true),
+                             nodal_property(
+                                 [](auto& s) -> auto& { return s.external_damping(); }, true),
                              "(nodes,) N s/m: a writable view of the couplings' damping")
       .def_property_readonly(
           "rest_positions",
@@ -216,9 +242,8 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
       .def_property_readonly(
           "positions",
           [](const Simulation& self) {
-            return self.visit([](const auto& s) {
-              return Eigen::MatrixXd((s.model().net.rest + s.state().u).transpose());
-            });
+            return self.visit(
+                [](const auto& s) { return Eigen::MatrixXd((s.model().net.rest + s.state().u).transpose()); });
           },
           "X + u, (nodes, dim) m (computed: a copy)")
       .def(
@@ -241,7 +266,8 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
               for (int k = 0; k < net.num_springs(); ++k) {
                 const auto [i, j] = net.edge[static_cast<std::size_t>(k)];
                 e[k] = ((net.rest.col(j) + s.state().u.col(j)) - (net.rest.col(i) + s.state().u.col(i))).norm() /
-                           net.rest_length[k] - 1.0;
+                           net.rest_length[k] -
+                       1.0;
               }
               return e;
             });
@@ -278,7 +304,8 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
               py::array_t<int> a({static_cast<py::ssize_t>(mesh.num_cells()), py::ssize_t(nv)});
               auto r = a.mutable_unchecked<2>();
               for (int c = 0; c < mesh.num_cells(); ++c)
-                for (int k = 0; k < nv; ++k) r(c, k) = mesh.cells[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)];
+                for (int k = 0; k < nv; ++k)
+                  r(c, k) = mesh.cells[static_cast<std::size_t>(c)][static_cast<std::size_t>(k)];
               return a;
             });
           },
@@ -316,7 +343,8 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
       .def("__repr__", [](const Simulation& self) {
         return self.visit([&](const auto& s) {
           return "<vtb.Simulation " + std::to_string(self.dim()) + "D, " + std::to_string(s.model().num_nodes()) +
-                 " nodes, " + s.controls().solver + (s.running_filter().empty() ? "" : " (" + s.running_filter() + ")") +
+                 " nodes, " + s.controls().solver +
+                 (s.running_filter().empty() ? "" : " (" + s.running_filter() + ")") +
                  ", t = " + std::to_string(s.state().t) + " s>";
         });
       });

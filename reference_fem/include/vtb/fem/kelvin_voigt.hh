@@ -4,8 +4,8 @@
 /// plus mass damping, discretised with deal.II simplex finite elements on the very mesh the
 /// spring model uses. The public interface carries no deal.II type.
 
-#include "vtb/problem/problem.hh"
 #include "vtb/problem/output.hh"
+#include "vtb/problem/problem.hh"
 #include "vtb/problem/run_report.hh"
 
 #include <filesystem>
