@@ -6,6 +6,7 @@
 #include "vtb/haptics/contact3d.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/solvers/warped_filter.hh"
 
 #include <gtest/gtest.h>
 #ifdef VTB_HAVE_LIVE_SIM
@@ -171,6 +172,25 @@ TEST(NoAllocation, TensorMultigridFilterAllocatesNothingWhileItsCoverMoves) {
   // the transverse cover (the Galerkin products into their patterns, the coarsest factor).
   const Model<2> model = test::model_from(test::pulled_plate(40, 10, ""));
   EXPECT_EQ(filtered_step_allocations(model, "tensor-multigrid"), 0);
+}
+
+TEST(NoAllocation, TensorFilterRelinearisationAllocatesNothing) {
+  // Past its trusted distortion the tensor filter linearises again at the current shape
+  // within a step: the blocks written into H's values, the factor (or the V-cycle) refreshed.
+  const Model<2> model = test::model_from(test::pulled_plate(40, 10, ""));
+  Nodal<2> u(2, model.num_nodes());
+  for (int i = 0; i < model.num_nodes(); ++i) u.col(i) = Vec<2>(0.4 * model.net.rest(0, i), 0.1 * model.net.rest(0, i));
+  for (const bool multigrid : {false, true}) {
+    WarpedFilter<2> filter(model, 1e-2, multigrid);
+    filter.prepare(Nodal<2>::Zero(2, model.num_nodes()));
+    g_allocations = 0;
+    g_counting = true;
+    filter.relinearize(u);
+    filter.prepare(u);
+    g_counting = false;
+    EXPECT_EQ(g_allocations, 0) << (multigrid ? "tensor-multigrid" : "tensor");
+    EXPECT_EQ(filter.relinearizations(), 1);
+  }
 }
 
 TEST(NoAllocation, FreeBodyMomentumCorrectionAllocatesNothing) {

@@ -1,4 +1,5 @@
 #include "vtb/solvers/filtered.hh"
+
 #include "vtb/problem/solver_names.hh"
 
 #include "vtb/linalg/selected_inverse.hh"
@@ -7,6 +8,7 @@
 #include <Eigen/Dense>
 
 #include <algorithm>
+#include <cmath>
 
 namespace vtb {
 
@@ -144,13 +146,18 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   };
   if (turns) node_forces();
 
-  // The tensor filter where its warped rest Jacobian is trusted; past that distortion implicit
-  // Euler takes the step (entered beyond kTrustedMismatch, left below 0.7 of it): the current
-  // Jacobian, refactorised, where the rest one is no model of the state (docs/method.md).
+  // The tensor filter, lag-free about its reference shape while the distortion from it is
+  // trusted (kTrustedMismatch); past that the reference moves to the current shape
+  // (relinearize: one refactorisation) and the filter goes on from there (docs/method.md).
+  // Implicit Euler stays the safety net for a state with no finite mismatch, which its own
+  // step and the run's watch then meet.
   if (m_tensor) {
-    const double mismatch = turns ? m_tensor->prepare_turned(s.u) : m_tensor->prepare(s.u);
-    const double limit = WarpedFilter<dim>::kTrustedMismatch * (m_fallback ? 0.7 : 1.0);
-    m_fallback = !(mismatch <= limit);
+    double mismatch = turns ? m_tensor->prepare_turned(s.u) : m_tensor->prepare(s.u);
+    if (std::isfinite(mismatch) && mismatch > WarpedFilter<dim>::kTrustedMismatch) {
+      m_tensor->relinearize(s.u);
+      mismatch = m_tensor->prepare(s.u);
+    }
+    m_fallback = !(mismatch <= WarpedFilter<dim>::kTrustedMismatch);
     m_fallback_steps += m_fallback;
     if (m_fallback) {
       m_fallback_ie->step(s);

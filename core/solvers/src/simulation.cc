@@ -151,6 +151,8 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
   if (const auto* f = dynamic_cast<const FilteredImplicit<dim>*>(integrator.get()); f && f->has_fallback()) {
     rep.extra.emplace_back("tensor_fallback_steps", static_cast<double>(f->fallback_steps()));
     rep.fallback_steps = f->fallback_steps();
+    rep.extra.emplace_back("tensor_relinearizations", static_cast<double>(f->relinearizations()));
+    rep.extra.emplace_back("tensor_refactorizations", static_cast<double>(f->refactorizations()));
   }
   if (!rep.filter.empty())
     rep.filter_most_steps =

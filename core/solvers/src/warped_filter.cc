@@ -18,11 +18,18 @@ namespace vtb {
 
 namespace {
 
-/// A spring block's transverse parts at beta = 1 with H's sign: -sign (dt c + dt^2 k)(I - n n^T)
-/// from its stiffness and dashpot blocks K = k n n^T, D = c n n^T at rest.
-template <int dim> Mat<dim> transverse_block(double sign, const Mat<dim>& K, const Mat<dim>& D, double dt) {
-  const Mat<dim> I = Mat<dim>::Identity();
-  return -sign * (dt * (D.trace() * I - D) + dt * dt * (K.trace() * I - K));
+/// A spring block's transverse parts at beta = 1 with H's sign: -sign (dt c + dt^2 k)(I - n n^T),
+/// k and c the spring's constants and n its direction (from its dashpot block D = c n n^T, or
+/// from its vector where c is 0).
+template <int dim> Mat<dim> transverse_block(double sign, double k, double c, const Vec<dim>& n, double dt) {
+  return -sign * (dt * c + dt * dt * k) * (Mat<dim>::Identity() - n * n.transpose());
+}
+
+/// The unit direction of x_j - x_i (zero for a spring of length 0).
+template <int dim> Vec<dim> direction(const Vec<dim>& xi, const Vec<dim>& xj) {
+  const Vec<dim> d = xj - xi;
+  const double l = d.norm();
+  return l > 0 ? Vec<dim>(d / l) : Vec<dim>::Zero();
 }
 
 } // namespace
@@ -40,13 +47,17 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
   // `transverse` times their transverse parts k (I - n n^T) and c (I - n n^T). Every entry of
   // every block is stored, so the pattern does not depend on the values.
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
-  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
-    const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
-    if (a < 0 || b < 0) return;
-    const Mat<dim> B = -sign * (dt * D + dt * dt * K) + transverse * transverse_block<dim>(sign, K, D, dt);
-    for (int p = 0; p < dim; ++p)
-      for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, B(p, q));
-  });
+  for_each_jacobian_block(
+      net, rest, false, [&](int s, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+        const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
+        if (a < 0 || b < 0) return;
+        const auto& e = net.edge[static_cast<std::size_t>(s)];
+        const Vec<dim> n = direction<dim>(net.rest.col(e[0]), net.rest.col(e[1]));
+        const Mat<dim> B =
+            -sign * (dt * D + dt * dt * K) + transverse * transverse_block<dim>(sign, K.trace(), D.trace(), n, dt);
+        for (int p = 0; p < dim; ++p)
+          for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, B(p, q));
+      });
   Eigen::SparseMatrix<double> H(nf * dim, nf * dim);
   H.setFromTriplets(trip.begin(), trip.end());
   return H;
@@ -143,22 +154,31 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   m_base.assign(m_h->values(), m_h->values() + m_h->value_count());
   // Each spring's transverse blocks at beta = 1, (dt c + dt^2 k)(I - n n^T) with the signs of
   // tensor_filter_matrix, as (offset, value) pairs into H's stored values, so that H(beta)
-  // = H(0) + sum_s beta_s T_s is refilled spring by spring.
+  // = H(0) + sum_s beta_s T_s is refilled spring by spring. Every stored entry of a spring's
+  // blocks is kept (with its block and place, m_tcode), zeros included: relinearize() writes
+  // the blocks of another shape, whose zeros are elsewhere, at the same offsets.
   const auto& net = model.net;
   const int ns = net.num_springs();
+  m_dt = dt;
+  m_diag_off.resize(static_cast<std::size_t>(nf) * dim);
+  for (int r = 0; r < static_cast<int>(nf) * dim; ++r) m_diag_off[static_cast<std::size_t>(r)] = m_h->offset(r, r);
   m_tptr.assign(static_cast<std::size_t>(ns) + 1, 0);
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
   for_each_jacobian_block(
       net, rest, false, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
         const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
         if (a >= 0 && b >= 0) {
-          const Mat<dim> T = transverse_block<dim>(sign, K, D, dt);
+          const auto& e = net.edge[static_cast<std::size_t>(sp)];
+          const int block = (sign < 0 ? 0 : 2) + (i == e[0] ? 0 : 1); // (i,i), (j,j), (i,j), (j,i)
+          const Mat<dim> T = transverse_block<dim>(sign, K.trace(), D.trace(),
+                                                   direction<dim>(net.rest.col(e[0]), net.rest.col(e[1])), dt);
           for (int p = 0; p < dim; ++p)
             for (int q = 0; q < dim; ++q) {
               const long off = m_h->offset(a * dim + p, b * dim + q);
-              if (off < 0 || T(p, q) == 0) continue;
+              if (off < 0) continue;
               m_toff.push_back(static_cast<int>(off));
               m_tval.push_back(T(p, q));
+              m_tcode.push_back(static_cast<unsigned char>((block * dim + p) * dim + q));
             }
         }
         m_tptr[static_cast<std::size_t>(sp) + 1] = static_cast<int>(m_toff.size());
@@ -168,6 +188,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   for (int sp = 0; sp < ns; ++sp)
     m_spring_rest.col(sp) = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
                             net.rest.col(net.edge[static_cast<std::size_t>(sp)][0]);
+  m_spring_ref = m_spring_rest;
   if constexpr (dim == 3) {
     m_adj_rest.resize(dim, static_cast<Eigen::Index>(net.adj_node.size()));
     for (int i = 0; i < net.num_nodes(); ++i)
@@ -175,15 +196,11 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
         m_adj_rest.col(p) = net.rest.col(net.adj_node[static_cast<std::size_t>(p)]) - net.rest.col(i);
     // Per node 3 / sum |X_j - X_i|^2 = 3 / tr A_rest: A scaled by it has singular values near 1
     // (its polar factor unchanged), where the polar iteration needs few steps.
+    m_adj_ref = m_adj_rest;
     m_adj_scale.assign(static_cast<std::size_t>(net.num_nodes()), 1.0);
     m_polar_a.assign(9 * static_cast<std::size_t>(net.num_nodes()), 0.0);
     m_polar_ok.assign(static_cast<std::size_t>(net.num_nodes()), 0);
-    for (int i = 0; i < net.num_nodes(); ++i) {
-      double trace = 0;
-      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
-        trace += m_adj_rest.col(p).squaredNorm();
-      if (trace > 0) m_adj_scale[static_cast<std::size_t>(i)] = 3 / trace;
-    }
+    scale_neighbourhoods();
   }
   m_multigrid = multigrid;
   m_residual = Nodal<dim>::Zero(dim, net.num_nodes());
@@ -203,7 +220,7 @@ template <class Tracker>
 [[gnu::always_inline]] inline bool WarpedFilter<dim>::add_spring(Tracker& tracker, int s, const Nodal<dim>& u,
                                                                  double trigger) const {
   const auto [i, j] = m_model.net.edge[static_cast<std::size_t>(s)];
-  const Vec<dim> D = m_spring_rest.col(s);
+  const Vec<dim> D = m_spring_ref.col(s);
   Vec<dim> t;
   if constexpr (dim == 2) {
     // (R_i + R_j) D from the rotations as (cos, sin) (m_polar after rotations()): half the
@@ -213,7 +230,7 @@ template <class Tracker>
   } else {
     t = (rotation(i) + rotation(j)) * D;
   }
-  return tracker.template add<dim>(D + u.col(j) - u.col(i), t, trigger);
+  return tracker.template add<dim>(m_spring_rest.col(s) + u.col(j) - u.col(i), t, trigger);
 }
 
 template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
@@ -359,9 +376,8 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
       const auto ui = u.col(i);
       Mat<dim> A = Mat<dim>::Zero();
       for (int p = begin; p < end; ++p) {
-        const Vec<dim> D = m_adj_rest.col(p);
-        const Vec<dim> d = D + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
-        A.noalias() += d * D.transpose();
+        const Vec<dim> d = m_adj_rest.col(p) + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
+        A.noalias() += d * m_adj_ref.col(p).transpose();
       }
       Eigen::Map<Mat<dim>> scaled(&m_polar_a[9 * static_cast<std::size_t>(i)]);
       scaled = A * m_adj_scale[static_cast<std::size_t>(i)];
@@ -384,7 +400,7 @@ template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
 
 template <int dim> SpringTurns WarpedFilter<dim>::turns() {
   static_assert(dim == 2 || dim == 3);
-  if constexpr (dim == 2) return SpringTurns{m_spring_rest.data(), &m_pq(0, 0), &m_pq(0, 1), &m_polar};
+  if constexpr (dim == 2) return SpringTurns{m_spring_ref.data(), &m_pq(0, 0), &m_pq(0, 1), &m_polar};
   return SpringTurns{nullptr, nullptr, nullptr, nullptr};
 }
 
@@ -397,6 +413,56 @@ template <int dim> void WarpedFilter<dim>::turn_rotations() {
     const int n = net.num_nodes();
     detail::unit_pairs(n, m_polar.data());
   }
+}
+
+template <int dim> void WarpedFilter<dim>::scale_neighbourhoods() {
+  if constexpr (dim == 3) {
+    const auto& net = m_model.net;
+    for (int i = 0; i < net.num_nodes(); ++i) {
+      double trace = 0;
+      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
+        trace += m_adj_ref.col(p).squaredNorm();
+      m_adj_scale[static_cast<std::size_t>(i)] = trace > 0 ? 3 / trace : 1.0;
+    }
+  }
+}
+
+template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u) {
+  // H = M (1 + dt gamma) + dt D(u) + dt^2 K(u) at the shape X + u (K's transverse term clamped
+  // at 0 under compression, as implicit Euler's, so that H stays positive definite), written
+  // at the offsets the constructor kept; the transverse blocks and the reference vectors of
+  // that shape; no cover. Allocates nothing.
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const double dt = m_dt;
+  std::fill(m_base.begin(), m_base.end(), 0.0);
+  for (std::size_t r = 0; r < m_diag_off.size(); ++r)
+    m_base[static_cast<std::size_t>(m_diag_off[r])] += net.mass[free[r / dim]] * (1.0 + dt * net.mass_damping);
+  for (int s = 0; s < net.num_springs(); ++s) {
+    const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
+    const Vec<dim> xi = net.rest.col(i) + u.col(i), xj = net.rest.col(j) + u.col(j);
+    m_spring_ref.col(s) = xj - xi;
+    const int begin = m_tptr[static_cast<std::size_t>(s)], end = m_tptr[static_cast<std::size_t>(s) + 1];
+    if (begin == end) continue;
+    const double k = net.stiffness[static_cast<std::size_t>(s)], c = net.damping[static_cast<std::size_t>(s)];
+    const Mat<dim> B = dt * dashpot_jacobian<dim>(xi, xj, c) +
+                       dt * dt * spring_jacobian<dim>(xi, xj, net.rest_length[static_cast<std::size_t>(s)], k, true);
+    const Mat<dim> T = transverse_block<dim>(-1.0, k, c, direction<dim>(xi, xj), dt); // the diagonal blocks'
+    for (int e = begin; e < end; ++e) {
+      const int code = m_tcode[static_cast<std::size_t>(e)];
+      const int p = (code / dim) % dim, q = code % dim;
+      const double sign = code / (dim * dim) < 2 ? 1.0 : -1.0; // H's sign: + on (i,i), (j,j)
+      m_base[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
+      m_tval[static_cast<std::size_t>(e)] = sign * T(p, q);
+    }
+  }
+  if constexpr (dim == 3)
+    for (int i = 0; i < net.num_nodes(); ++i)
+      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
+        m_adj_ref.col(p) = m_adj_rest.col(p) + u.col(net.adj_node[static_cast<std::size_t>(p)]) - u.col(i);
+  scale_neighbourhoods();
+  cover(u, 0.0); // H(0) at this shape, refactorised; every trigger at the floor
+  ++m_relinearizations;
 }
 
 template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {

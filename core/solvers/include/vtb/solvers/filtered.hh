@@ -57,9 +57,13 @@ public:
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
   const std::string& filter() const { return m_filter; }
-  /// Tensor filter: the steps taken by implicit Euler because the distortion passed what the
-  /// warped rest Jacobian is trusted with (WarpedFilter::kTrustedMismatch).
+  /// Tensor filter: the steps taken by implicit Euler, its safety net for a state whose
+  /// distortion is not finite (past WarpedFilter::kTrustedMismatch the filter relinearises).
   long fallback_steps() const { return m_fallback_steps; }
+  /// Tensor filters: the times the filter linearised again at the current shape, and the
+  /// times its H was refactorised (relinearisations and covers); 0 otherwise.
+  long relinearizations() const { return m_tensor ? m_tensor->relinearizations() : 0; }
+  long refactorizations() const { return m_tensor ? m_tensor->refactorizations() : 0; }
   /// Whether it has that fallback (the tensor filters).
   bool has_fallback() const { return m_fallback_ie != nullptr; }
 
@@ -72,7 +76,7 @@ private:
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor;    ///< tensor: the rest Jacobian's factor, warped
-  std::unique_ptr<Integrator<dim>> m_fallback_ie; ///< tensor: implicit Euler, past the trusted distortion
+  std::unique_ptr<Integrator<dim>> m_fallback_ie; ///< tensor: implicit Euler, the safety net
   Eigen::VectorXd m_coupling;                     ///< tensor, full: the couplings' dt^2 k + dt c per node
   Eigen::VectorXd m_no_coupling;                  ///< empty: no couplings
   bool m_fallback = false;                        ///< tensor: this step is implicit Euler's

@@ -85,9 +85,26 @@ public:
   WarpedFilter(const Model<dim>& model, double dt, bool multigrid = false);
   /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
   static constexpr int kMaxCoupled = 8;
-  /// Beyond this direction mismatch the warped rest Jacobian is not trusted: the filtered step
-  /// then falls back to implicit Euler, the current Jacobian refactorised (docs/method.md).
+  /// Beyond this direction mismatch from the reference shape the warped reference Jacobian is
+  /// not trusted: the filtered step then relinearises at the current shape (docs/method.md).
   static constexpr double kTrustedMismatch = 0.2;
+  /// Linearises again at displacement u: H_t's Jacobian blocks (K's transverse term clamped at
+  /// 0 under compression) and the reference vectors that the rotations and the mismatch are
+  /// measured from become those of the shape X + u, refactorised (or the V-cycle refreshed),
+  /// with no cover. The filter is then lag-free about that shape as it is about the rest shape
+  /// at start (docs/method.md). Allocates nothing; costs one refactorisation.
+  void relinearize(const Nodal<dim>& u);
+  /// How many times relinearize() ran.
+  long relinearizations() const { return m_relinearizations; }
+  /// H's entry (r, c) on the free dofs (row dim a + p: free node a, axis p) as the system holds
+  /// it now, the cover included (for tests).
+  double entry(int r, int c) {
+    const long off = m_h->offset(r, c) >= 0 ? m_h->offset(r, c) : m_h->offset(c, r);
+    return off < 0 ? 0.0 : m_h->values()[off];
+  }
+  /// How many times H was refactorised (or its V-cycle refreshed) after construction: each
+  /// relinearisation and each new cover.
+  long refactorizations() const { return m_factor_version; }
   /// The rotations at displacement u and the largest direction mismatch, which it returns; the
   /// cover follows it while it is trusted.
   double prepare(const Nodal<dim>& u);
@@ -140,6 +157,8 @@ private:
   void turn_out(double dt, Nodal<dim>& dv) const;
   /// 2D: each node's rotation from the turns' sums.
   void turn_rotations();
+  /// 3D: each node's 3 / sum |x_j - x_i|^2 over its neighbours in the reference shape.
+  void scale_neighbourhoods();
   /// The mismatch at u after the rotations, and the cover that follows it (prepare's rest).
   double follow(const Nodal<dim>& u);
   /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and refactorises.
@@ -162,7 +181,9 @@ private:
   std::vector<int> m_node_at, m_slot_at;  ///< per node position in the solve's vector: the node, its free index
   std::vector<Mat<dim>> m_rotation;       ///< 3D, per node (2D: m_polar)
   Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
+  Nodal<dim> m_spring_ref;                ///< per spring: its vector in the reference shape (relinearize())
   Nodal<dim> m_adj_rest;           ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
+  Nodal<dim> m_adj_ref;            ///< 3D, the same in the reference shape
   std::vector<double> m_adj_scale; ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
   std::vector<double> m_polar_a;   ///< 3D, per node: its scaled A (9 values), the rotations' scratch
   std::vector<unsigned char> m_polar_ok; ///< 3D, per node: whether the polar iteration converged
@@ -174,6 +195,11 @@ private:
   /// k in [m_tptr[s], m_tptr[s + 1]).
   std::vector<int> m_tptr, m_toff;
   std::vector<double> m_tval;
+  std::vector<unsigned char>
+      m_tcode;                 ///< per stored entry: (block * dim + p) * dim + q, blocks (i,i), (j,j), (i,j), (j,i)
+  std::vector<int> m_diag_off; ///< per free dof: its diagonal's offset among H's values
+  double m_dt = 0;
+  long m_relinearizations = 0;
   std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
   // correct()'s scratch: the residual and the iterate by nodes (fixed nodes 0), the
   // preconditioned residual by free nodes, and each spring's block of A as q d d^T + a_t I
