@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace vtb {
 namespace {
 
@@ -75,6 +77,39 @@ TEST(OrderedLDLT, KeepsAmdsFillAndRarelyPutsARowRightAfterOneItNeeds) {
   int follows = 0;
   for (Eigen::Index k = 0; k + 1 < L.cols(); ++k) follows += L.coeff(k + 1, k) != 0;
   EXPECT_LT(follows, H.rows() / 10) << "of " << H.rows() << " rows";
+}
+
+TEST(OrderedLDLT, FactorisedInPartsIsTheSameFactorToTheBit) {
+  // factorize_part runs factorize()'s row loop a share at a time: the same arithmetic in the
+  // same order, so L and D are equal to the bit, whatever the share; a share of 0 takes one
+  // row per call.
+  const Model<2> m = test::model_from(test::plate_scene(30, 8, "[[fix]]\ngroup = \"left\"\n"));
+  const Eigen::SparseMatrix<double> H = filter_system_matrix(m, 1e-3);
+  OrderedLDLT whole(H), parts(H);
+  ASSERT_TRUE(whole.factorize());
+  ASSERT_TRUE(parts.factorize());
+  const double work = whole.factorize_work();
+  ASSERT_GT(work, static_cast<double>(H.rows()));
+  for (const double share : {0.0, 0.05, 0.3}) {
+    parts.values()[0] *= 2; // other values, then the first ones back: a factor made again
+    ASSERT_TRUE(parts.factorize());
+    parts.values()[0] /= 2;
+    parts.begin_factorize();
+    int calls = 1;
+    while (!parts.factorize_part(share * work)) ++calls;
+    EXPECT_TRUE(parts.factorized());
+    if (share == 0.0) {
+      EXPECT_EQ(calls, H.rows());
+    } else {
+      // Every call but the last does at least its share (it stops at the first row past it),
+      // so at most 1 / share calls; and more than one, as no row holds the whole.
+      EXPECT_LE(calls, static_cast<int>(std::ceil(1 / share))) << share;
+      EXPECT_GT(calls, 1) << share;
+    }
+    const Eigen::SparseMatrix<double> d = parts.lower() - whole.lower();
+    EXPECT_EQ(Eigen::MatrixXd(d).cwiseAbs().maxCoeff(), 0.0) << share;
+    EXPECT_EQ((parts.diagonal() - whole.diagonal()).cwiseAbs().maxCoeff(), 0.0) << share;
+  }
 }
 
 TEST(NodalSolve, MatchesADenseSolveForEveryCoordinate) {

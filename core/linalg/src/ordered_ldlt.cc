@@ -92,6 +92,80 @@ OrderedLDLT::OrderedLDLT(const Eigen::SparseMatrix<double>& A, int block) {
         static_cast<int>(r % block);
   m_upper = ordered_upper(A, m_perm);
   m_factor.analyzePattern(m_upper);
+  m_y.assign(static_cast<std::size_t>(n), 0.0);
+  m_pattern.assign(static_cast<std::size_t>(n), 0);
+  m_tags.assign(static_cast<std::size_t>(n), 0);
+  m_factor.size_diagonal();
+}
+
+double OrderedLDLT::Factor::rows(const Eigen::SparseMatrix<double>& ap, int k, int end, std::vector<double>& y,
+                                 std::vector<int>& pattern, std::vector<int>& tags) {
+  // Eigen's SimplicialCholeskyBase::factorize_preordered (LDL^T, no shift), its loop over rows
+  // k .. end - 1.
+  const int size = static_cast<int>(ap.rows());
+  const int* Lp = this->m_matrix.outerIndexPtr();
+  int* Li = this->m_matrix.innerIndexPtr();
+  double* Lx = this->m_matrix.valuePtr();
+  int* nz = this->m_nonZerosPerCol.data();
+  const int* parent = this->m_parent.data();
+  double* diag = this->m_diag.data();
+  double work = 0;
+  for (; k < end; ++k) {
+    y[static_cast<std::size_t>(k)] = 0;
+    int top = size;
+    tags[static_cast<std::size_t>(k)] = k;
+    nz[k] = 0;
+    for (Eigen::SparseMatrix<double>::InnerIterator it(ap, k); it; ++it) {
+      int i = static_cast<int>(it.index());
+      if (i <= k) {
+        y[static_cast<std::size_t>(i)] += it.value();
+        int len = 0;
+        for (; tags[static_cast<std::size_t>(i)] != k; i = parent[i]) {
+          pattern[static_cast<std::size_t>(len++)] = i;
+          tags[static_cast<std::size_t>(i)] = k;
+        }
+        while (len > 0) pattern[static_cast<std::size_t>(--top)] = pattern[static_cast<std::size_t>(--len)];
+      }
+    }
+    double d = y[static_cast<std::size_t>(k)] * this->m_shiftScale + this->m_shiftOffset;
+    y[static_cast<std::size_t>(k)] = 0;
+    for (; top < size; ++top) {
+      const int i = pattern[static_cast<std::size_t>(top)];
+      const double yi = y[static_cast<std::size_t>(i)];
+      y[static_cast<std::size_t>(i)] = 0;
+      const double l_ki = yi / diag[i];
+      const int p2 = Lp[i] + nz[i];
+      int p;
+      for (p = Lp[i]; p < p2; ++p) y[static_cast<std::size_t>(Li[p])] -= Lx[p] * yi;
+      work += p2 - Lp[i] + 1;
+      d -= l_ki * yi;
+      Li[p] = k;
+      Lx[p] = l_ki;
+      ++nz[i];
+    }
+    diag[k] = d;
+    if (d == 0) return -1;
+  }
+  return work;
+}
+
+void OrderedLDLT::begin_factorize() {
+  m_part_row = 0;
+  m_part_ok = true;
+}
+
+bool OrderedLDLT::factorize_part(double work) {
+  const int n = static_cast<int>(m_upper.rows());
+  double done = 0;
+  while (m_part_row < n && m_part_ok && (done < work || done == 0)) {
+    const double w = m_factor.rows(m_upper, m_part_row, m_part_row + 1, m_y, m_pattern, m_tags);
+    ++m_part_row;
+    m_part_ok = w >= 0;
+    done += w + 1;
+  }
+  if (m_part_row < n && m_part_ok) return false;
+  m_factor.finish(m_part_ok);
+  return true;
 }
 
 int OrderedLDLT::offset(int r, int c) const {
@@ -104,8 +178,13 @@ int OrderedLDLT::offset(int r, int c) const {
 }
 
 bool OrderedLDLT::factorize() {
-  m_factor.refactorize(m_upper);
-  return m_factor.info() == Eigen::Success;
+  // factorize_part's loop over every row at once, counting the whole factorisation's work.
+  begin_factorize();
+  const double w = m_factor.rows(m_upper, 0, static_cast<int>(m_upper.rows()), m_y, m_pattern, m_tags);
+  m_part_ok = w >= 0;
+  if (m_part_ok) m_work = w + static_cast<double>(m_upper.rows());
+  m_factor.finish(m_part_ok);
+  return m_part_ok;
 }
 
 void OrderedLDLT::solve_in_place(Eigen::Ref<Eigen::MatrixXd> x) const {
