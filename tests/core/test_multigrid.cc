@@ -200,6 +200,29 @@ TEST(BlockMultigridCycle, RefreshedAfterNewValuesIsBetweenZeroAndTheirInverse) {
   // the filter's stability needs is the property above, with P from H0.)
 }
 
+TEST(BlockMultigridCycle, RefreshedInPartsIsTheSameCycleToTheBit) {
+  // refresh_part runs refresh()'s stages a share at a time (rows of the Galerkin products):
+  // the same arithmetic in the same order, so the same cycle to the bit. Every call but the
+  // last does at least its share of the counted work (it stops at the first chunk of rows past
+  // it; a stage that cannot be split, a rounding or finish(), may take it further), so a share
+  // of 1/16 takes at most 16 calls and one more, and more than one.
+  const Model<3> m = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "12, 4, 4");
+  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(m, 0.01, 0.0), H1 = tensor_filter_matrix(m, 0.01, 0.7);
+  BlockMultigrid<3> whole(H0, free_positions(m), 16), parts(H0, free_positions(m), 16);
+  for (BlockMultigrid<3>* mg : {&whole, &parts})
+    for (Eigen::Index c = 0; c < H1.outerSize(); ++c)
+      for (Eigen::SparseMatrix<double>::InnerIterator it(H1, c); it; ++it)
+        mg->values()[mg->offset(static_cast<int>(it.row()), static_cast<int>(it.col()))] = it.value();
+  whole.refresh();
+  parts.begin_refresh();
+  int calls = 1;
+  while (!parts.refresh_part(1.0 / 16)) ++calls;
+  EXPECT_LE(calls, 17);
+  EXPECT_GE(calls, 2);
+  const Eigen::MatrixXd Bw = dense_block_cycle(whole, H1.rows()), Bp = dense_block_cycle(parts, H1.rows());
+  EXPECT_EQ((Bw - Bp).cwiseAbs().maxCoeff(), 0.0);
+}
+
 /// The filtered step linearised at rest, by central differences of one step from a perturbed
 /// state: columns are d(u', v') / d(u, v) over the free nodes' coordinates.
 Eigen::MatrixXd linearised_step(const Model<3>& model, Integrator<3>& integ) {

@@ -356,7 +356,10 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     lev.inv_diag.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(m_mats[l].block()), 0.0);
     m_levels.push_back(std::move(lev));
     m_mats.push_back(square(Cn, kModes));
-    galerkin(l);
+    for (int stage = 1 + 3 * static_cast<int>(l); stage <= 3 + 3 * static_cast<int>(l); ++stage) { // its values
+      bool done = false;
+      m_work += refresh_stage(stage, 0, std::numeric_limits<int>::max(), done) + 1;
+    }
     m_b.emplace_back(static_cast<std::size_t>(nc) * static_cast<std::size_t>(m_mats.back().w), 0.0);
     m_x.emplace_back(m_b.back().size(), 0.0);
     modes = coarse_modes;
@@ -378,20 +381,81 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
   m_coarse_order.resize(static_cast<std::size_t>(C.rows()) * static_cast<std::size_t>(C.nb));
   for (std::size_t d = 0; d < m_coarse_order.size(); ++d) m_coarse_order[d] = m_coarse->ordered(static_cast<int>(d));
   m_coarse_rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m_coarse_order.size()), 1);
-  finish(); // the setup's loop made every level's values
+  // The setup's loop made every level's values; the rest of a refresh, its work counted.
+  bool done = false;
+  m_work += refresh_stage(1 + 3 * static_cast<int>(m_levels.size()), 0, 0, done) + 1;
+  m_work += 15.0 * static_cast<double>(m_mats.front().col.size()) * m_mats.front().nb * m_mats.front().nb +
+            1; // the finest matrix's rounding (refresh_stage's unit)
 }
 
-template <int dim> void BlockMultigrid<dim>::galerkin(std::size_t l) {
-  if constexpr (dim == 3)
-    m_mats[l].nb == 3 ? galerkin_products<4, 3, 8>(l) : galerkin_products<8, 6, 8>(l);
-  else
-    m_mats[l].nb == 2 ? galerkin_products<2, 2, 4>(l) : galerkin_products<4, 3, 4>(l);
+template <int dim> void BlockMultigrid<dim>::finish_coarse(std::size_t l) {
   // 1 on the dead values' diagonal (their P columns are zero); then what the cycle reads.
   BlockCsr& C = m_mats[l + 1];
   for (int d : m_levels[l].dead)
     C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
         1.0;
   round(C);
+}
+
+template <int dim> double BlockMultigrid<dim>::refresh_stage(int stage, int begin, int end, bool& done) {
+  // The work in multiply-adds of the lanes computed, and for the other loops their measured
+  // cost in the same unit (on a 2,415-node 3D hierarchy: a rounded value about 15, a
+  // multiply-add of the coarsest factor about 6, a diagonal block's inverse about nb^3 x 10).
+  constexpr double kRoundValue = 15, kFactorAdd = 6, kInverse = 10;
+  const int levels = static_cast<int>(m_levels.size());
+  done = true;
+  if (stage == 0) {
+    const BlockCsr& A = m_mats.front();
+    round(m_mats.front());
+    return kRoundValue * static_cast<double>(A.col.size()) * A.nb * A.nb;
+  }
+  if (stage == 1 + 3 * levels) {
+    finish();
+    double inverses = 0;
+    for (const BlockCsr& m : m_mats) inverses += static_cast<double>(m.rows()) * m.nb * m.nb * m.nb;
+    return kInverse * inverses + kFactorAdd * m_coarse->factorize_work();
+  }
+  const auto l = static_cast<std::size_t>((stage - 1) / 3);
+  const int kind = (stage - 1) % 3;
+  if (kind == 2) {
+    finish_coarse(l);
+    const BlockCsr& C = m_mats[l + 1];
+    return kRoundValue * static_cast<double>(C.col.size()) * C.nb * C.nb;
+  }
+  const int rows = kind == 0 ? m_mats[l].rows() : m_mats[l + 1].rows();
+  end = std::min(end, rows);
+  done = end == rows;
+  const bool fine3 = m_mats[l].nb == 3;
+  if constexpr (dim == 3)
+    return kind == 0 ? (fine3 ? ap_rows<4, 3, 8>(l, begin, end) : ap_rows<8, 6, 8>(l, begin, end))
+                     : (fine3 ? ptap_rows<4, 3, 8>(l, begin, end) : ptap_rows<8, 6, 8>(l, begin, end));
+  else
+    return kind == 0 ? (m_mats[l].nb == 2 ? ap_rows<2, 2, 4>(l, begin, end) : ap_rows<4, 3, 4>(l, begin, end))
+                     : (m_mats[l].nb == 2 ? ptap_rows<2, 2, 4>(l, begin, end) : ptap_rows<4, 3, 4>(l, begin, end));
+}
+
+template <int dim> void BlockMultigrid<dim>::begin_refresh() {
+  m_stage = 0;
+  m_row = 0;
+}
+
+template <int dim> bool BlockMultigrid<dim>::refresh_part(double share) {
+  // Stages in order, rows of the Galerkin products a chunk at a time, until the share of a
+  // whole refresh's work is done (a whole refresh when the work is not yet counted).
+  constexpr int kChunk = 16;
+  const int last = 1 + 3 * static_cast<int>(m_levels.size());
+  const double budget = m_work > 0 ? share * m_work : std::numeric_limits<double>::infinity();
+  double done = 0;
+  while (m_stage <= last && (done < budget || done == 0)) {
+    bool complete = false;
+    done += refresh_stage(m_stage, m_row, m_row + kChunk, complete) + 1;
+    m_row += kChunk;
+    if (complete) {
+      ++m_stage;
+      m_row = 0;
+    }
+  }
+  return m_stage > last;
 }
 
 template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
@@ -436,25 +500,28 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
     }
 }
 
-template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::galerkin_products(std::size_t l) {
-  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
+template <int dim>
+template <int W, int NB, int WC>
+double BlockMultigrid<dim>::ap_rows(std::size_t l, int begin, int end) {
+  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC;
   const BlockCsr& A = m_mats[l];
-  BlockCsr& C = m_mats[l + 1];
   Level& lev = m_levels[l];
   RectCsr& ap = lev.ap;
   int* marker = lev.marker.data();
   const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = lev.prolong.ptr.data(), *pc = lev.prolong.col.data();
-  const float *av = A.f.data(), *pv = lev.prolong.f.data(), *ptv = lev.ptrans.data();
+  const float *av = A.f.data(), *pv = lev.prolong.f.data();
   double* apv = ap.val.data();
+  long products = 0;
   // A P, row by row into its pattern (a scatter through the row's marker of coarse columns):
   // column c of block (i, J) += A_ij times column c of P_jJ.
-  for (int i = 0; i < A.rows(); ++i) {
+  for (int i = begin; i < end; ++i) {
     for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
       marker[ap.col[static_cast<std::size_t>(q)]] = q;
       std::fill_n(apv + q * PB, PB, 0.0);
     }
     for (int k = ptr[i]; k < ptr[i + 1]; ++k) {
       const float* a = av + k * AB;
+      products += pp[col[k] + 1] - pp[col[k]];
       for (int p = pp[col[k]]; p < pp[col[k] + 1]; ++p) {
         const float* pj = pv + p * PB;
         double* t = apv + marker[pc[p]] * PB;
@@ -462,10 +529,24 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
       }
     }
   }
+  return static_cast<double>(products) * W * NB * NBC; // each product: NBC columns of W lanes, NB terms
+}
+
+template <int dim>
+template <int W, int NB, int WC>
+double BlockMultigrid<dim>::ptap_rows(std::size_t l, int begin, int end) {
+  constexpr int NBC = kModes, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
+  BlockCsr& C = m_mats[l + 1];
+  Level& lev = m_levels[l];
+  const RectCsr& ap = lev.ap;
+  int* marker = lev.marker.data();
+  const float* ptv = lev.ptrans.data();
+  const double* apv = ap.val.data();
+  long products = 0;
   // P^T (A P), coarse row by coarse row: column c of block (I, J) += P_iI^T times column c of
   // (A P)_iJ.
   double* cv = C.val.data();
-  for (int I = 0; I < C.rows(); ++I) {
+  for (int I = begin; I < end; ++I) {
     for (int q = C.ptr[static_cast<std::size_t>(I)]; q < C.ptr[static_cast<std::size_t>(I) + 1]; ++q) {
       marker[C.col[static_cast<std::size_t>(q)]] = q;
       std::fill_n(cv + q * CB, CB, 0.0);
@@ -473,6 +554,7 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
     for (int s = lev.rptr[static_cast<std::size_t>(I)]; s < lev.rptr[static_cast<std::size_t>(I) + 1]; ++s) {
       const int i = lev.rrow[static_cast<std::size_t>(s)];
       const float* pt = ptv + lev.rblock[static_cast<std::size_t>(s)] * PTB;
+      products += ap.ptr[static_cast<std::size_t>(i) + 1] - ap.ptr[static_cast<std::size_t>(i)];
       for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
         const double* a = apv + q * PB;
         double* t = cv + marker[ap.col[static_cast<std::size_t>(q)]] * CB;
@@ -480,12 +562,16 @@ template <int dim> template <int W, int NB, int WC> void BlockMultigrid<dim>::ga
       }
     }
   }
+  return static_cast<double>(products) * WC * NB * NBC;
 }
 
 template <int dim> void BlockMultigrid<dim>::refresh() {
-  round(m_mats.front());
-  for (std::size_t l = 0; l < m_levels.size(); ++l) galerkin(l);
-  finish();
+  // Every stage whole, in refresh_part's order; the work counted for its shares.
+  double work = 0;
+  bool done = false;
+  for (int stage = 0; stage <= 1 + 3 * static_cast<int>(m_levels.size()); ++stage)
+    work += refresh_stage(stage, 0, std::numeric_limits<int>::max(), done) + 1;
+  m_work = work;
 }
 
 template <int dim> void BlockMultigrid<dim>::finish() {

@@ -148,16 +148,20 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
 
   // The tensor filter, lag-free about its reference shape while the distortion from it is
   // trusted (kTrustedMismatch); past that the reference moves to the current shape
-  // (relinearize: one refactorisation) and the filter goes on from there (docs/method.md).
+  // (relinearize), its refactorisation spread over the next steps, which the H in use serves
+  // meanwhile, unless the distortion passes kHardMismatch first (then at once: docs/method.md).
   // Implicit Euler stays the safety net for a state with no finite mismatch, which its own
   // step and the run's watch then meet.
   if (m_tensor) {
     double mismatch = turns ? m_tensor->prepare_turned(s.u) : m_tensor->prepare(s.u);
     if (std::isfinite(mismatch) && mismatch > WarpedFilter<dim>::kTrustedMismatch) {
-      m_tensor->relinearize(s.u);
-      mismatch = m_tensor->prepare(s.u);
+      if (!m_tensor->relinearizing()) m_tensor->relinearize(s.u, false);
+      if (mismatch > WarpedFilter<dim>::kHardMismatch) {
+        m_tensor->finish_refresh();
+        mismatch = m_tensor->prepare(s.u);
+      }
     }
-    m_fallback = !(mismatch <= WarpedFilter<dim>::kTrustedMismatch);
+    m_fallback = !(mismatch <= WarpedFilter<dim>::kHardMismatch);
     m_fallback_steps += m_fallback;
     if (m_fallback) {
       m_fallback_ie->step(s);
@@ -189,6 +193,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     // Toward implicit Euler's step where a cover or the V-cycle makes H depart from the
     // warped rest Jacobian (WarpedFilter::correct).
     m_tensor->correct(s.u, s.v, m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
+    m_tensor->advance_refresh(); // this step's part of a refactorisation under way
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);

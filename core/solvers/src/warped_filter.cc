@@ -132,13 +132,19 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   Nodal<dim> x(dim, nf); // the free nodes' rest positions: the V-cycle's rigid modes
   for (Eigen::Index a = 0; a < nf; ++a) x.col(a) = model.net.rest.col(model.free_nodes[static_cast<std::size_t>(a)]);
-  m_h = make_warped_system<dim>(tensor_filter_matrix(model, dt, 0.0), x, multigrid);
+  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(model, dt, 0.0);
+  m_h = make_warped_system<dim>(H0, x, multigrid);
+  m_next = make_warped_system<dim>(H0, x, multigrid); // the refreshes' (same ordering and pattern)
   m_index.resize(static_cast<std::size_t>(nf) * dim);
   for (int r = 0; r < static_cast<int>(nf) * dim; ++r) {
     m_index[static_cast<std::size_t>(r)] = m_h->index(r);
     if (m_index[static_cast<std::size_t>(r)] != m_index[static_cast<std::size_t>(r - r % dim)] + r % dim)
       throw std::logic_error("WarpedFilter: the system does not keep a node's values consecutive");
+    if (m_next->index(r) != m_index[static_cast<std::size_t>(r)])
+      throw std::logic_error("WarpedFilter: the two systems order the dofs differently");
   }
+  if (m_next->value_count() != m_h->value_count())
+    throw std::logic_error("WarpedFilter: the two systems store different patterns");
   // Per node position in the solve's vector, its node and free index (what solve_turned reads;
   // meaningful where the system keeps a node's values at a multiple of dim, as the factor does).
   m_node_at.assign(static_cast<std::size_t>(m_h->size() / dim), -1);
@@ -184,6 +190,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
         m_tptr[static_cast<std::size_t>(sp) + 1] = static_cast<int>(m_toff.size());
       });
   m_trigger.assign(static_cast<std::size_t>(ns), MismatchTracker::to_sin2(kCoverFloor));
+  m_beta.assign(static_cast<std::size_t>(ns), 0.0);
   m_spring_rest.resize(dim, ns);
   for (int sp = 0; sp < ns; ++sp)
     m_spring_rest.col(sp) = net.rest.col(net.edge[static_cast<std::size_t>(sp)][1]) -
@@ -197,11 +204,16 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
     // Per node 3 / sum |X_j - X_i|^2 = 3 / tr A_rest: A scaled by it has singular values near 1
     // (its polar factor unchanged), where the polar iteration needs few steps.
     m_adj_ref = m_adj_rest;
+    m_adj_ref_next = m_adj_rest;
     m_adj_scale.assign(static_cast<std::size_t>(net.num_nodes()), 1.0);
+    m_adj_scale_next = m_adj_scale;
     m_polar_a.assign(9 * static_cast<std::size_t>(net.num_nodes()), 0.0);
     m_polar_ok.assign(static_cast<std::size_t>(net.num_nodes()), 0);
-    scale_neighbourhoods();
+    scale_neighbourhoods(m_adj_ref, m_adj_scale);
   }
+  m_spring_ref_next = m_spring_ref;
+  m_base_next = m_base;
+  m_tval_next = m_tval;
   m_multigrid = multigrid;
   m_residual = Nodal<dim>::Zero(dim, net.num_nodes());
   m_iterate = Nodal<dim>::Zero(dim, net.num_nodes());
@@ -278,7 +290,7 @@ template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<
   return one.value();
 }
 
-template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mismatch) {
+template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mismatch, bool at_once) {
   // Each spring's beta is twice its own mismatch while the largest, M, is at most
   // kLocalCoverLimit; past it every spring gets the largest, 2 M. Kept until a spring outgrows
   // its beta or M falls 8x below the largest; no cover at all while M < kCoverFloor (the
@@ -289,19 +301,68 @@ template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mis
   // tenth of its stiffness (strains past 0.1 turn springs that had little mismatch within a step).
   const auto& net = m_model.net;
   const double global = mismatch < kCoverFloor ? 0.0 : std::min(1.0, 2 * mismatch);
-  double* v = m_h->values();
-  std::copy(m_base.begin(), m_base.end(), v);
   for (int s = 0; s < net.num_springs(); ++s) {
     const double b = global == 0                   ? 0.0
                      : mismatch > kLocalCoverLimit ? global
                                                    : std::min(global, 2 * spring_mismatch(s, u));
+    m_beta[static_cast<std::size_t>(s)] = b;
     m_trigger[static_cast<std::size_t>(s)] = MismatchTracker::to_sin2(std::max(b, kCoverFloor));
-    for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k)
-      v[m_toff[static_cast<std::size_t>(k)]] += b * m_tval[static_cast<std::size_t>(k)];
   }
   m_beta_max = global;
-  m_correction_rest = 0; // a new cover: correct() measures its gain again
-  m_h->refresh();
+  start_refresh(false);
+  if (at_once) finish_refresh();
+}
+
+template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
+  // H(beta) = H(0) + sum_s beta_s T_s into the second system's values, from the H(0) and T of
+  // the reference shape it will have (a relinearisation's, or the one in use).
+  const auto& net = m_model.net;
+  const std::vector<double>& base = relinearized ? m_base_next : m_base;
+  const std::vector<double>& tval = relinearized ? m_tval_next : m_tval;
+  double* v = m_next->values();
+  std::copy(base.begin(), base.end(), v);
+  if (!relinearized)
+    for (int s = 0; s < net.num_springs(); ++s) {
+      const double b = m_beta[static_cast<std::size_t>(s)];
+      if (b == 0) continue;
+      for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k)
+        v[m_toff[static_cast<std::size_t>(k)]] += b * tval[static_cast<std::size_t>(k)];
+    }
+  m_next->begin_refresh();
+  m_refreshing = true;
+  m_next_relinearized = relinearized;
+}
+
+template <int dim> void WarpedFilter<dim>::advance_refresh() {
+  if (m_refreshing && m_next->refresh_part(1.0 / kRefreshParts)) swap_systems();
+}
+
+template <int dim> void WarpedFilter<dim>::finish_refresh() {
+  if (!m_refreshing) return;
+  if (!m_next->refresh_part(1.0 / kRefreshParts)) { // more than one part left
+    ++m_refreshes_at_once;
+    while (!m_next->refresh_part(1.0)) {
+    }
+  }
+  swap_systems();
+}
+
+template <int dim> void WarpedFilter<dim>::swap_systems() {
+  std::swap(m_h, m_next);
+  if (m_next_relinearized) { // the new reference shape, with no cover on it
+    m_spring_ref.swap(m_spring_ref_next);
+    m_adj_ref.swap(m_adj_ref_next);
+    m_adj_scale.swap(m_adj_scale_next);
+    m_base.swap(m_base_next);
+    m_tval.swap(m_tval_next);
+    std::fill(m_beta.begin(), m_beta.end(), 0.0);
+    std::fill(m_trigger.begin(), m_trigger.end(), MismatchTracker::to_sin2(kCoverFloor));
+    m_beta_max = 0;
+    ++m_relinearizations;
+  }
+  m_refreshing = false;
+  m_next_relinearized = false;
+  m_correction_rest = 0; // a new H: correct() measures its gain again
   ++m_factor_version;
 }
 
@@ -415,33 +476,35 @@ template <int dim> void WarpedFilter<dim>::turn_rotations() {
   }
 }
 
-template <int dim> void WarpedFilter<dim>::scale_neighbourhoods() {
+template <int dim>
+void WarpedFilter<dim>::scale_neighbourhoods(const Nodal<dim>& ref, std::vector<double>& scale) const {
   if constexpr (dim == 3) {
     const auto& net = m_model.net;
     for (int i = 0; i < net.num_nodes(); ++i) {
       double trace = 0;
       for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
-        trace += m_adj_ref.col(p).squaredNorm();
-      m_adj_scale[static_cast<std::size_t>(i)] = trace > 0 ? 3 / trace : 1.0;
+        trace += ref.col(p).squaredNorm();
+      scale[static_cast<std::size_t>(i)] = trace > 0 ? 3 / trace : 1.0;
     }
   }
 }
 
-template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u) {
+template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool at_once) {
   // H = M (1 + dt gamma) + dt D(u) + dt^2 K(u) at the shape X + u (K's transverse term clamped
   // at 0 under compression, as implicit Euler's, so that H stays positive definite), written
   // at the offsets the constructor kept; the transverse blocks and the reference vectors of
-  // that shape; no cover. Allocates nothing.
+  // that shape, all into the second system's arrays (the ones in use serve the steps until it
+  // takes over); no cover. Allocates nothing.
   const auto& net = m_model.net;
   const auto& free = m_model.free_nodes;
   const double dt = m_dt;
-  std::fill(m_base.begin(), m_base.end(), 0.0);
+  std::fill(m_base_next.begin(), m_base_next.end(), 0.0);
   for (std::size_t r = 0; r < m_diag_off.size(); ++r)
-    m_base[static_cast<std::size_t>(m_diag_off[r])] += net.mass[free[r / dim]] * (1.0 + dt * net.mass_damping);
+    m_base_next[static_cast<std::size_t>(m_diag_off[r])] += net.mass[free[r / dim]] * (1.0 + dt * net.mass_damping);
   for (int s = 0; s < net.num_springs(); ++s) {
     const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
     const Vec<dim> xi = net.rest.col(i) + u.col(i), xj = net.rest.col(j) + u.col(j);
-    m_spring_ref.col(s) = xj - xi;
+    m_spring_ref_next.col(s) = xj - xi;
     const int begin = m_tptr[static_cast<std::size_t>(s)], end = m_tptr[static_cast<std::size_t>(s) + 1];
     if (begin == end) continue;
     const double k = net.stiffness[static_cast<std::size_t>(s)], c = net.damping[static_cast<std::size_t>(s)];
@@ -452,17 +515,17 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u) {
       const int code = m_tcode[static_cast<std::size_t>(e)];
       const int p = (code / dim) % dim, q = code % dim;
       const double sign = code / (dim * dim) < 2 ? 1.0 : -1.0; // H's sign: + on (i,i), (j,j)
-      m_base[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
-      m_tval[static_cast<std::size_t>(e)] = sign * T(p, q);
+      m_base_next[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
+      m_tval_next[static_cast<std::size_t>(e)] = sign * T(p, q);
     }
   }
   if constexpr (dim == 3)
     for (int i = 0; i < net.num_nodes(); ++i)
       for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
-        m_adj_ref.col(p) = m_adj_rest.col(p) + u.col(net.adj_node[static_cast<std::size_t>(p)]) - u.col(i);
-  scale_neighbourhoods();
-  cover(u, 0.0); // H(0) at this shape, refactorised; every trigger at the floor
-  ++m_relinearizations;
+        m_adj_ref_next.col(p) = m_adj_rest.col(p) + u.col(net.adj_node[static_cast<std::size_t>(p)]) - u.col(i);
+  scale_neighbourhoods(m_adj_ref_next, m_adj_scale_next);
+  start_refresh(true);
+  if (at_once) finish_refresh();
 }
 
 template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {
@@ -478,8 +541,8 @@ template <int dim> double WarpedFilter<dim>::prepare_turned(const Nodal<dim>& u)
 template <int dim> double WarpedFilter<dim>::follow(const Nodal<dim>& u) {
   bool outgrown = false;
   const double mismatch = scan(u, &outgrown);
-  if (!(mismatch <= kTrustedMismatch)) return mismatch;
-  if (outgrown || 8 * mismatch < m_beta_max) cover(u, mismatch);
+  if (!(mismatch <= kTrustedMismatch) || m_refreshing) return mismatch; // one refresh at a time
+  if (outgrown || 8 * mismatch < m_beta_max) cover(u, mismatch, false);
   return mismatch;
 }
 

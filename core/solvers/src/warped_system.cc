@@ -34,6 +34,14 @@ public:
     m_h.factorize(); // H(beta) is H(0) plus positive semidefinite terms: positive definite
     m_blocks.refresh();
   }
+  void begin_refresh() override { m_h.begin_factorize(); }
+  bool refresh_part(double share) override {
+    // Rows of the factor up to the share of its work; the tiles copied with the last part.
+    if (!m_h.factorize_part(share * m_h.factorize_work())) return false;
+    if (!m_h.factorized()) throw std::runtime_error("filtered (tensor): H is not positive definite");
+    m_blocks.refresh();
+    return true;
+  }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
     m_blocks.solve_in_place(Eigen::Map<Nodal<dim>>(y.data(), dim, y.size() / dim)); // tile k = rows k dim ..
   }
@@ -63,6 +71,8 @@ public:
   std::size_t value_count() const override { return m_mg.value_count(); }
   long offset(int r, int c) const override { return m_mg.offset(r, c); }
   void refresh() override { m_mg.refresh(); }
+  void begin_refresh() override { m_mg.begin_refresh(); }
+  bool refresh_part(double share) override { return m_mg.refresh_part(share); }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
     std::copy(y.data(), y.data() + y.size(), m_b.begin()); // the pads are 0 in and out
     m_mg.apply(m_b.data(), y.data());

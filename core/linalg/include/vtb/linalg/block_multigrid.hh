@@ -57,6 +57,13 @@ public:
   long offset(int r, int c) const;
   /// After values() changed: the diagonal inverses, coarse matrices and coarsest factor again.
   void refresh();
+  /// refresh() in parts, so that a time step can carry a share of it (warped_filter.hh):
+  /// begin_refresh(), then refresh_part(share) until it returns true, each call doing about
+  /// `share` of the whole (rows of the Galerkin products, counted in block products; at least
+  /// one row). The same arithmetic as refresh(), so the same hierarchy to the bit. Not applied
+  /// in between. Allocates nothing.
+  void begin_refresh();
+  bool refresh_part(double share);
 
   /// x <- B b; b and x hold kLanes values per node (node a at a kLanes ..), pads 0; distinct.
   void apply(const double* b, double* x);
@@ -97,13 +104,21 @@ private:
     std::vector<int> dead;               ///< coarse values with no fine support (a small aggregate): 1 on the diagonal
   };
   void cycle(std::size_t l, const double* b, double* x);
-  void galerkin(std::size_t l);
+  /// Stage `stage` of a refresh, rows [begin, end) where it has rows (else all of it; `end`
+  /// past its rows ends it): 0 rounds the finest matrix, 1 + 3 l, 2 + 3 l and 3 + 3 l make A P,
+  /// P^T A P and the rounded coarse matrix of level l, and 1 + 3 levels is finish(). Returns
+  /// its work (block products, blocks or rows) and sets `done` when the stage is complete.
+  double refresh_stage(int stage, int begin, int end, bool& done);
   /// The diagonal inverses and the coarsest factor of the levels' current values.
   void finish();
   /// m.f from m.val (BlockCsr::f).
   static void round(BlockCsr& m);
-  /// galerkin() for fine nodes of NB values on W lanes (coarse: kModes on WC lanes).
-  template <int W, int NB, int WC> void galerkin_products(std::size_t l);
+  /// A P's fine rows [begin, end) and P^T A P's coarse rows [begin, end) of level l, for fine
+  /// nodes of NB values on W lanes (coarse: kModes on WC lanes); each returns its block products.
+  template <int W, int NB, int WC> double ap_rows(std::size_t l, int begin, int end);
+  template <int W, int NB, int WC> double ptap_rows(std::size_t l, int begin, int end);
+  /// The coarse matrix of level l + 1 from its products: 1 on the dead values, then rounded.
+  void finish_coarse(std::size_t l);
 
   std::vector<BlockCsr> m_mats;              ///< every level's matrix, finest first
   std::vector<Level> m_levels;               ///< every level but the coarsest
@@ -112,6 +127,8 @@ private:
   std::vector<int> m_coarse_offset;          ///< per coarsest block value: its factor offset, or -1
   std::vector<int> m_coarse_order;           ///< per coarsest dof: its factor row
   Eigen::MatrixXd m_coarse_rhs;              ///< one column in factor order
+  int m_stage = 0, m_row = 0;                ///< refresh_part's place: the stage and its next row
+  double m_work = 0;                         ///< a whole refresh's work, counted by the last refresh()
 };
 
 } // namespace vtb

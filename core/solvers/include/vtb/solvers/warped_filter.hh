@@ -63,6 +63,14 @@ public:
   virtual long offset(int r, int c) const = 0;
   /// After values() changed.
   virtual void refresh() = 0;
+  /// refresh() in parts, for a bounded step: begin_refresh() after values() changed, then
+  /// refresh_part(share) until it returns true, each call doing about `share` of the whole
+  /// (at least a little); the system is not solved with in between. By default all at once.
+  virtual void begin_refresh() {}
+  virtual bool refresh_part(double /*share*/) {
+    refresh();
+    return true;
+  }
   /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
   virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
   /// 2D, where the system can (the factor: BlockSolve::solve_turned): y <- H^-1 b with node
@@ -88,12 +96,30 @@ public:
   /// Beyond this direction mismatch from the reference shape the warped reference Jacobian is
   /// not trusted: the filtered step then relinearises at the current shape (docs/method.md).
   static constexpr double kTrustedMismatch = 0.2;
+  /// While the relinearisation started past kTrustedMismatch is under way the H in use serves;
+  /// past this mismatch it is finished at once.
+  static constexpr double kHardMismatch = 0.3;
   /// Linearises again at displacement u: H_t's Jacobian blocks (K's transverse term clamped at
   /// 0 under compression) and the reference vectors that the rotations and the mismatch are
   /// measured from become those of the shape X + u, refactorised (or the V-cycle refreshed),
   /// with no cover. The filter is then lag-free about that shape as it is about the rest shape
-  /// at start (docs/method.md). Allocates nothing; costs one refactorisation.
-  void relinearize(const Nodal<dim>& u);
+  /// at start (docs/method.md). Allocates nothing; costs one refactorisation: at once, or
+  /// (at_once false) spread over the next kRefreshParts steps (advance_refresh), the steps
+  /// meanwhile solved with the H in use. Supersedes a refresh under way.
+  void relinearize(const Nodal<dim>& u, bool at_once = true);
+  /// A refactorisation (a new cover, or a relinearisation) is under way in the second system.
+  bool refreshing() const { return m_refreshing; }
+  /// And it is a relinearisation.
+  bool relinearizing() const { return m_refreshing && m_next_relinearized; }
+  /// One part of the refresh under way (none: nothing); at its end the new H takes over.
+  void advance_refresh();
+  /// The rest of the refresh under way, now (counted by refreshes_at_once when more than one
+  /// part was left: a step that carried a whole refactorisation).
+  void finish_refresh();
+  long refreshes_at_once() const { return m_refreshes_at_once; }
+  /// How many steps a refactorisation is spread over: each step carries 1 / kRefreshParts of
+  /// it, so that no step costs a whole factorisation (docs/method.md).
+  static constexpr int kRefreshParts = 16;
   /// How many times relinearize() ran.
   long relinearizations() const { return m_relinearizations; }
   /// H's entry (r, c) on the free dofs (row dim a + p: free node a, axis p) as the system holds
@@ -157,12 +183,18 @@ private:
   void turn_out(double dt, Nodal<dim>& dv) const;
   /// 2D: each node's rotation from the turns' sums.
   void turn_rotations();
-  /// 3D: each node's 3 / sum |x_j - x_i|^2 over its neighbours in the reference shape.
-  void scale_neighbourhoods();
+  /// 3D: each node's 3 / sum |x_j - x_i|^2 over its neighbours in reference vectors `ref`.
+  void scale_neighbourhoods(const Nodal<dim>& ref, std::vector<double>& scale) const;
   /// The mismatch at u after the rotations, and the cover that follows it (prepare's rest).
   double follow(const Nodal<dim>& u);
-  /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and refactorises.
-  void cover(const Nodal<dim>& u, double mismatch);
+  /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and starts
+  /// the refactorisation in the second system (at_once: finishes it).
+  void cover(const Nodal<dim>& u, double mismatch, bool at_once);
+  /// Writes H(beta) into the second system's values from m_base and m_tval, or (next) from
+  /// the relinearisation's m_base_next and m_tval_next.
+  void start_refresh(bool relinearized);
+  /// The second system takes over (and with a relinearisation, its reference shape).
+  void swap_systems();
   /// The largest mismatch at u; `outgrown` (if given): whether a spring passed its trigger.
   double scan(const Nodal<dim>& u, bool* outgrown) const;
   /// Spring s's mismatch at u.
@@ -176,16 +208,22 @@ private:
   static constexpr double kLocalCoverLimit = 0.1;
 
   const Model<dim>& m_model;
-  std::unique_ptr<WarpedSystem<dim>> m_h; ///< H's factor or V-cycle
-  std::vector<int> m_index;               ///< per free dof (dim a + p): its position in the solve's vector
-  std::vector<int> m_node_at, m_slot_at;  ///< per node position in the solve's vector: the node, its free index
-  std::vector<Mat<dim>> m_rotation;       ///< 3D, per node (2D: m_polar)
-  Nodal<dim> m_spring_rest;               ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
-  Nodal<dim> m_spring_ref;                ///< per spring: its vector in the reference shape (relinearize())
-  Nodal<dim> m_adj_rest;           ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
-  Nodal<dim> m_adj_ref;            ///< 3D, the same in the reference shape
-  std::vector<double> m_adj_scale; ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
-  std::vector<double> m_polar_a;   ///< 3D, per node: its scaled A (9 values), the rotations' scratch
+  std::unique_ptr<WarpedSystem<dim>> m_h;    ///< H's factor or V-cycle, in use
+  std::unique_ptr<WarpedSystem<dim>> m_next; ///< the same for the refresh under way (same pattern)
+  bool m_refreshing = false, m_next_relinearized = false;
+  std::vector<int> m_index;              ///< per free dof (dim a + p): its position in the solve's vector
+  std::vector<int> m_node_at, m_slot_at; ///< per node position in the solve's vector: the node, its free index
+  std::vector<Mat<dim>> m_rotation;      ///< 3D, per node (2D: m_polar)
+  Nodal<dim> m_spring_rest;              ///< per spring: its rest vector X_j - X_i (the scan reads it in order)
+  Nodal<dim> m_spring_ref;               ///< per spring: its vector in the reference shape (relinearize())
+  Nodal<dim> m_adj_rest; ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
+  Nodal<dim> m_adj_ref;  ///< 3D, the same in the reference shape
+  /// A relinearisation under way: its reference vectors, scales, H(0) values and transverse
+  /// blocks, which take over with its system.
+  Nodal<dim> m_spring_ref_next, m_adj_ref_next;
+  std::vector<double> m_adj_scale_next, m_base_next, m_tval_next;
+  std::vector<double> m_adj_scale;       ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
+  std::vector<double> m_polar_a;         ///< 3D, per node: its scaled A (9 values), the rotations' scratch
   std::vector<unsigned char> m_polar_ok; ///< 3D, per node: whether the polar iteration converged
   Eigen::Matrix2Xd m_polar;              ///< 2D, per node: (A00 + A11, A10 - A01), then the rotation's (cos, sin)
   /// 2D, per spring (row) at the last rotations(), column by column: d . D and D x d.
@@ -200,7 +238,9 @@ private:
   std::vector<int> m_diag_off; ///< per free dof: its diagonal's offset among H's values
   double m_dt = 0;
   long m_relinearizations = 0;
+  long m_refreshes_at_once = 0;
   std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
+  std::vector<double> m_beta;    ///< per spring: its cover (the last cover()'s)
   // correct()'s scratch: the residual and the iterate by nodes (fixed nodes 0), the
   // preconditioned residual by free nodes, and each spring's block of A as q d d^T + a_t I
   // (its vector d, q and a_t).
