@@ -50,6 +50,12 @@ Action add_haptics(CLI::App& app) {
               << " non-finite, energy to user " << r.energy_to_user << " J";
     if (r.fault_time >= 0)
       std::cout << "; fault at " << r.fault_time << " s, force zero at " << r.force_zero_time << " s";
+    std::cout << "; physics step median " << r.physics_step_median_us << " us, " << r.physics_steps_over_budget
+              << " of " << r.physics_steps << " steps over its budget of " << r.physics_step_budget_us << " us"
+              << (r.physics_filter.empty()
+                      ? ""
+                      : " (" + r.physics_filter + " filter" +
+                            (r.physics_filter_reason.empty() ? "" : ": " + r.physics_filter_reason) + ")");
     std::cout << "; outputs in " << out.string() << "\n";
     // Timing a user should not miss: late servo cycles mean the force felt was held longer
     // than one period (docs/haptics.md says what lowers them).

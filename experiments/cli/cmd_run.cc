@@ -47,7 +47,8 @@ Action add_run(CLI::App& app) {
     std::string filter; // what a filtered run ran, and whether auto picked it
     if (!r.filter.empty())
       filter = " (" + r.filter +
-               (r.filter_requested != r.filter ? " filter, picked by " + r.filter_requested : " filter") + ")";
+               (r.filter_requested != r.filter ? " filter, picked by " + r.filter_requested : " filter") +
+               (r.filter_reason.empty() ? "" : ": " + r.filter_reason) + ")";
     std::string springs; // which constants, and what auto or the fit's guard chose
     if (!r.calibration.empty())
       springs =
@@ -59,6 +60,12 @@ Action add_run(CLI::App& app) {
                 << std::setprecision(6) << " %) fell back to implicit Euler (the " << r.filter
                 << " filter's rest Jacobian past its trusted distortion, docs/method.md); most steps: "
                 << r.filter_most_steps << "\n";
+    if (r.step_budget > 0) // the budget's promise, kept or not
+      std::cout << "vtb run: " << r.steps_over_budget << " of " << r.steps_taken << " steps (" << std::setprecision(3)
+                << (r.steps_taken > 0
+                        ? 100.0 * static_cast<double>(r.steps_over_budget) / static_cast<double>(r.steps_taken)
+                        : 0.0)
+                << std::setprecision(6) << " %) took longer than the step budget of " << r.step_budget * 1e6 << " us\n";
     std::string load_check; // the springs against P1 FEM on this scene's loads
     if (std::isfinite(r.calibration_load_error)) {
       std::ostringstream pct;

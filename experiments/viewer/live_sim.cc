@@ -1,5 +1,6 @@
 #include "live_sim.hh"
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/filtered.hh"
 
 #include "vtb/meshes/input_error.hh"
@@ -42,7 +43,11 @@ template <int dim> void LiveSim<dim>::rebuild() {
   o.kind = m_controls.solver;
   o.filter = m_controls.filter;
   o.dt = m_controls.dt;
+  o = with_budget_pick(*model, o);         // auto within [solver].step_budget (filter_pick.hh)
   auto integ = make_integrator(*model, o); // the integrator keeps a reference to *model
+  m_stats.step_budget_us = o.step_budget * 1e6;
+  m_stats.steps_over_budget = 0;
+  m_stats.filter_reason = o.filter_reason;
   const bool same_size = m_model && m_model->num_nodes() == model->num_nodes();
   const auto* filtered = dynamic_cast<const FilteredImplicit<dim>*>(integ.get());
   m_running_filter = filtered ? filtered->filter() : std::string();
@@ -115,6 +120,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   m_integ->step(m_state);
   const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();
   m_step_us[static_cast<std::size_t>(m_step_count % static_cast<int>(m_step_us.size()))] = us;
+  if (m_stats.step_budget_us > 0 && us > m_stats.step_budget_us) ++m_stats.steps_over_budget;
   ++m_step_count;
   ++m_stats.steps;
   check(false);

@@ -54,7 +54,10 @@ struct SimStats {
   double energy = 0;          ///< elastic + kinetic, J
   double max_strain = 0;      ///< max |l/L0 - 1|
   long steps = 0;
-  long fallback_steps = 0; ///< tensor filter: steps handed to implicit Euler (distortion past trust)
+  long fallback_steps = 0;    ///< tensor filter: steps handed to implicit Euler (distortion past trust)
+  double step_budget_us = 0;  ///< [solver].step_budget (0: none)
+  long steps_over_budget = 0; ///< steps that took longer, since the integrator was built
+  std::string filter_reason;  ///< why auto picked the filter within the budget (empty: no budget)
 };
 
 /// Called before every step with the state whose applied forces (and their couplings'

@@ -91,6 +91,9 @@ template <int dim> void App<dim>::draw_readouts() {
   ImGui::Text("pulls: %d (shift+release pins, C lets go)", sim.num_pulls());
   if (st.fallback_steps > 0)
     ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "tensor: %ld steps by implicit Euler", st.fallback_steps);
+  if (st.step_budget_us > 0)
+    ImGui::TextColored(st.steps_over_budget > 0 ? ImVec4(1, 0.6f, 0.1f, 1) : ImVec4(0.7f, 0.9f, 0.7f, 1),
+                       "step budget %.0f us: %ld steps over", st.step_budget_us, st.steps_over_budget);
   if (st.behind && !m_paused) ImGui::TextColored(ImVec4(1, 0.6f, 0.1f, 1), "behind real time: physics over budget");
   const int n = sim.probe_trace(m_trace);
   if (n > 0) {

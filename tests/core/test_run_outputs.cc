@@ -92,6 +92,36 @@ TEST(RunOutputs, SummarySaysWhichFilterAutoPicked) {
   EXPECT_EQ(j["filter_requested"], "auto");
 }
 
+TEST(RunOutputs, AStepBudgetCountsTheStepsOverItAndPicksTheMostAccurateFilterThatFits) {
+  // [solver] step_budget: with a budget no step can miss (1000 s) every step is within it and
+  // auto runs the most accurate candidate, the tensor filter; with one no step can meet
+  // (1e-12 s) every step is over it, and auto runs the cheapest filter it measured, saying so.
+  // Which one that is depends on the clock; that it is one of the 2D candidates does not.
+  const test::FreshDir fresh;
+  const auto [r, j] = run_pulled_plate("kind = \"filtered\"\ndt = 1e-2\nstep_budget = 1000.0\n", fresh / "loose");
+  ASSERT_TRUE(r.stable);
+  EXPECT_EQ(j["filter"], "tensor");
+  EXPECT_EQ(j["filter_requested"], "auto");
+  EXPECT_EQ(j["steps_over_budget"], 0);
+  EXPECT_EQ(j["over_budget_share"], 0.0);
+  EXPECT_NE(j["filter_reason"].get<std::string>().find("fits the step budget"), std::string::npos) << j.dump();
+  const auto [t, k] = run_pulled_plate("kind = \"filtered\"\ndt = 1e-2\nstep_budget = 1e-12\n", fresh / "tight");
+  ASSERT_TRUE(t.stable);
+  EXPECT_EQ(k["steps_over_budget"], k["steps"]);
+  EXPECT_EQ(k["over_budget_share"], 1.0);
+  EXPECT_TRUE(k["filter"] == "tensor" || k["filter"] == "full") << k.dump();
+  EXPECT_EQ(k["filter_reason"].get<std::string>().rfind("no filter's measured step fits", 0), 0u) << k.dump();
+  // A named filter is run as named, the budget only counted; without a budget nothing is said.
+  const auto [n, m] =
+      run_pulled_plate("kind = \"filtered\"\nfilter = \"full\"\ndt = 1e-2\nstep_budget = 1e-12\n", fresh / "named");
+  EXPECT_EQ(m["filter"], "full");
+  EXPECT_FALSE(m.contains("filter_reason"));
+  EXPECT_EQ(m["steps_over_budget"], m["steps"]);
+  const auto [u, w] = run_pulled_plate("kind = \"filtered\"\ndt = 1e-2\n", fresh / "none");
+  EXPECT_FALSE(w.contains("step_budget"));
+  EXPECT_FALSE(w.contains("steps_over_budget"));
+}
+
 } // namespace
 } // namespace vtb
 

@@ -102,6 +102,24 @@ def test_stats_report_the_steps(plate_scene):
     assert st["steps"] == 30 and st["step_median_us"] > 0 and st["max_strain"] > 0 and st["energy"] > 0
 
 
+def test_stats_count_the_steps_over_the_step_budget(plate_scene):
+    """[solver] step_budget: no step meets 1e-12 s, every step meets 1000 s; without one, 0. With
+    filter = "auto" the Simulation picks within the budget as vtb run does (filter_reason)."""
+    text = plate_scene.read_text().replace('filter = "full"', 'filter = "auto"')
+    text = text.replace("[solver]", "[solver]\nstep_budget = 1e-12")
+    tight = vtb.Simulation(vtb.Scene.from_toml(text))
+    tight.step(20)
+    assert tight.stats["step_budget_us"] == pytest.approx(1e-6)
+    assert tight.stats["steps_over_budget"] == 20
+    assert tight.stats["filter_reason"].startswith("no filter's measured step fits")
+    loose = vtb.Simulation(vtb.Scene.from_toml(text.replace("1e-12", "1000.0")))
+    loose.step(20)
+    assert loose.stats["steps_over_budget"] == 0 and "fits the step budget" in loose.stats["filter_reason"]
+    none = vtb.Simulation(plate_scene)
+    none.step(5)
+    assert none.stats["step_budget_us"] == 0 and none.stats["steps_over_budget"] == 0 and none.stats["filter_reason"] == ""
+
+
 def test_step_releases_the_gil(plate_scene):
     """A Python thread runs while another steps: its counter advances during one step() call."""
     sim = vtb.Simulation(plate_scene, solver="implicit-euler")

@@ -36,6 +36,10 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["force_zero_time"] = r.force_zero_time;
   j["physics_steps"] = r.physics_steps;
   j["physics_step_median_us"] = r.physics_step_median_us;
+  j["physics_step_budget_us"] = r.physics_step_budget_us;
+  j["physics_steps_over_budget"] = r.physics_steps_over_budget;
+  if (!r.physics_filter.empty()) j["physics_filter"] = r.physics_filter;
+  if (!r.physics_filter_reason.empty()) j["physics_filter_reason"] = r.physics_filter_reason;
   j["tick_median_us"] = r.tick_median_us;
   j["tick_p99_us"] = r.tick_p99_us;
   j["dim"] = r.dim;

@@ -1,5 +1,7 @@
 #include "vtb/haptics/session.hh"
+
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/filter_pick.hh"
 
 #include "realtime_thread.hh"
 #include "vtb/haptics/contacts.hh"
@@ -366,7 +368,11 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     throw InputError(scene.file.string() + ": [solver].kind = \"" + scene.solver.kind +
                      "\": a haptics session needs a fixed-step spring solver (" + solvers::list(solvers::is_stepper) +
                      ")");
-  const IntegratorOptions o = integrator_options(scene.solver);
+  IntegratorOptions o = integrator_options(scene.solver);
+  // The physics steps once per servo cycle: its budget is the cycle's period unless the scene
+  // sets one, and auto picks the most accurate filter that fits it (filter_pick.hh).
+  if (!(o.step_budget > 0)) o.step_budget = 1.0 / h.rate;
+  o = with_budget_pick(model, o);
 
   Snapshot<dim> init;
   init.x = model.net.rest;
@@ -384,6 +390,11 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
                                : run_realtime(servo, physics, ticks, period, opt, advance_devices);
   HapticsReport rep = finish_report(std::move(servo.report()), std::move(lt), physics, opt.lockstep);
   rep.coupling_stiffness = h.coupling_stiffness;
+  rep.physics_step_budget_us = o.step_budget * 1e6;
+  rep.physics_steps_over_budget = std::count_if(physics.step_times().begin(), physics.step_times().end(),
+                                                [&](double us) { return us > rep.physics_step_budget_us; });
+  if (o.kind == solvers::kFiltered) rep.physics_filter = chosen_filter(model, o.filter);
+  rep.physics_filter_reason = o.filter_reason;
   rep.notes = std::move(notes);
   return rep;
 }

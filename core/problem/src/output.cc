@@ -32,6 +32,12 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   j["precompute_seconds"] = r.precompute_seconds;
   j["step_seconds"] = {{"mean", r.step_seconds.mean}, {"median", r.step_seconds.median}, {"p99", r.step_seconds.p99}};
   j["total_seconds"] = r.total_seconds;
+  if (r.step_budget > 0) {
+    j["step_budget"] = r.step_budget;
+    j["steps_over_budget"] = r.steps_over_budget;
+    j["over_budget_share"] =
+        r.steps_taken > 0 ? static_cast<double>(r.steps_over_budget) / static_cast<double>(r.steps_taken) : 0.0;
+  }
   j["stable"] = r.stable;
   if (!r.stable) {
     j["failure"] = r.failure;
@@ -65,6 +71,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
   if (r.solver == solvers::kFiltered) {
     j["filter"] = r.filter;
     if (!r.filter_requested.empty()) j["filter_requested"] = r.filter_requested;
+    if (!r.filter_reason.empty()) j["filter_reason"] = r.filter_reason;
     if (!r.filter_most_steps.empty()) j["filter_most_steps"] = r.filter_most_steps;
     if (r.steps_taken > 0)
       j["fallback_share"] = static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken);

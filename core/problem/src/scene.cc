@@ -196,8 +196,9 @@ void read_probes(const TableReader& top, const std::string& name, Scene& s) {
 void read_solver(const TableReader& top, const std::string& name, Scene& s) {
   if (const toml::table* t = top.table("solver")) {
     const TableReader r(*t, "[solver]", name,
-                        {"kind", "dt", "filter", "momentum_correction", "strain_limit", "springs", "rtol", "atol",
-                         "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static", "kinematics"});
+                        {"kind", "dt", "filter", "momentum_correction", "strain_limit", "step_budget", "springs",
+                         "rtol", "atol", "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static",
+                         "kinematics"});
     std::vector<std::string_view> kinds;
     for (const auto& e : solvers::kEntries)
       if (e.scene_kind) kinds.emplace_back(e.name);
@@ -207,6 +208,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
         r.string("filter", solvers::kFilterAuto, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
     s.solver.momentum_correction = r.boolean("momentum_correction", true);
     s.solver.strain_limit = r.number("strain_limit", 0.0, non_negative);
+    s.solver.step_budget = r.number("step_budget", 0.0, non_negative);
     s.solver.springs = r.string("springs", "auto", {"auto", "lloyd", "van-gelder", "fitted"});
     s.solver.rtol = r.number("rtol", 1e-8, positive);
     s.solver.atol = r.number("atol", 1e-12, positive);

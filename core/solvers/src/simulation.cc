@@ -1,5 +1,7 @@
 #include "vtb/solvers/simulation.hh"
+
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/solvers/filter_pick.hh"
 
 #include "vtb/meshes/vtu_io.hh"
 #include "vtb/problem/cell_fields.hh"
@@ -70,9 +72,11 @@ std::string explicit_hint(const IntegratorOptions& o, const RunReport& rep) {
 template <int dim> RunReport report_header(const Model<dim>& model, const IntegratorOptions& o) {
   RunReport rep = spring_report(model, o.kind);
   rep.dt = o.dt;
+  rep.step_budget = o.step_budget;
   if (o.kind == solvers::kFiltered) {
     rep.filter = chosen_filter(model, o.filter);
-    rep.filter_requested = o.filter;
+    rep.filter_requested = o.filter_requested.empty() ? o.filter : o.filter_requested;
+    rep.filter_reason = o.filter_reason;
     rep.momentum_correction = o.momentum_correction && !model.has_constraints();
     rep.strain_limit = o.strain_limit;
   }
@@ -92,8 +96,9 @@ void fail(RunReport& rep, const std::string& why, const IntegratorOptions& o, do
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
   if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+  const IntegratorOptions picked = with_budget_pick(model, o); // auto within a step budget
   return simulate_with<dim>(
-      model, o, [&] { return make_integrator(model, o); }, traj, record_field);
+      model, picked, [&] { return make_integrator(model, picked); }, traj, record_field);
 }
 
 template <int dim>
@@ -146,6 +151,9 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
       }
     }
   }
+  if (o.step_budget > 0)
+    rep.steps_over_budget =
+        std::count_if(step_time.begin(), step_time.end(), [&](double t) { return t > o.step_budget; });
   rep.step_seconds = step_stats(std::move(step_time));
   // The tensor filters' steps taken by implicit Euler (their warped Jacobian past trust).
   if (const auto* f = dynamic_cast<const FilteredImplicit<dim>*>(integrator.get()); f && f->has_fallback()) {
@@ -173,6 +181,7 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
   o.atol = s.atol;
   o.linear_solver = s.linear_solver;
   o.cg_tolerance = s.cg_tolerance;
+  o.step_budget = s.step_budget;
   return o;
 }
 

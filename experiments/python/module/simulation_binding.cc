@@ -333,13 +333,17 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
               d["energy"] = st.energy;
               d["max_strain"] = st.max_strain;
               d["fallback_steps"] = st.fallback_steps;
+              d["step_budget_us"] = st.step_budget_us;
+              d["steps_over_budget"] = st.steps_over_budget;
+              d["filter_reason"] = st.filter_reason;
               d["courant_dt"] = s.courant_dt();
               return d;
             });
           },
           "Readouts, brought up to date when read: steps, step_median_us (over the last 256 steps), "
           "realtime_factor (of the last step call), energy (J), max_strain (springs' max |l/L0 - 1|), "
-          "fallback_steps, courant_dt")
+          "fallback_steps, step_budget_us and steps_over_budget ([solver].step_budget; 0 without), "
+          "filter_reason (why auto picked the filter within the budget), courant_dt")
       .def("__repr__", [](const Simulation& self) {
         return self.visit([&](const auto& s) {
           return "<vtb.Simulation " + std::to_string(self.dim()) + "D, " + std::to_string(s.model().num_nodes()) +

@@ -45,6 +45,12 @@ struct HapticsReport {
   double fault_time = -1, force_zero_time = -1; ///< when the watchdog tripped, when every |F| first hit 0 after it
   long physics_steps = 0;
   double physics_step_median_us = 0;
+  /// The physics' step budget: [solver].step_budget, or the servo period when the scene sets
+  /// none (one physics step per servo cycle); the steps over it; the filter auto picked within
+  /// it and why (filter_pick.hh; empty for other solvers or a named filter).
+  double physics_step_budget_us = 0;
+  long physics_steps_over_budget = 0;
+  std::string physics_filter, physics_filter_reason;
   double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
   double coupling_stiffness = 0;              ///< N/m rendered: the scene's, limited to the device's max stiffness
   std::vector<std::string> notes;             ///< what the run changed from the scene, one line each

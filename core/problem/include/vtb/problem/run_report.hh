@@ -58,6 +58,9 @@ struct RunReport {
   double effective_poisson_ratio = 0;
   std::string filter;           ///< filtered: the filter it ran
   std::string filter_requested; ///< filtered: the scene's [solver].filter (auto, or the filter itself)
+  std::string filter_reason;    ///< filtered: why auto picked it within the step budget (empty: no budget)
+  double step_budget = 0;       ///< [solver].step_budget (s; 0: none)
+  long steps_over_budget = 0;   ///< the steps that took longer
   /// filtered: what took most of the steps: the filter, or implicit-euler where the tensor
   /// filter's safety net took more than half of them (then the step cost is implicit Euler's).
   std::string filter_most_steps;

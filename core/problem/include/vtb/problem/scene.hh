@@ -78,6 +78,7 @@ struct SolverDesc {
   std::string filter = solvers::kFilterAuto;
   bool momentum_correction = true;
   double strain_limit = 0.0;    ///< 0 = off (the default: it changes the physics)
+  double step_budget = 0.0;     ///< s per step; 0 = none (filter_pick.hh)
   std::string springs = "auto"; ///< auto (fitted within its budget, else lloyd) | lloyd | van-gelder | fitted
   double rtol = 1e-8;
   std::string linear_solver = "auto"; ///< implicit-euler: auto (direct in 2D, cg in 3D) | direct | cg

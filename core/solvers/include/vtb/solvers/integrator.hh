@@ -79,6 +79,9 @@ struct IntegratorOptions {
   /// implicit-euler: auto (direct in 2D, cg in 3D) | direct (sparse LDL^T) | cg
   std::string linear_solver = "auto";
   double cg_tolerance = 1e-8; ///< implicit-euler with cg: |r| <= tol |b|
+  double step_budget = 0;     ///< s per step (0: none): steps over it are counted; auto's pick (filter_pick.hh)
+  /// Set by with_budget_pick when it resolved `auto`: what was asked for and why the filter.
+  std::string filter_requested, filter_reason;
 };
 
 /// From this many free nodes a 3D system is solved by the multigrid V-cycle rather than a
