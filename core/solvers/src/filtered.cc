@@ -162,6 +162,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
       }
     }
     m_fallback = !(mismatch <= WarpedFilter<dim>::kHardMismatch);
+    m_mismatch = mismatch;
     m_fallback_steps += m_fallback;
     if (m_fallback) {
       m_fallback_ie->step(s);
@@ -193,7 +194,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     // Toward implicit Euler's step where a cover or the V-cycle makes H depart from the
     // warped rest Jacobian (WarpedFilter::correct).
     m_tensor->correct(s.u, s.v, m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
-    m_tensor->advance_refresh(); // this step's part of a refactorisation under way
+    m_tensor->advance_refresh(m_mismatch); // this step's part of a refactorisation under way
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);

@@ -329,12 +329,26 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
         v[m_toff[static_cast<std::size_t>(k)]] += b * tval[static_cast<std::size_t>(k)];
     }
   m_next->begin_refresh();
+  m_refresh_done = 0;
   m_refreshing = true;
   m_next_relinearized = relinearized;
 }
 
-template <int dim> void WarpedFilter<dim>::advance_refresh() {
-  if (m_refreshing && m_next->refresh_part(1.0 / kRefreshParts)) swap_systems();
+template <int dim> void WarpedFilter<dim>::advance_refresh(double mismatch) {
+  if (!m_refreshing) return;
+  // 1 / kRefreshParts of the work; more where a relinearisation would not be done before the
+  // mismatch, growing as it did over the last step, reaches kHardMismatch: what is left spread
+  // over the steps left (so that the work per step grows smoothly instead of one step carrying
+  // the rest at the hard limit).
+  double share = 1.0 / kRefreshParts;
+  const double growth = mismatch - m_last_mismatch;
+  if (m_next_relinearized && growth > 0 && mismatch < kHardMismatch) {
+    const double steps_left = std::max(1.0, (kHardMismatch - mismatch) / growth - 1);
+    share = std::max(share, (1 - m_refresh_done) / steps_left);
+  }
+  m_last_mismatch = mismatch;
+  m_refresh_done += share;
+  if (m_next->refresh_part(share)) swap_systems();
 }
 
 template <int dim> void WarpedFilter<dim>::finish_refresh() {

@@ -84,6 +84,7 @@ private:
   Eigen::VectorXd m_no_coupling;                  ///< empty: no couplings
   bool m_fallback = false;                        ///< tensor: this step is implicit Euler's
   long m_fallback_steps = 0;
+  double m_mismatch = 0; ///< tensor: this step's largest direction mismatch
   bool m_correct;
   double m_strain_limit;
   std::unique_ptr<NodalSolve> m_h;                       ///< full: the factor of H

@@ -111,8 +111,11 @@ public:
   bool refreshing() const { return m_refreshing; }
   /// And it is a relinearisation.
   bool relinearizing() const { return m_refreshing && m_next_relinearized; }
-  /// One part of the refresh under way (none: nothing); at its end the new H takes over.
-  void advance_refresh();
+  /// One part of the refresh under way (none: nothing), at the step's largest mismatch; at its
+  /// end the new H takes over. A part is 1 / kRefreshParts of the work, or more where a
+  /// relinearisation at that pace would not be done before the mismatch, growing as it did
+  /// over the last step, reaches kHardMismatch.
+  void advance_refresh(double mismatch = 0);
   /// The rest of the refresh under way, now (counted by refreshes_at_once when more than one
   /// part was left: a step that carried a whole refactorisation).
   void finish_refresh();
@@ -239,6 +242,8 @@ private:
   double m_dt = 0;
   long m_relinearizations = 0;
   long m_refreshes_at_once = 0;
+  double m_refresh_done = 0;     ///< the shares of the refresh under way handed out so far
+  double m_last_mismatch = 0;    ///< advance_refresh's mismatch of the step before
   std::vector<double> m_trigger; ///< per spring: the sin^2 past which it outgrows its beta
   std::vector<double> m_beta;    ///< per spring: its cover (the last cover()'s)
   // correct()'s scratch: the residual and the iterate by nodes (fixed nodes 0), the
