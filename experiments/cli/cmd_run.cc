@@ -58,7 +58,7 @@ Action add_run(CLI::App& app) {
       std::cout << "vtb run: " << r.fallback_steps << " of " << r.steps_taken << " steps (" << std::setprecision(3)
                 << 100.0 * static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken)
                 << std::setprecision(6) << " %) fell back to implicit Euler (the " << r.filter
-                << " filter's rest Jacobian past its trusted distortion, docs/method.md); most steps: "
+                << " filter's safety net, for a state whose distortion is not finite, docs/method.md); most steps: "
                 << r.filter_most_steps << "\n";
     if (r.step_budget > 0) // the budget's promise, kept or not
       std::cout << "vtb run: " << r.steps_over_budget << " of " << r.steps_taken << " steps (" << std::setprecision(3)
