@@ -325,7 +325,7 @@ template <int dim> void tensor_kernel(benchmark::State& st, const Model<dim>& mo
   }
   const Nodal<dim> f = Nodal<dim>::Random(dim, model.num_nodes());
   Nodal<dim> dv(dim, static_cast<Eigen::Index>(model.free_nodes.size()));
-  const Eigen::VectorXd none;
+  const CouplingSet<dim> none(model.free_index); // no couplings
   for (auto _ : st) {
     if (prepare) {
       // 2D: normalising the turns' sums in place leaves unit pairs, which normalise to

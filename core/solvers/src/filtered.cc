@@ -90,11 +90,14 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
       m_row_of_node[static_cast<std::size_t>(node)] = factor.ordered(a);
     }
     m_rhs.resize(dim, nf);
-    m_couplings = std::make_unique<ScalarCouplings>(*m_h, nf);
+    m_couplings = std::make_unique<ScalarCouplings<dim>>(*m_h, nf);
   } else if (!m_tensor) {
     m_sparse = filter_matrix_neighbors(model, o.dt);
   }
-  if (m_tensor || m_h) m_coupling = Eigen::VectorXd::Zero(n); // the couplings' dt^2 k + dt c per node
+  // The couplings' units, by the slots of the system that solves them: free nodes (tensor) or
+  // the factor's rows (full).
+  if (m_tensor) m_units = std::make_unique<CouplingSet<dim>>(model.free_index);
+  if (m_h) m_units = std::make_unique<CouplingSet<dim>>(m_row_of_node);
   m_force.resize(dim, n);
   m_acc.resize(dim, nf);
   m_dv.resize(dim, nf);
@@ -173,14 +176,15 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   if (!turns) node_forces();
 
   // The couplings' implicit part, for the filters with a factor (tensor, full): their force's
-  // -dt k v term here, their dt^2 k + dt c joining H through Woodbury's identity.
-  const bool coupled =
-      (m_tensor || m_h) && (s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols());
-  if (coupled)
-    for (Eigen::Index i = 0; i < m_force.cols(); ++i) {
-      m_force.col(i) += coupling_force_correction(s, i, dt);
-      m_coupling[i] = coupling_diagonal(s, i, dt);
+  // -dt K v term here, their units' c w w^T joining H through Woodbury's identity.
+  if (m_units) {
+    if (s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols()) {
+      m_units->gather(s, dt);
+      m_units->add_force_correction(s.v, dt, m_force);
+    } else if (m_units->units() > 0) {
+      m_units->set(Eigen::VectorXd(), Eigen::VectorXd(), Eigen::VectorXi(), dt);
     }
+  }
   // The accelerations M^-1 F: what the neighbour filter multiplies and the momentum correction
   // compares with; the full and tensor filters solve with F itself.
   if ((!m_full && !m_tensor) || m_correct)
@@ -190,10 +194,10 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     }
   // dv = dt W a.
   if (m_tensor && !m_fallback) {
-    m_tensor->solve(m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
+    m_tensor->solve(m_force, *m_units, dt, m_dv);
     // Toward implicit Euler's step where a cover or the V-cycle makes H depart from the
     // warped rest Jacobian (WarpedFilter::correct).
-    m_tensor->correct(s.u, s.v, m_force, coupled ? m_coupling : m_no_coupling, dt, m_dv);
+    m_tensor->correct(s.u, s.v, m_force, *m_units, dt, m_dv);
     m_tensor->advance_refresh(m_mismatch); // this step's part of a refactorisation under way
   } else if (m_mg) {
     // H^-1 F_node by one V-cycle, in the free nodes' order.
@@ -201,10 +205,10 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_mg->apply(m_rhs, m_dv);
     m_dv *= dt;
   } else if (m_h) {
-    if (coupled) m_couplings->set(m_coupling, m_row_of_node);
+    m_couplings->set(*m_units);
     // W a = H^-1 M a = H^-1 F_node.
     m_h->solve_gathered<dim>(m_force, m_node_of_row.data(), m_rhs);
-    if (coupled) m_couplings->correct(m_rhs);
+    m_couplings->correct(m_rhs);
     if (!m_correct) { // nothing reads dv but the update: apply it in the factor's order
       advance<dim>(s, nf, m_node_of_row.data(), m_rhs, dt, dt);
       finish_step(s);

@@ -47,7 +47,7 @@ VTB_VECTOR_CLONES void correction_terms(int n, double dt, const double* __restri
 
 template <int dim>
 void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force,
-                                const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv) {
+                                const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv) {
   if (!(m_multigrid || m_beta_max > 0)) return; // H is the warped rest Jacobian: nothing to correct
   if (m_correction_rest > 0) {
     --m_correction_rest;
@@ -58,12 +58,10 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   const auto nf = static_cast<Eigen::Index>(free.size());
   const int ns = net.num_springs();
   const auto* e = net.edge.data();
-  const bool coupled = coupling.size() == net.num_nodes();
-  const auto diagonal = [&](int i) {
-    return net.mass[i] * (1.0 + dt * net.mass_damping) + (coupled && coupling[i] > 0 ? coupling[i] : 0.0);
-  };
+  const auto diagonal = [&](int i) { return net.mass[i] * (1.0 + dt * net.mass_damping); };
   // r = b - A x at x = dv: b = dt F' plus the transverse part of dt^2 K v (F' holds its axial
-  // part, the filter's dt k term), A x = the diagonal's plus the springs' B (x_i - x_j).
+  // part, the filter's dt k term), A x = the mass's, the couplings' c w w^T x and the springs'
+  // B (x_i - x_j).
   // e0 = x . A x, the step's own energy, for the gain below (which the V-cycle does not read).
   m_iterate.setZero();
   m_residual = dt * force;
@@ -75,6 +73,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     m_residual.col(i) -= m * dv.col(a);
     e0 += m * dv.col(a).squaredNorm();
   }
+  e0 += couplings.subtract_product(m_iterate, m_residual);
   alignas(64) double ew[kChunk * dim], l2[kChunk], dw[kChunk], de[kChunk], ww[kChunk], g[kChunk];
   for (int s0 = 0; s0 < ns; s0 += kChunk) {
     const int n = std::min(kChunk, ns - s0);
@@ -98,7 +97,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     });
   }
   // z = P r (P: R H'^-1 R^T, this filter's own solve), alpha = r . z / z . A z.
-  solve(m_residual, coupling, 1.0, m_direction);
+  solve(m_residual, couplings, 1.0, m_direction);
   double rz = 0, zaz = 0;
   for (Eigen::Index a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
@@ -106,6 +105,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     rz += m_residual.col(i).dot(m_direction.col(a));
     zaz += diagonal(i) * m_direction.col(a).squaredNorm();
   }
+  zaz += couplings.energy(m_iterate);
   for (int s = 0; s < ns; ++s) {
     const Vec<dim> w = m_iterate.col(e[s][0]) - m_iterate.col(e[s][1]);
     const double dws = m_spring_d.col(s).dot(w);
@@ -123,9 +123,9 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   if (!m_multigrid && rz * rz / (zaz * e0) < kCorrectionGain) m_correction_rest = kCorrectionRest;
 }
 
-template void WarpedFilter<2>::correct(const Nodal<2>&, const Nodal<2>&, const Nodal<2>&, const Eigen::VectorXd&,
-                                       double, Nodal<2>&);
-template void WarpedFilter<3>::correct(const Nodal<3>&, const Nodal<3>&, const Nodal<3>&, const Eigen::VectorXd&,
-                                       double, Nodal<3>&);
+template void WarpedFilter<2>::correct(const Nodal<2>&, const Nodal<2>&, const Nodal<2>&, const CouplingSet<2>&, double,
+                                       Nodal<2>&);
+template void WarpedFilter<3>::correct(const Nodal<3>&, const Nodal<3>&, const Nodal<3>&, const CouplingSet<3>&, double,
+                                       Nodal<3>&);
 
 } // namespace vtb

@@ -380,40 +380,34 @@ template <int dim> void WarpedFilter<dim>::swap_systems() {
   ++m_factor_version;
 }
 
-template <int dim> void WarpedFilter<dim>::couple(const Eigen::VectorXd& coupling) {
-  const auto& free = m_model.free_nodes;
-  const int nf = static_cast<int>(free.size());
-  int count = 0;
-  bool same = true;
-  std::array<double, kMaxCoupled> k{}; // dt^2 k + dt c per coupled node
-  for (int a = 0; a < nf && count < kMaxCoupled && coupling.size() > 0; ++a) {
-    const double ka = coupling[free[static_cast<std::size_t>(a)]];
-    if (!(ka > 0) || !std::isfinite(ka)) continue;
-    same = same && count < m_coupled && m_coupled_node[static_cast<std::size_t>(count)] == a;
-    m_coupled_node[static_cast<std::size_t>(count)] = a;
-    k[static_cast<std::size_t>(count++)] = ka;
-  }
-  same = same && count == m_coupled;
-  const bool new_z = !same || m_z_version != m_factor_version;
-  if (same && !new_z && k == m_coupled_k) return;
+template <int dim> void WarpedFilter<dim>::couple(const CouplingSet<dim>& set) {
+  const int count = set.units();
+  std::array<double, kMaxCoupled> c{}; // dt^2 k + dt b per unit
+  for (int u = 0; u < count; ++u) c[static_cast<std::size_t>(u)] = set.coefficient(u);
+  const bool new_z = count > 0 && (set.version() != m_set_version || m_z_version != m_factor_version);
+  const bool same_set = m_set == &set;
+  m_set = &set;
+  if (same_set && !new_z && count == m_coupled && c == m_coupled_k) return;
   m_coupled = count;
-  m_coupled_k = k;
+  m_coupled_k = c;
   if (count == 0) return;
   const int m = count * dim;
-  if (new_z) { // Z = H^-1 U: one solve per coupled dof, in place in its column
-    for (int c = 0; c < m; ++c) {
-      auto z = m_z.col(c);
+  // Where unit u's weight q sits in the solve's vector on axis p.
+  const auto at = [&](int u, int q, int p) { return m_index[static_cast<std::size_t>(set.slot(u, q) * dim + p)]; };
+  if (new_z || !same_set) { // Z = H^-1 U: one solve per unit and axis, in place in its column
+    for (int col = 0; col < m; ++col) {
+      auto z = m_z.col(col);
       z.setZero();
-      z[m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(c / dim)] * dim + c % dim)]] = 1.0;
+      for (int q = 0; q < set.size(col / dim); ++q) z[at(col / dim, q, col % dim)] += set.weight(col / dim, q);
       m_h->solve(z);
     }
     m_z_version = m_factor_version;
+    m_set_version = set.version();
   }
-  Small C(m, m);
+  Small C = Small::Zero(m, m);
   for (int r = 0; r < m; ++r)
-    for (int c = 0; c < m; ++c)
-      C(r, c) =
-          m_z(m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim)], c);
+    for (int q = 0; q < set.size(r / dim); ++q)
+      C.row(r) += set.weight(r / dim, q) * m_z.row(at(r / dim, q, r % dim)).head(m);
   for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
   m_capacitance.compute(C);
 }
@@ -422,9 +416,13 @@ template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd
   const int m = m_coupled * dim;
   if (m == 0) return;
   m_small.resize(m);
-  for (int r = 0; r < m; ++r)
-    m_small[r] =
-        y(m_index[static_cast<std::size_t>(m_coupled_node[static_cast<std::size_t>(r / dim)] * dim + r % dim)], 0);
+  for (int r = 0; r < m; ++r) {
+    double sum = 0;
+    for (int q = 0; q < m_set->size(r / dim); ++q)
+      sum +=
+          m_set->weight(r / dim, q) * y(m_index[static_cast<std::size_t>(m_set->slot(r / dim, q) * dim + r % dim)], 0);
+    m_small[r] = sum;
+  }
   m_small = m_capacitance.solve(m_small);
   y.col(0).noalias() -= m_z.leftCols(m) * m_small;
 }
@@ -561,8 +559,8 @@ template <int dim> double WarpedFilter<dim>::follow(const Nodal<dim>& u) {
 }
 
 template <int dim>
-void WarpedFilter<dim>::solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv) {
-  couple(coupling);
+void WarpedFilter<dim>::solve(const Nodal<dim>& force, const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv) {
+  couple(couplings);
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<int>(free.size());
   // Each node's dim values sit together in the solve's vector, from m_index[dim a] on (both

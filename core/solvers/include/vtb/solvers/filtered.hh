@@ -80,8 +80,7 @@ private:
   bool m_full;
   std::unique_ptr<WarpedFilter<dim>> m_tensor;    ///< tensor: the rest Jacobian's factor, warped
   std::unique_ptr<Integrator<dim>> m_fallback_ie; ///< tensor: implicit Euler, the safety net
-  Eigen::VectorXd m_coupling;                     ///< tensor, full: the couplings' dt^2 k + dt c per node
-  Eigen::VectorXd m_no_coupling;                  ///< empty: no couplings
+  std::unique_ptr<CouplingSet<dim>> m_units;      ///< tensor, full: the couplings as their solve takes them
   bool m_fallback = false;                        ///< tensor: this step is implicit Euler's
   long m_fallback_steps = 0;
   double m_mismatch = 0; ///< tensor: this step's largest direction mismatch
@@ -91,7 +90,7 @@ private:
   std::unique_ptr<SymmetricMultigrid<dim>> m_mg;         ///< multigrid: one V-cycle for H^-1
   std::vector<int> m_node_of_row;                        ///< full: factor row -> node
   std::vector<int> m_row_of_node;                        ///< full: node -> factor row (-1: fixed)
-  std::unique_ptr<ScalarCouplings> m_couplings;          ///< full: pulls and contacts in the solve
+  std::unique_ptr<ScalarCouplings<dim>> m_couplings;     ///< full: pulls and contacts in the solve
   Eigen::SparseMatrix<double, Eigen::RowMajor> m_sparse; ///< neighbours: truncated W
   Nodal<dim> m_force;                                    ///< per node
   Nodal<dim> m_acc, m_dv;                                ///< per free node

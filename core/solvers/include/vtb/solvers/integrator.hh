@@ -31,6 +31,12 @@ template <int dim> struct State {
   /// The damping (N s/m, isotropic) of the same couplings (a contact's -c (v - v_handle)),
   /// per node; empty or zero where there is none. Solved implicitly with the stiffness.
   Eigen::VectorXd applied_damping;
+  /// Nodes that share one coupling (a tool tip's footprint: the coupling's force spread by
+  /// weights w, sum 1): the same group id >= 0, their applied_stiffness and applied_damping
+  /// w_i k and w_i b. Its Jacobian is k w w^T, which the tensor and full filters solve
+  /// (coupling_set.hh); implicit Euler takes the diagonal bound k diag(w) (stiffer, so
+  /// stable). Empty or -1: each node's coupling is its own.
+  Eigen::VectorXi applied_group;
 };
 
 /// What node i's couplings add to the diagonal of an implicit step's system M + dt C + dt^2 K:

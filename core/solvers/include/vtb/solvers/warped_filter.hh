@@ -28,14 +28,16 @@
 /// largest beta. Small deformations keep beta = 0 and no lag (a fixed beta of 0.05 would
 /// quadruple the cantilever's tip error), and springs that do not turn are not damped across.
 ///
-/// Couplings from outside (a user's pull, State::applied_stiffness) are solved implicitly, as
-/// the springs are: k I at the coupled node joins H, H' = H + dt^2 U K U^T, applied without
-/// refactorising by Woodbury's identity, H'^-1 = H^-1 - Z (K^-1 / dt^2 + U^T Z)^-1 Z^T with
-/// Z = H^-1 U (dim solves per coupled node, made again only when the coupled nodes or H's factor
-/// change; isotropic, so the rotation R leaves it as it is). Treated explicitly, a pull of 4x
+/// Couplings from outside (a user's pull, a tool tip's footprint: coupling_set.hh) are solved
+/// implicitly, as the springs are: each unit's c w w^T joins H, H' = H + U C U^T (U: a column
+/// w on each axis per unit), applied without refactorising by Woodbury's identity, H'^-1 =
+/// H^-1 - Z (C^-1 + U^T Z)^-1 Z^T with Z = H^-1 U (dim solves per unit, made again only when
+/// the units' nodes or weights or H's factor change; isotropic, so the rotation R leaves it as
+/// it is). Treated explicitly, a pull of 4x
 /// the mean spring stiffness at the paper's plate's free corner diverged at dt = 10 ms: in the
 /// directions where the node's own springs are weak, H holds little more than its mass.
 
+#include "vtb/solvers/coupling_set.hh"
 #include "vtb/springs/model.hh"
 
 #include <Eigen/Cholesky>
@@ -91,8 +93,8 @@ template <int dim> class WarpedFilter {
 public:
   /// multigrid: solve with one block V-cycle instead of H's factor (large 3D meshes).
   WarpedFilter(const Model<dim>& model, double dt, bool multigrid = false);
-  /// The coupled nodes the filter solves implicitly at most; more are applied explicitly.
-  static constexpr int kMaxCoupled = 8;
+  /// The coupling units the filter solves implicitly at most; more are applied explicitly.
+  static constexpr int kMaxCoupled = CouplingSet<dim>::kMaxUnits;
   /// Beyond this direction mismatch from the reference shape the warped reference Jacobian is
   /// not trusted: the filtered step then relinearises at the current shape (docs/method.md).
   static constexpr double kTrustedMismatch = 0.2;
@@ -143,9 +145,9 @@ public:
   /// 2D: where the springs' turns go (per spring p, q and per node their sums).
   SpringTurns turns();
   /// dv (dim x free nodes) = dt R H'^-1 R^T F at the prepared displacement (F: dim x nodes,
-  /// including the couplings' forces and their -dt k v term), H' = H_t + c I at each node with
-  /// a `coupling` coefficient c = dt^2 k + dt b > 0 (per node; empty: none).
-  void solve(const Nodal<dim>& force, const Eigen::VectorXd& coupling, double dt, Nodal<dim>& dv);
+  /// including the couplings' forces and their -dt k v term), H' = H_t + U C U^T, the
+  /// coupling units' c w w^T (coupling_set.hh; none: an empty set).
+  void solve(const Nodal<dim>& force, const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv);
   /// Moves dv (solve()'s) toward implicit Euler's step where the filter's matrix departs from
   /// the warped rest Jacobian (a cover is on: its transverse damping lags; or H is solved by
   /// the V-cycle, whose B^-1 = H + Delta carries extra mass): one step of conjugate gradients on
@@ -159,7 +161,7 @@ public:
   /// new cover ends the rest) where the departure is a cover's; under the V-cycle, whose Delta
   /// lags every step alike, every call corrects. `force` is solve()'s F (with the dt k axial
   /// term that is dt K(u) v's axial part), u and v the state it was made at. Allocates nothing.
-  void correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force, const Eigen::VectorXd& coupling,
+  void correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force, const CouplingSet<dim>& couplings,
                double dt, Nodal<dim>& dv);
   /// correct()'s threshold on its gain (docs/method.md: the measured gains of the cases).
   static constexpr double kCorrectionGain = 0.05;
@@ -255,15 +257,16 @@ private:
   bool m_multigrid = false;  ///< H solved by the block V-cycle
   int m_correction_rest = 0; ///< correct() calls left to skip
   Eigen::MatrixXd m_rhs;     ///< one column, laid out as m_h's
-  /// Sets the coupled nodes from `coupling` and makes Z again when they or the factor changed.
-  void couple(const Eigen::VectorXd& coupling);
+  /// Takes the coupling units and makes Z again when their nodes or weights or the factor changed.
+  void couple(const CouplingSet<dim>& couplings);
   /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y laid out as m_h's).
   void correct_for_couplings(Eigen::MatrixXd& y) const;
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxCoupled * dim, kMaxCoupled * dim>;
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxCoupled * dim, 1>;
   long m_factor_version = 0, m_z_version = -1;
-  int m_coupled = 0;                             ///< how many nodes are coupled now
-  std::array<int, kMaxCoupled> m_coupled_node{}; ///< their free indices
+  long m_set_version = -1;                       ///< the units' version Z was made for
+  const CouplingSet<dim>* m_set = nullptr;       ///< the units coupled now (slots: free indices)
+  int m_coupled = 0;                             ///< how many units are coupled now
   std::array<double, kMaxCoupled> m_coupled_k{}; ///< and their dt^2 k + dt c
   Eigen::MatrixXd m_z;                           ///< m_h's layout x (dim per coupled node): H^-1 U
   Eigen::LDLT<Small> m_capacitance;              ///< C^-1 + U^T Z
