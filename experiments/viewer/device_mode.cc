@@ -23,7 +23,9 @@ DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene)
       m_k(std::min(scene.haptics ? scene.haptics->coupling_stiffness : 400.0, DeviceSpec{}.max_stiffness)),
       m_b(scene.haptics ? scene.haptics->coupling_damping : 2.0),
       m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_plane(device_plane(scene, mesh)),
-      m_hand(still_hand(scene)), m_contact(mesh, 1), m_shaper(m_params), m_x(mesh.points) {}
+      m_hand(still_hand(scene)),
+      m_contact(mesh, 1, (scene.haptics ? *scene.haptics : HapticsDesc{}).tip_radius_for(dim), scene.material),
+      m_shaper(m_params), m_x(mesh.points) {}
 
 template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, State<dim>& s, double dt) {
   // The ticks that fall in [t, t + dt): at least one per step.
@@ -39,8 +41,7 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   const bool finite = m_x.allFinite() && s.v.allFinite();
   if (finite) m_contact.refit(m_x);
   Vec<dim> on_body_sum = Vec<dim>::Zero();
-  int facet = -1;
-  std::array<double, dim> weights{};
+  Footprint footprint;
   for (int k = 0; k < n; ++k) {
     Eigen::Vector2d pos, vel;
     device.read(pos, vel);
@@ -48,9 +49,7 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     ContactResult<dim> c;
     if (finite) c = m_contact.update(0, handle, m_x);
     Vec<dim> raw = Vec<dim>::Zero();
-    if (c.touching)
-      raw = virtual_coupling<dim>(c, m_contact.facets()[static_cast<std::size_t>(c.facet)], handle, m_plane.axes * vel,
-                                  s.v, m_k, m_b);
+    if (c.touching) raw = virtual_coupling<dim>(c, handle, m_plane.axes * vel, s.v, m_k, m_b);
     const Vec<dim> f = m_shaper.shape(raw, m_t, m_t, finite);
     m_force_device = m_plane.axes.transpose() * f;
     m_saturated += m_shaper.last_saturated();
@@ -60,28 +59,19 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     ++m_ticks;
     m_touching = c.touching;
     m_proxy = c.touching ? c.proxy : handle;
+    m_footprint = c.footprint;
     if (c.touching) {
-      facet = c.facet;
-      weights = c.weights;
+      footprint = c.footprint;
       on_body_sum -= f;
     }
     m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force_device.norm());
     m_head = (m_head + 1) % kTrace;
     m_count = std::min(m_count + 1, kTrace);
   }
-  // The step's force on the body: the ticks' mean, on the last touched facet's nodes, with the
-  // coupling's stiffness and damping by the same weights for the solvers that take them
-  // implicitly (as vtb haptics does: docs/haptics.md).
-  if (facet >= 0) {
-    const auto& e = m_contact.facets()[static_cast<std::size_t>(facet)];
-    for (int k = 0; k < dim; ++k) {
-      const int node = e[static_cast<std::size_t>(k)];
-      const double w = weights[static_cast<std::size_t>(k)];
-      s.applied.col(node) += w * on_body_sum / n;
-      if (node < s.applied_stiffness.size()) s.applied_stiffness[node] += w * m_k;
-      if (node < s.applied_damping.size()) s.applied_damping[node] += w * m_b;
-    }
-  }
+  // The step's force on the body: the ticks' mean, on the last footprint's nodes, with the
+  // coupling's stiffness and damping by the same weights in one group for the solvers that take
+  // them implicitly (as vtb haptics does: docs/haptics.md).
+  if (footprint.count > 0) apply_to_body<dim>(footprint, Vec<dim>(on_body_sum / n), m_k, m_b, kDeviceGroup, s);
 }
 
 template <int dim> int DeviceMode<dim>::force_trace(float* out) const {

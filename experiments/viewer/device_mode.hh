@@ -23,6 +23,9 @@ namespace vtb::viewer {
 template <int dim> class DeviceMode final : public StepHook<dim> {
 public:
   static constexpr int kTrace = 600;
+  /// The coupling group the device's footprint takes in State::applied_group (the drags' are
+  /// their pull index, below it).
+  static constexpr int kDeviceGroup = 1000;
   /// The scene's [haptics] settings when it has them, else the defaults of DESIGN.md §2.
   DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
@@ -36,6 +39,9 @@ public:
   Vec<dim> handle() const { return m_plane.to_world(m_device ? m_device->true_position() : m_hand_device); }
   const Vec<dim>& proxy() const { return m_proxy; }
   bool touching() const { return m_touching; }
+  /// The tool tip's footprint at the last tick (nodes and weights; empty when not touching).
+  const Footprint& footprint() const { return m_footprint; }
+  double tip_radius() const { return m_contact.tip().radius(); }
   /// The last force the device rendered (its in-plane part), in the body's space, N.
   Vec<dim> force() const { return m_plane.axes * m_force_device; }
   double max_force() const { return m_params.max_force; }
@@ -56,6 +62,7 @@ private:
   BasicForceShaper<dim> m_shaper;
   Nodal<dim> m_x;
   Vec<dim> m_proxy = Vec<dim>::Zero();
+  Footprint m_footprint;
   Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;

@@ -61,6 +61,7 @@ template <int dim> void LiveSim<dim>::rebuild() {
     m_state.applied = Nodal<dim>::Zero(dim, m_model->num_nodes());
     m_state.applied_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
     m_state.applied_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
+    m_state.applied_group = Eigen::VectorXi::Constant(m_model->num_nodes(), -1);
     m_external_force = Nodal<dim>::Zero(dim, m_model->num_nodes());
     m_external_stiffness = Eigen::VectorXd::Zero(m_model->num_nodes());
     m_external_damping = Eigen::VectorXd::Zero(m_model->num_nodes());
@@ -110,6 +111,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   m_state.applied = m_external_force;
   m_state.applied_stiffness = m_external_stiffness; // and each pull's spring, for the solvers that take it implicitly
   m_state.applied_damping = m_external_damping;
+  m_state.applied_group.setConstant(-1);
   for (int k = 0; k < m_num_pulls; ++k) {
     const int node = m_pulls[static_cast<std::size_t>(k)].node;
     m_state.applied.col(node) += pull_force(k);

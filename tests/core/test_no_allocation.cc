@@ -4,6 +4,7 @@
 #include "support/small_models.hh"
 #include "vtb/haptics/contact2d.hh"
 #include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/solvers/warped_filter.hh"
@@ -131,18 +132,21 @@ TEST_P(CouplingsAllocateNothing, WhileTheCoupledNodesAndTheirStiffnessChange) {
   s.applied = Nodal<2>::Zero(2, n);
   s.applied_stiffness = Eigen::VectorXd::Zero(n);
   s.applied_damping = Eigen::VectorXd::Zero(n);
+  s.applied_group = Eigen::VectorXi::Constant(n, -1);
   integ->step(s);
   g_allocations = 0;
   g_counting = true;
-  for (int k = 0; k < 60; ++k) {
+  for (int k = 0; k < 80; ++k) {
     s.applied_stiffness.setZero();
     s.applied_damping.setZero();
     s.applied.setZero();
-    for (int c = 0; c < 1 + k / 20; ++c) { // one, two, then three coupled nodes
+    s.applied_group.setConstant(-1);
+    for (int c = 0; c < 1 + k / 20; ++c) { // one, two, three coupled nodes, then four as a tip's footprint
       const auto node = n - 1 - c;
       s.applied_stiffness[node] = 100.0 * (1 + k % 3);
       s.applied_damping[node] = 0.5 * (k % 2);
       s.applied.col(node) = Vec<2>(0.0, -0.01);
+      if (k >= 60) s.applied_group[node] = 0;
     }
     integ->step(s);
   }
@@ -207,6 +211,12 @@ TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
   const Mesh3 box = generate_box({0.02, 0.02, 0.02}, {3, 3, 3});
   SurfaceTree tree(box);
   SurfaceContact c3(tree);
+  // With a tool tip of 8 mm (footprint.hh): wider than a facet, in 2D and 3D.
+  TipFootprint<2> tip2(c2.facets(), plate.points, 0.008, 5e4, 0.3, 0.001);
+  TipFootprint<3> tip3(tree.facets(), box.points, 0.008, 5e4, 0.3);
+  ContactResult<2> last2;
+  ContactResult<3> last3;
+  int footprint_nodes = 0;
   BasicForceShaper<3> shaper({4.0, 0.5, 0.03, 0.01});
   Nodal<3> x = box.points;
   // The handle goes down in 1 mm steps from 5 mm above the top face to 14 mm into the box,
@@ -214,10 +224,11 @@ TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
   // to allocating GMP numbers).
   const auto cycle = [&](int k) {
     const double y = 0.025 - 0.001 * (k % 20);
-    c2.update({0.01, y}, plate.points);
+    const auto r2 = hold_tip(c2, last2, tip2, Eigen::Vector2d(0.01, y), plate.points);
     x.row(1) = box.points.row(1) * (1.0 - 0.05 * (k % 7)); // squeezed by up to 6 mm
     tree.rebuild(x);
-    const auto r = c3.update({0.01, y, 0.01}, x);
+    const auto r = hold_tip(c3, last3, tip3, Eigen::Vector3d(0.01, y, 0.01), x);
+    footprint_nodes = std::max({footprint_nodes, r2.footprint.count, r.footprint.count});
     shaper.shape(r.proxy - Eigen::Vector3d(0.01, y, 0.01), 1e-3 * k, 1e-3 * k, true);
   };
   cycle(0);
@@ -228,6 +239,7 @@ TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
   g_counting = false;
   EXPECT_EQ(g_allocations, 0);
   EXPECT_GT(tree.builds(), builds) << "the squeeze exceeds the margin: full builds were exercised";
+  EXPECT_GT(footprint_nodes, 3) << "the tips' footprints covered more than one facet";
 }
 
 } // namespace

@@ -54,9 +54,9 @@ double BoundaryContact::closest_on(int e, const Eigen::Vector2d& p, const Nodal<
   return (a + along * d - p).squaredNorm();
 }
 
-BoundaryContact::Result BoundaryContact::update(const Eigen::Vector2d& handle, const Nodal<2>& x) {
+BoundaryContact::Result BoundaryContact::update(const Eigen::Vector2d& handle, const Nodal<2>& x, bool hold) {
   Result r;
-  if (!inside(handle, x)) {
+  if (!(hold && m_last.touching) && !inside(handle, x)) {
     r.proxy = handle;
     m_last = r;
     return r;

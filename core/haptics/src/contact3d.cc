@@ -175,11 +175,11 @@ double SurfaceTree::closest_on(int f, const Eigen::Vector3d& p, const Nodal<3>& 
   return (c - p).squaredNorm();
 }
 
-SurfaceContact::Result SurfaceContact::update(const Eigen::Vector3d& handle, const Nodal<3>& x) {
+SurfaceContact::Result SurfaceContact::update(const Eigen::Vector3d& handle, const Nodal<3>& x, bool hold) {
   Result r;
   const Eigen::Vector3d previous = m_previous_handle;
   m_previous_handle = handle;
-  if (!m_tree->inside(handle)) {
+  if (!(hold && m_last.touching) && !m_tree->inside(handle)) {
     r.proxy = handle;
     m_last = r;
     return r;

@@ -44,13 +44,19 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["tick_p99_us"] = r.tick_p99_us;
   j["dim"] = r.dim;
   j["coupling_stiffness"] = r.coupling_stiffness;
+  j["tip_radius"] = r.tip_radius;
+  j["surface_mean_edge"] = r.surface_mean_edge;
   j["notes"] = r.notes;
   j["probes"] = nlohmann::ordered_json::array();
   for (const ProbeTrace& p : r.probes)
     j["probes"].push_back({{"max_force", p.max_force},
                            {"saturated_samples", p.saturated_samples},
                            {"nonfinite_samples", p.nonfinite_samples},
-                           {"energy_to_user", p.energy_to_user}});
+                           {"energy_to_user", p.energy_to_user},
+                           {"contact_samples", p.contact_samples},
+                           {"unresolved_samples", p.unresolved_samples},
+                           {"truncated_samples", p.truncated_samples},
+                           {"footprint_nodes_max", p.footprint_nodes_max}});
   write_files_atomically(dir, {{"haptics.csv", csv.str()}, {"summary.json", j.dump(2) + "\n"}});
 }
 

@@ -38,10 +38,10 @@ template <int dim> struct Snapshot {
   Nodal<dim> x, v;
 };
 
-/// What the servo sends back for one probe: the contact force on the body, where.
+/// What the servo sends back for one probe: the contact force on the body, where (no nodes:
+/// not touching).
 template <int dim> struct ContactCommand {
-  int facet = -1;
-  std::array<double, dim> weights{};
+  Footprint footprint;
   Vec<dim> force_on_body = Vec<dim>::Zero();
 };
 template <int dim> using Commands = std::vector<ContactCommand<dim>>; ///< one per probe, sized once
@@ -49,11 +49,11 @@ template <int dim> using Commands = std::vector<ContactCommand<dim>>; ///< one p
 /// The servo side: devices, proxies, coupling, shaping, log. No allocation in tick().
 template <int dim> class Servo {
 public:
-  Servo(std::vector<std::unique_ptr<HapticDevice>>& devices, const Mesh<dim>& mesh, const HapticsDesc& h,
-        const DevicePlane<dim>& plane, long max_samples, TripleBuffer<Snapshot<dim>>& snap,
+  Servo(std::vector<std::unique_ptr<HapticDevice>>& devices, const Mesh<dim>& mesh, const MaterialDesc& material,
+        const HapticsDesc& h, const DevicePlane<dim>& plane, long max_samples, TripleBuffer<Snapshot<dim>>& snap,
         TripleBuffer<Commands<dim>>& cmd)
-      : m_devices(devices), m_contacts(mesh, devices.size()), m_h(h), m_plane(plane), m_snap(snap), m_cmd(cmd),
-        m_x(mesh.points), m_max(max_samples) {
+      : m_devices(devices), m_contacts(mesh, devices.size(), h.tip_radius_for(dim), material), m_h(h), m_plane(plane),
+        m_snap(snap), m_cmd(cmd), m_x(mesh.points), m_max(max_samples) {
     m_rep.t.reserve(static_cast<std::size_t>(max_samples));
     m_rep.probes.resize(devices.size());
     for (std::size_t i = 0; i < devices.size(); ++i) {
@@ -91,9 +91,9 @@ public:
       const Vec<dim> f = m_shapers[i].shape(raw, t, s.t, finite);
       const Eigen::Vector2d fd = m_plane.axes.transpose() * f;
       m_devices[i]->command(fd);
-      out[i].facet = c.touching ? c.facet : -1;
-      out[i].weights = c.weights;
+      out[i].footprint = c.touching ? c.footprint : Footprint{};
       out[i].force_on_body = -f;
+      if (c.touching) count_footprint(m_rep.probes[i], c.footprint);
       all_zero = all_zero && f.norm() == 0.0;
       if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, fd);
       if (m_shapers[i].faulted() && m_rep.fault_time < 0) m_rep.fault_time = m_shapers[i].fault_time();
@@ -103,13 +103,22 @@ public:
   }
 
   HapticsReport& report() { return m_rep; }
-  const std::vector<std::array<int, dim>>& facets() const { return m_contacts.facets(); }
+  const TipFootprint<dim>& tip() const { return m_contacts.tip(); }
 
 private:
   Vec<dim> coupling(const ContactResult<dim>& c, const Vec<dim>& handle, const Vec<dim>& handle_velocity,
                     const Nodal<dim>& node_velocity) const {
-    return virtual_coupling<dim>(c, m_contacts.facets()[static_cast<std::size_t>(c.facet)], handle, handle_velocity,
-                                 node_velocity, m_h.coupling_stiffness, m_h.coupling_damping);
+    return virtual_coupling<dim>(c, handle, handle_velocity, node_velocity, m_h.coupling_stiffness,
+                                 m_h.coupling_damping);
+  }
+
+  /// The tip's footprint over the cycles in contact: its largest node count, the cycles where
+  /// the tip was narrower than the touched facet (not resolved) or covered too many nodes.
+  static void count_footprint(ProbeTrace& p, const Footprint& fp) {
+    ++p.contact_samples;
+    p.footprint_nodes_max = std::max(p.footprint_nodes_max, fp.count);
+    p.unresolved_samples += !fp.resolved;
+    p.truncated_samples += fp.truncated;
   }
 
   void log(ProbeTrace& p, const BasicForceShaper<dim>& shaper, const Eigen::Vector2d& pos, const Eigen::Vector2d& vel,
@@ -141,13 +150,13 @@ private:
 template <int dim> class Physics {
 public:
   Physics(const Model<dim>& model, const IntegratorOptions& o, TripleBuffer<Snapshot<dim>>& snap,
-          TripleBuffer<Commands<dim>>& cmd, const std::vector<std::array<int, dim>>& facets, const HapticsDesc& h,
-          const HapticsOptions& faults)
+          TripleBuffer<Commands<dim>>& cmd, const HapticsDesc& h, const HapticsOptions& faults)
       : m_model(model), m_integ(make_integrator(model, o)), m_state(initial_state(model)), m_snap(snap), m_cmd(cmd),
-        m_facets(facets), m_k(h.coupling_stiffness), m_b(h.coupling_damping), m_faults(faults) {
+        m_k(h.coupling_stiffness), m_b(h.coupling_damping), m_faults(faults) {
     m_state.applied = Nodal<dim>::Zero(dim, model.num_nodes());
     m_state.applied_stiffness = Eigen::VectorXd::Zero(model.num_nodes());
     m_state.applied_damping = Eigen::VectorXd::Zero(model.num_nodes());
+    m_state.applied_group = Eigen::VectorXi::Constant(model.num_nodes(), -1);
   }
 
   double dt() const { return m_integ->dt(); }
@@ -161,22 +170,16 @@ public:
     m_state.applied.setZero();
     m_state.applied_stiffness.setZero();
     m_state.applied_damping.setZero();
-    // Each probe's force on the nodes of the touched facet, by the proxy's barycentric weights.
-    // The coupling's stiffness and damping go with it, for the integrators that solve them
-    // implicitly: the contact point is sum_k w_k x_k, so the coupling's k acts as k w w^T on
-    // the facet's nodes; its diagonal bound k diag(w) (w >= 0, sum 1: diag(w) - w w^T is
-    // positive semidefinite) is what they take. Explicitly, a 400 N/m coupling on a node of
-    // 0.04 g is beyond the step's limit at dt = 1 ms (sqrt(m/k) = 0.33 ms).
+    m_state.applied_group.setConstant(-1);
+    // Each probe's force on its footprint's nodes by their weights, and the coupling's
+    // stiffness and damping with it, one group per probe, for the integrators that solve them
+    // implicitly: the proxy is sum_k w_k x_k along the tip's normal, so the coupling's k acts as
+    // k w w^T (coupling_set.hh). Explicitly, a 400 N/m coupling on a node of 0.04 g is beyond
+    // the step's limit at dt = 1 ms (sqrt(m/k) = 0.33 ms).
+    int group = 0;
     for (const ContactCommand<dim>& c : m_cmd.front()) {
-      if (c.facet < 0) continue;
-      const auto& f = m_facets[static_cast<std::size_t>(c.facet)];
-      for (int k = 0; k < dim; ++k) {
-        const int node = f[static_cast<std::size_t>(k)];
-        const double w = c.weights[static_cast<std::size_t>(k)];
-        m_state.applied.col(node) += w * c.force_on_body;
-        m_state.applied_stiffness[node] += w * m_k;
-        m_state.applied_damping[node] += w * m_b;
-      }
+      if (c.footprint.count > 0) apply_to_body<dim>(c.footprint, c.force_on_body, m_k, m_b, group, m_state);
+      ++group;
     }
     const auto a = steady::now();
     m_integ->step(m_state);
@@ -200,7 +203,6 @@ private:
   State<dim> m_state;
   TripleBuffer<Snapshot<dim>>& m_snap;
   TripleBuffer<Commands<dim>>& m_cmd;
-  const std::vector<std::array<int, dim>>& m_facets;
   double m_k, m_b; ///< the virtual coupling's stiffness and damping
   HapticsOptions m_faults;
   std::vector<double> m_step_us;
@@ -381,15 +383,35 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   TripleBuffer<Commands<dim>> cmd(Commands<dim>(devices.size()));
   const double period = 1.0 / h.rate;
   const long ticks = std::lround(scene.duration / period);
-  Servo<dim> servo(devices, model.mesh, h, plane, ticks + 2, snap, cmd);
-  Physics<dim> physics(model, o, snap, cmd, servo.facets(), h, opt);
+  Servo<dim> servo(devices, model.mesh, scene.material, h, plane, ticks + 2, snap, cmd);
+  Physics<dim> physics(model, o, snap, cmd, h, opt);
   const auto advance_devices = [&devices](double dt) {
     for (auto& d : devices) d->advance(dt);
   };
+  const double servo_tip_edge = servo.tip().mean_edge();
   LoopTiming lt = opt.lockstep ? run_lockstep(servo, physics, ticks, period, advance_devices)
                                : run_realtime(servo, physics, ticks, period, opt, advance_devices);
   HapticsReport rep = finish_report(std::move(servo.report()), std::move(lt), physics, opt.lockstep);
   rep.coupling_stiffness = h.coupling_stiffness;
+  rep.tip_radius = h.tip_radius_for(dim);
+  rep.surface_mean_edge = servo_tip_edge;
+  for (std::size_t i = 0; i < rep.probes.size(); ++i) {
+    const ProbeTrace& p = rep.probes[i];
+    if (rep.tip_radius > 0 && p.unresolved_samples > 0) {
+      std::ostringstream msg;
+      msg << scene.file.string() << ": [haptics].tip_radius = " << rep.tip_radius * 1e3
+          << " mm is narrower than the facets it touched in " << p.unresolved_samples << " of " << p.contact_samples
+          << " contact cycles of probe " << i << " (mean surface edge " << rep.surface_mean_edge * 1e3
+          << " mm): the mesh does not resolve the tip there, and the force rests on the local compliance added in "
+             "series "
+             "(the half-space's, docs/haptics.md)";
+      notes.push_back(msg.str());
+    }
+    if (p.truncated_samples > 0)
+      notes.push_back(scene.file.string() + ": the tip of probe " + std::to_string(i) + " covered more than " +
+                      std::to_string(Footprint::kMaxNodes) + " surface nodes in " +
+                      std::to_string(p.truncated_samples) + " cycles; the nodes beyond took no share of its force");
+  }
   rep.physics_step_budget_us = o.step_budget * 1e6;
   rep.physics_steps_over_budget = std::count_if(physics.step_times().begin(), physics.step_times().end(),
                                                 [&](double us) { return us > rep.physics_step_budget_us; });

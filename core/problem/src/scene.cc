@@ -278,15 +278,16 @@ void read_haptics(const TableReader& top, const std::string& name, Scene& s) {
   const toml::table* t = top.table("haptics");
   if (!t) return;
   {
-    const TableReader r(
-        *t, "[haptics]", name,
-        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "hand", "probe", "plane"});
+    const TableReader r(*t, "[haptics]", name,
+                        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "tip_radius", "hand",
+                         "probe", "plane"});
     HapticsDesc h;
     h.device = r.string("device", "procat-sim", {"procat-sim", "replay"});
     h.rate = r.number("rate", 1000.0, positive);
     h.coupling_stiffness = r.number("coupling_stiffness", 400.0, positive);
     h.coupling_damping = r.number("coupling_damping", 2.0, non_negative);
     h.max_force = r.number("max_force", 4.0, positive);
+    if (r.has("tip_radius")) h.tip_radius = r.number("tip_radius", 0.0, non_negative);
     if (const toml::table* ht = r.table("hand")) h.hand = read_hand(*ht, "[haptics.hand]", name);
     const auto hands = r.tables("probe");
     for (std::size_t i = 0; i < hands.size(); ++i)

@@ -19,7 +19,8 @@ public:
   using Result = ContactResult<2>;
 
   /// Updates the proxy for the handle at `handle` with the body's nodes at `x` (deformed).
-  Result update(const Eigen::Vector2d& handle, const Nodal<2>& x);
+  /// `hold`: stay in contact though the handle is outside (a tip's face still above it).
+  Result update(const Eigen::Vector2d& handle, const Nodal<2>& x, bool hold = false);
   void reset() { m_last = Result{}; }
 
   /// The boundary edges (Result::facet indexes them), outward oriented.

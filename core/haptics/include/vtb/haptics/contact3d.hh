@@ -72,8 +72,9 @@ public:
   explicit SurfaceContact(const SurfaceTree& tree) : m_tree(&tree) {}
 
   /// Updates the proxy for the handle at `handle`, with the body's nodes at `x` (deformed,
-  /// close to the tree's last rebuild). Allocation-free.
-  Result update(const Eigen::Vector3d& handle, const Nodal<3>& x);
+  /// close to the tree's last rebuild). `hold`: stay in contact though the handle is outside
+  /// (a tip's face still above it). Allocation-free.
+  Result update(const Eigen::Vector3d& handle, const Nodal<3>& x, bool hold = false);
   void reset();
   const std::vector<std::array<int, 3>>& facets() const { return m_tree->facets(); }
 

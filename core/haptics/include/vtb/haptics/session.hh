@@ -29,6 +29,11 @@ struct ProbeTrace {
   double max_force = 0;
   long saturated_samples = 0, nonfinite_samples = 0;
   double energy_to_user = 0; ///< J: the work the device did on the handle
+  /// The tool tip over the servo cycles in contact: how many, the footprint's largest node
+  /// count, the cycles where the tip was narrower than the touched facet (the force not
+  /// resolved there: a point proxy's) and those where it covered more nodes than it takes.
+  long contact_samples = 0, unresolved_samples = 0, truncated_samples = 0;
+  int footprint_nodes_max = 0;
 };
 
 struct HapticsReport {
@@ -53,6 +58,8 @@ struct HapticsReport {
   std::string physics_filter, physics_filter_reason;
   double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
   double coupling_stiffness = 0;              ///< N/m rendered: the scene's, limited to the device's max stiffness
+  double tip_radius = 0;                      ///< m: the tool tip's (0: a point proxy)
+  double surface_mean_edge = 0;               ///< m: the body's mean surface edge at rest
   std::vector<std::string> notes;             ///< what the run changed from the scene, one line each
   std::vector<double> period_us;              ///< each servo cycle's measured period (real time only)
   std::vector<double> t;                      ///< servo sample times

@@ -110,6 +110,11 @@ struct HapticsDesc {
   double coupling_stiffness = 400.0;
   double coupling_damping = 2.0;
   double max_force = 4.0;
+  /// m: the tool tip's radius (a flat pad; 0: a point proxy); unset: tip_radius() decides.
+  std::optional<double> tip_radius;
+  /// The tip's radius for a body of `dim`: the scene's, else 4 mm in 3D (a physical tool) and a
+  /// point proxy in 2D (docs/haptics.md: a pad on the 2D membranes does not hold steady yet).
+  double tip_radius_for(int dim) const { return tip_radius ? *tip_radius : (dim == 3 ? 0.004 : 0.0); }
   std::optional<HandDesc> hand;
   /// [[haptics.probe]]: further devices, each held by a scripted hand of its own (probe 1, 2, ...;
   /// [haptics.hand] is probe 0). Their contact forces act on the body in the same step.
