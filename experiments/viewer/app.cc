@@ -291,6 +291,35 @@ template <int dim> void App<dim>::frame(double sim_seconds, double wall_budget) 
   draw_scale_bar();
 }
 
+template <int dim> template <class At> void App<dim>::draw_tip(ImDrawList* fg, const At& at) const {
+  // The tool tip (a flat pad of the scene's tip_radius) at the proxy, in its face's plane: a
+  // segment in 2D, a circle in 3D (red), and the footprint's nodes it presses (dots sized by
+  // their share of the force). Nothing for a point proxy.
+  const double r = m_device->tip_radius();
+  const Vec<dim> n = m_device->tip_normal(), p = m_device->proxy();
+  if (!(r > 0)) return; // a point proxy: its dot is drawn already
+  if (n.squaredNorm() > 0) {
+    if constexpr (dim == 2) {
+      const Vec<2> t(-n.y(), n.x());
+      fg->AddLine(at(Vec<2>(p - r * t)), at(Vec<2>(p + r * t)), IM_COL32(200, 30, 30, 255), 4.0f);
+    } else {
+      const Eigen::Vector3d e1 = n.unitOrthogonal(), e2 = n.cross(e1);
+      constexpr int kSides = 32;
+      ImVec2 ring[kSides];
+      for (int k = 0; k < kSides; ++k) {
+        const double a = 2 * M_PI * k / kSides;
+        ring[k] = at(Vec<3>(p + r * (std::cos(a) * e1 + std::sin(a) * e2)));
+      }
+      fg->AddPolyline(ring, kSides, IM_COL32(200, 30, 30, 255), ImDrawFlags_Closed, 2.5f);
+    }
+  }
+  const Footprint& fp = m_device->footprint();
+  for (int k = 0; k < fp.count; ++k)
+    fg->AddCircleFilled(at(Vec<dim>(m_device->positions().col(fp.node[static_cast<std::size_t>(k)]))),
+                        2.0f + 10.0f * static_cast<float>(std::sqrt(fp.weight[static_cast<std::size_t>(k)])),
+                        IM_COL32(200, 30, 30, 160));
+}
+
 template <int dim> void App<dim>::draw_device() {
   // The hand's recent path in the device's plane (grey), the grip from hand to handle, the
   // handle (white), its proxy on the surface (red), and the force the device renders as an
@@ -313,6 +342,7 @@ template <int dim> void App<dim>::draw_device() {
   if (m_device->touching()) {
     fg->AddLine(h, q, IM_COL32(255, 80, 80, 255), 2.0f);
     fg->AddCircleFilled(q, 6.0f, IM_COL32(255, 60, 60, 255));
+    draw_tip(fg, at);
   }
   fg->AddCircleFilled(h, 7.0f, IM_COL32(255, 255, 255, 255));
   fg->AddCircle(h, 7.0f, IM_COL32(30, 30, 30, 255), 0, 2.0f);

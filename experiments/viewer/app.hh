@@ -10,6 +10,8 @@
 #include "surface.hh"
 #include "viewer.hh"
 
+struct ImDrawList;
+
 #include <array>
 #include <memory>
 #include <vector>
@@ -48,6 +50,8 @@ private:
   void draw_markers();
   void draw_pulls();
   void draw_device();
+  /// The device's tool tip and its footprint, drawn through `at` (a body point to the window).
+  template <class At> void draw_tip(ImDrawList* fg, const At& at) const;
   void draw_device_panel();
   void draw_panel();
   void draw_solver_controls();

@@ -60,6 +60,7 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     m_touching = c.touching;
     m_proxy = c.touching ? c.proxy : handle;
     m_footprint = c.footprint;
+    m_normal = c.normal;
     if (c.touching) {
       footprint = c.footprint;
       on_body_sum -= f;

@@ -41,6 +41,10 @@ public:
   bool touching() const { return m_touching; }
   /// The tool tip's footprint at the last tick (nodes and weights; empty when not touching).
   const Footprint& footprint() const { return m_footprint; }
+  /// The tip's face's outward normal at the last tick (when touching).
+  const Vec<dim>& tip_normal() const { return m_normal; }
+  /// The body's nodes as the last tick saw them (the footprint's nodes index them).
+  const Nodal<dim>& positions() const { return m_x; }
   double tip_radius() const { return m_contact.tip().radius(); }
   /// The last force the device rendered (its in-plane part), in the body's space, N.
   Vec<dim> force() const { return m_plane.axes * m_force_device; }
@@ -63,6 +67,7 @@ private:
   Nodal<dim> m_x;
   Vec<dim> m_proxy = Vec<dim>::Zero();
   Footprint m_footprint;
+  Vec<dim> m_normal = Vec<dim>::Zero();
   Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;

@@ -330,6 +330,35 @@ TEST(Viewer, DeviceModeIn3DPressesTheSlabInTheScenesPlane) {
   EXPECT_GT(differing(rest, pressed), 400) << "the handle, its path and the force arrow are drawn";
 }
 
+/// Pixels of the tool tip's colour (200, 30, 30: its outline and its footprint's dots).
+int tip_pixels(const Image& im) {
+  int n = 0;
+  for (int y = 0; y < im.h; ++y)
+    for (int x = 0; x < im.w; ++x) {
+      const unsigned char* p = im.at(x, y);
+      n += std::abs(p[0] - 200) < 30 && p[1] < 70 && p[2] < 70;
+    }
+  return n;
+}
+
+TEST(Viewer, DeviceModeDrawsTheToolTipAndItsFootprint) {
+  // The slab press with its 4 mm tip: the viewer draws the tip's outline in its face's plane
+  // at the proxy and the footprint's nodes (docs/haptics.md); with a point proxy (tip_radius =
+  // 0) neither is drawn. The tip's colour is kept out of the strain colour map (viridis has no
+  // strong red), so the count separates them: measured 156 against 1 pixel.
+  const test::FreshDir dir;
+  Scene slab = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_slab_press.toml");
+  viewer::ViewOptions o;
+  o.frames = 90;
+  o.device = true;
+  o.drag = viewer::parse_drag("0.1,0.025,0.05:0.1,0.025,0.015");
+  const Image tipped = shot(slab, o, dir, "tip.png");
+  slab.haptics->tip_radius = 0.0;
+  const Image point = shot(slab, o, dir, "point.png");
+  EXPECT_GT(tip_pixels(tipped), 100);
+  EXPECT_LT(tip_pixels(point), 10);
+}
+
 TEST(Viewer, A3DBodyAtRestIsShadedSoItsShapeReads) {
   // At rest every cell has zero strain: one colour (viridis' dark end) on every face, so only
   // the light tells the faces apart. The slab's visible faces must differ in brightness by
