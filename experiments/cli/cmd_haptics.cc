@@ -3,6 +3,7 @@
 
 #include "vtb/haptics/session.hh"
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <thread>
@@ -56,6 +57,12 @@ Action add_haptics(CLI::App& app) {
                       ? ""
                       : " (" + r.physics_filter + " filter" +
                             (r.physics_filter_reason.empty() ? "" : ": " + r.physics_filter_reason) + ")");
+    int footprint = 0;
+    for (const ProbeTrace& p : r.probes) footprint = std::max(footprint, p.footprint_nodes_max);
+    if (r.tip_radius > 0)
+      std::cout << "; tool tip " << r.tip_radius * 1e3 << " mm, its force on up to " << footprint << " surface nodes";
+    else
+      std::cout << "; a point proxy";
     std::cout << "; outputs in " << out.string() << "\n";
     // Timing a user should not miss: late servo cycles mean the force felt was held longer
     // than one period (docs/haptics.md says what lowers them).

@@ -238,16 +238,20 @@ template <int dim> void App<dim>::draw_markers() {
 }
 
 template <int dim> void App<dim>::draw_pulls() {
-  // Each pull: a line from the grabbed node to the target and an arrowhead at the node (the
-  // force points from the node toward the target), labelled with its force in newtons.
+  // Each pull: a line from the grabbed patch's mean to the target and an arrowhead (the force
+  // points from the patch toward the target), labelled with its force in newtons, and the
+  // patch's nodes as dots.
   m_lines.clear();
   const Eigen::Vector3d z = Eigen::Vector3d::UnitZ();
   ImDrawList* fg = ImGui::GetForegroundDrawList();
   const float px = 1.0f / std::max(1.0f, ImGui::GetIO().DisplayFramebufferScale.x);
   for (int k = 0; k < m_sim->num_pulls(); ++k) {
     const auto& p = m_sim->pull(k);
-    const Eigen::Vector2d a = m_cam.to_window(to3(m_sim->position(p.node))) * px,
-                          b = m_cam.to_window(to3(p.target)) * px;
+    const Eigen::Vector2d a = m_cam.to_window(to3(m_sim->grabbed(k))) * px, b = m_cam.to_window(to3(p.target)) * px;
+    for (int q = 0; p.count > 1 && q < p.count; ++q) {
+      const Eigen::Vector2d n = m_cam.to_window(to3(m_sim->position(p.nodes[static_cast<std::size_t>(q)]))) * px;
+      fg->AddCircleFilled(ImVec2(float(n.x()), float(n.y())), 3.0f, IM_COL32(255, 255, 255, 200));
+    }
     const Eigen::Vector2d d = b - a;
     const double len = d.norm();
     const ImU32 col = p.pinned ? IM_COL32(255, 90, 90, 255) : IM_COL32(255, 255, 255, 255);

@@ -12,6 +12,8 @@
 #include "vtb/problem/solver_registry.hh"
 #include "vtb/solvers/integrator.hh"
 
+#include "vtb/solvers/coupling_set.hh"
+
 #include <array>
 #include <memory>
 #include <optional>
@@ -39,11 +41,20 @@ struct SimControls {
   std::string springs = "auto"; ///< the calibration requested (the model's net says which it used)
 };
 
-/// A hand pull: the node is pulled toward `target` by a spring of stiffness k (N/m).
+/// A hand pull: the grabbed patch is pulled toward `target` by a spring of stiffness k (N/m).
+/// The patch is the boundary nodes within the grab radius of `node` at rest (the scene's tool
+/// tip, docs/haptics.md; just `node` in 2D or inside the body), the nearest kMaxNodes,
+/// weighted equally: the spring acts on their mean position and spreads its force by the
+/// weights, as a tool holding a patch of tissue does, where a single node was dragged into a
+/// spike.
 template <int dim> struct Pull {
+  static constexpr int kMaxNodes = CouplingSet<dim>::kMaxUnits;
   int node = -1;
   Vec<dim> target = Vec<dim>::Zero();
   bool pinned = false;
+  int count = 0; ///< the patch's nodes
+  std::array<int, kMaxNodes> nodes{};
+  std::array<double, kMaxNodes> weights{};
 };
 
 /// Rolling readouts of the run.
@@ -100,7 +111,8 @@ public:
   void refresh_stats();
   void reset();
 
-  /// Pulls: add one at the node (returns its index, or -1 when all slots are used).
+  /// Pulls: add one at the node, grabbing the patch of the grab radius around it (Pull;
+  /// returns its index, or -1 when all slots are used).
   int add_pull(int node, const Vec<dim>& target, bool pinned = false);
   void move_pull(int index, const Vec<dim>& target);
   void remove_pull(int index);
@@ -125,6 +137,10 @@ public:
   const State<dim>& state() const { return m_state; }
   /// Current positions X + u.
   Vec<dim> position(int node) const { return m_model->net.rest.col(node) + m_state.u.col(node); }
+  /// Where pull k holds the body now: its patch's weighted mean position.
+  Vec<dim> grabbed(int k) const;
+  /// The radius of the patch a pull grabs (m): the scene's tool tip.
+  double grab_radius() const { return m_grab_radius; }
   const SimStats& stats() const { return m_stats; }
   /// The explicit scheme's predicted stability limit for the current model (s).
   double courant_dt() const { return m_courant_dt; }
@@ -154,6 +170,8 @@ private:
   Eigen::VectorXd m_external_stiffness, m_external_damping;
   std::array<Pull<dim>, kMaxPulls> m_pulls{};
   int m_num_pulls = 0;
+  double m_grab_radius = 0;
+  std::vector<char> m_on_boundary; ///< per node: on the mesh's boundary
   SimStats m_stats;
   std::string m_failure;
   std::array<double, 256> m_step_us{};

@@ -88,6 +88,10 @@ sed 's/^y_axis = \[0.0, 0.0, 1.0\]/y_axis = [1.0, 0.0, 1.0]/' "$src/experiments/
 sed -i 's|"\.\./\.\./meshes|"'"$src"'/meshes|' "$work/bad_plane.toml"
 "$vtb" haptics "$work/bad_plane.toml" --out "$work/out_hap_bad" 2> "$work/err"; rc=$?
 check "haptics refuses a device plane whose axes are not at right angles" '[ $rc -eq 1 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "\[haptics.plane\].y_axis: must be orthogonal" "$work/err" && [ ! -e "$work/out_hap_bad" ]'
+sed 's/^max_force = 4.0/max_force = 4.0\ntip_radius = -0.002/' "$src/experiments/scenes/haptic_slab_press.toml" > "$work/bad_tip.toml"
+sed -i 's|"\.\./\.\./meshes|"'"$src"'/meshes|' "$work/bad_tip.toml"
+"$vtb" haptics "$work/bad_tip.toml" --out "$work/out_hap_tip" 2> "$work/err"; rc=$?
+check "haptics refuses a negative tool tip radius, naming the key" '[ $rc -eq 1 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "tip_radius" "$work/err" && [ ! -e "$work/out_hap_tip" ]'
 
 "$vtb" haptics "$src/experiments/scenes/plate_step.toml" --out "$work/out_hap2" 2> "$work/err"; rc=$?
 check "haptics refuses a scene without [haptics]" '[ $rc -eq 1 ] && grep -q "\[haptics\] is missing" "$work/err"'

@@ -380,11 +380,26 @@ template <int dim> void WarpedFilter<dim>::swap_systems() {
   ++m_factor_version;
 }
 
+template <int dim> double WarpedFilter<dim>::coupling_entry(int u, int q, int p, int axis) const {
+  // U's column (u, p) in the solve's (rotated) frame at node q's axis `axis`: w_q R_q^T e_p. A
+  // unit of one node spans the same columns as e_p (its coupling is isotropic), so its columns
+  // stay e_p and need no new solve when the node turns; a footprint's nodes turn apart, and its
+  // w w^T in the world frame is R^T (w w^T) R in the rotated one.
+  const double w = m_set->weight(u, q);
+  if (m_set->size(u) == 1) return p == axis ? w : 0.0;
+  return w * rotation(m_set->node(u, q))(p, axis);
+}
+
 template <int dim> void WarpedFilter<dim>::couple(const CouplingSet<dim>& set) {
   const int count = set.units();
   std::array<double, kMaxCoupled> c{}; // dt^2 k + dt b per unit
-  for (int u = 0; u < count; ++u) c[static_cast<std::size_t>(u)] = set.coefficient(u);
-  const bool new_z = count > 0 && (set.version() != m_set_version || m_z_version != m_factor_version);
+  bool groups = false;                 // units of several nodes: their columns turn with the nodes
+  for (int u = 0; u < count; ++u) {
+    c[static_cast<std::size_t>(u)] = set.coefficient(u);
+    groups = groups || set.size(u) > 1;
+  }
+  const bool new_z = count > 0 && (set.version() != m_set_version || m_z_version != m_factor_version ||
+                                   (groups && m_z_turns != m_turns));
   const bool same_set = m_set == &set;
   m_set = &set;
   if (same_set && !new_z && count == m_coupled && c == m_coupled_k) return;
@@ -392,22 +407,28 @@ template <int dim> void WarpedFilter<dim>::couple(const CouplingSet<dim>& set) {
   m_coupled_k = c;
   if (count == 0) return;
   const int m = count * dim;
-  // Where unit u's weight q sits in the solve's vector on axis p.
-  const auto at = [&](int u, int q, int p) { return m_index[static_cast<std::size_t>(set.slot(u, q) * dim + p)]; };
+  // Where unit u's node q sits in the solve's vector on axis `axis`.
+  const auto at = [&](int u, int q, int axis) {
+    return m_index[static_cast<std::size_t>(set.slot(u, q) * dim + axis)];
+  };
   if (new_z || !same_set) { // Z = H^-1 U: one solve per unit and axis, in place in its column
     for (int col = 0; col < m; ++col) {
       auto z = m_z.col(col);
       z.setZero();
-      for (int q = 0; q < set.size(col / dim); ++q) z[at(col / dim, q, col % dim)] += set.weight(col / dim, q);
+      for (int q = 0; q < set.size(col / dim); ++q)
+        for (int axis = 0; axis < dim; ++axis)
+          z[at(col / dim, q, axis)] += coupling_entry(col / dim, q, col % dim, axis);
       m_h->solve(z);
     }
     m_z_version = m_factor_version;
     m_set_version = set.version();
+    m_z_turns = m_turns;
   }
   Small C = Small::Zero(m, m);
   for (int r = 0; r < m; ++r)
     for (int q = 0; q < set.size(r / dim); ++q)
-      C.row(r) += set.weight(r / dim, q) * m_z.row(at(r / dim, q, r % dim)).head(m);
+      for (int axis = 0; axis < dim; ++axis)
+        C.row(r) += coupling_entry(r / dim, q, r % dim, axis) * m_z.row(at(r / dim, q, axis)).head(m);
   for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
   m_capacitance.compute(C);
 }
@@ -419,8 +440,9 @@ template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd
   for (int r = 0; r < m; ++r) {
     double sum = 0;
     for (int q = 0; q < m_set->size(r / dim); ++q)
-      sum +=
-          m_set->weight(r / dim, q) * y(m_index[static_cast<std::size_t>(m_set->slot(r / dim, q) * dim + r % dim)], 0);
+      for (int axis = 0; axis < dim; ++axis)
+        sum += coupling_entry(r / dim, q, r % dim, axis) *
+               y(m_index[static_cast<std::size_t>(m_set->slot(r / dim, q) * dim + axis)], 0);
     m_small[r] = sum;
   }
   m_small = m_capacitance.solve(m_small);
@@ -428,6 +450,7 @@ template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd
 }
 
 template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
+  ++m_turns;
   const auto& net = m_model.net;
   // A_i = sum over i's springs (x_j - x_i)(X_j - X_i)^T, gathered node by node so that the
   // sum stays in registers (scattered spring by spring, each add waited on the previous
@@ -478,6 +501,7 @@ template <int dim> SpringTurns WarpedFilter<dim>::turns() {
 }
 
 template <int dim> void WarpedFilter<dim>::turn_rotations() {
+  ++m_turns;
   if constexpr (dim == 2) {
     const auto& net = m_model.net;
     // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so

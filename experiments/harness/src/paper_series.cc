@@ -272,4 +272,42 @@ void haptics(const std::filesystem::path& dir, Out& out) {
   out.number_and_raw("vtbDeviceLimit", s.number(0, "device_limit"), 3);
 }
 
+void tip_force(const std::filesystem::path& dir, Out& out) {
+  // The held force against depth (mm) per mesh, with the tool tip and with a point proxy, and
+  // the half-space's line; the numbers: the two meshes' forces at the deepest press and their
+  // spread, with the tip and without.
+  const CsvTable t = CsvTable::read(dir / "tip_force.csv");
+  const auto rows = [&](const std::string& mesh, bool tip) {
+    return
+        [&t, mesh, tip](std::size_t r) { return t.text(r, "mesh") == mesh && (t.number(r, "tip_radius") > 0) == tip; };
+  };
+  const auto depth_mm = [](std::vector<double> d) {
+    for (double& v : d) v *= 1e3;
+    return d;
+  };
+  const auto deepest = [&](const std::string& mesh, bool tip) {
+    const std::vector<double> f = column(t, "force", rows(mesh, tip));
+    return f.empty() ? std::nan("") : f.back();
+  };
+  out.files.emplace_back("tip_anchor.dat",
+                         series("depth force", {depth_mm(column(t, "depth", rows("half-space", true))),
+                                                column(t, "force", rows("half-space", true))}));
+  for (const char* mesh : {"slab_500", "slab_2000"})
+    for (const bool tip : {true, false}) {
+      const auto keep = rows(std::string(mesh) + ".msh", tip);
+      out.files.emplace_back(std::string("tip_") + mesh + (tip ? "_tip" : "_point") + ".dat",
+                             series("depth force", {depth_mm(column(t, "depth", keep)), column(t, "force", keep)}));
+    }
+  const double coarse = deepest("slab_500.msh", true), fine = deepest("slab_2000.msh", true);
+  out.number("vtbTipCoarse", coarse, 3);
+  out.number("vtbTipFine", fine, 3);
+  out.number("vtbTipSpread", 100 * std::abs(coarse - fine) / fine, 2);
+  out.number("vtbPointCoarse", deepest("slab_500.msh", false), 3);
+  out.number("vtbPointFine", deepest("slab_2000.msh", false), 3);
+  const std::vector<double> anchor = column(t, "force", rows("half-space", true));
+  out.number("vtbTipAnchor", anchor.empty() ? std::nan("") : anchor.back(), 3);
+  const std::vector<double> depths = column(t, "depth", rows("half-space", true));
+  out.number("vtbTipDepthMm", depths.empty() ? std::nan("") : 1e3 * depths.back(), 2);
+}
+
 } // namespace vtb::harness::paper

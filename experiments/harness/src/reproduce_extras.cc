@@ -5,6 +5,7 @@
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/problem/output.hh"
+#include "vtb/problem/problem.hh"
 
 #include <cmath>
 #include <fstream>
@@ -12,6 +13,7 @@
 #include <ostream>
 #include <sstream>
 #include <thread>
+#include <variant>
 
 namespace vtb::harness::parts {
 namespace {
@@ -74,6 +76,45 @@ void write_transient(const std::filesystem::path& out, const std::filesystem::pa
          << (r.stable ? "true" : "false") << '\n';
     }
   write_files_atomically(out, {{"transient.csv", os.str()}});
+}
+
+void write_tip_force(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, bool quick,
+                     std::ostream* log) {
+  if (log) *log << "[tip] the slab press held at each depth: two meshes, a 4 mm tip and a point proxy\n";
+  const Scene base = read_scene(scenes_dir / "haptic_slab_press.toml");
+  const double top = 0.02; // the slab's top face (z), which the hand's waypoints press into
+  const std::vector<double> depths =
+      quick ? std::vector<double>{0.002, 0.005} : std::vector<double>{0.001, 0.002, 0.003, 0.004, 0.005};
+  const HapticsDesc& h = *base.haptics;
+  // The half-space under a uniform disc of the tip's radius (mean compliance 16 (1 - nu^2) /
+  // (3 pi^2 E a)) in series with the coupling and the hand's grip: a layer on a rigid base is
+  // stiffer, so the force lies above it.
+  const double a = 0.004, nu = base.material.poisson_ratio;
+  const double half_space = 16 * (1 - nu * nu) / (3 * M_PI * M_PI * base.material.young_modulus * a);
+  const double chain = 1 / h.coupling_stiffness + 1 / h.hand->grip_stiffness + half_space;
+  std::ostringstream os;
+  os << std::setprecision(6) << "mesh,nodes,tip_radius,depth,force\n";
+  for (double d : depths) os << "half-space,0," << a << ',' << d << ',' << d / chain << '\n';
+  for (const char* mesh : {"slab_500.msh", "slab_2000.msh"})
+    for (double tip : {a, 0.0})
+      for (double d : depths) {
+        Scene s = base;
+        s.mesh.file = base.mesh.file.parent_path() / mesh;
+        s.haptics->tip_radius = tip;
+        s.duration = 1.8; // the hand reaches the depth at 1 s and holds it to 2 s
+        s.haptics->hand->waypoints = {Eigen::Vector2d(0.1, 0.05), Eigen::Vector2d(0.1, top - d),
+                                      Eigen::Vector2d(0.1, top - d), Eigen::Vector2d(0.1, 0.05)};
+        HapticsOptions ho;
+        ho.lockstep = true;
+        const HapticsReport r = run_haptics(s, ho);
+        double sum = 0;
+        int n = 0;
+        for (std::size_t k = 0; k < r.t.size(); ++k)
+          if (r.t[k] >= 1.3) sum += r.probes.at(0).fy[k], ++n;
+        const auto nodes = std::visit([](const auto& m) { return m.num_nodes(); }, load_mesh(s));
+        os << mesh << ',' << nodes << ',' << tip << ',' << d << ',' << sum / std::max(n, 1) << '\n';
+      }
+  write_files_atomically(out, {{"tip_force.csv", os.str()}});
 }
 
 void write_haptics(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, double stall_time,

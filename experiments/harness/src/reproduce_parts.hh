@@ -33,6 +33,11 @@ void write_transient(const std::filesystem::path& out, const std::filesystem::pa
 /// haptics_periods.csv (each servo cycle's period) and haptics_trace.csv (t, handle and
 /// force of the first probe) of a real-time session of haptic_press.toml with the physics
 /// stalled at `stall_time`; haptics_summary.csv: misses, p99, fault and force-zero times.
+/// tip_force.csv: the slab press (haptic_slab_press, lockstep) held at several depths on the
+/// repository's two slab meshes, with the scene's 4 mm tool tip and with a point proxy, and the
+/// half-space's force at each depth (docs/haptics.md).
+void write_tip_force(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, bool quick,
+                     std::ostream* log);
 void write_haptics(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, double stall_time,
                    std::ostream* log);
 

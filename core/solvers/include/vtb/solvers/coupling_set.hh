@@ -20,7 +20,7 @@ namespace vtb {
 
 template <int dim> class CouplingSet {
 public:
-  static constexpr int kMaxUnits = 8;  ///< units solved implicitly at most; more apply their force alone
+  static constexpr int kMaxUnits = 16; ///< units solved implicitly at most; more apply their force alone
   static constexpr int kMaxNodes = 64; ///< nodes per unit at most; more apply their force alone
 
   /// `slot_of_node`: each node's place in the consumer's system (a free index, a factor row;

@@ -261,6 +261,9 @@ private:
   void couple(const CouplingSet<dim>& couplings);
   /// y -= Z C^-1 U^T y: H^-1 r turned into H'^-1 r (y laid out as m_h's).
   void correct_for_couplings(Eigen::MatrixXd& y) const;
+  /// U's entry for unit u's node q, world axis p, at the node's axis `axis` in the rotated frame.
+  double coupling_entry(int u, int q, int p, int axis) const;
+  long m_turns = 0, m_z_turns = -1; ///< rotations() calls, and the one Z was made at
   using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxCoupled * dim, kMaxCoupled * dim>;
   using SmallVec = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxCoupled * dim, 1>;
   long m_factor_version = 0, m_z_version = -1;

@@ -24,6 +24,7 @@ inline constexpr ReportFigure kReportFigures[] = {
     {"creep", "Creep against the Kelvin-Voigt law"},
     {"scaling", "Step time and memory against nodes"},
     {"haptics", "The haptic loop: servo periods and a physics stall"},
+    {"tip_force", "The held force against depth: the tool tip on two meshes, a point proxy, the half-space"},
 };
 
 struct ReproduceOptions {
