@@ -1,4 +1,5 @@
 #include "vtb/haptics/contact3d.hh"
+#include "vtb/haptics/facet_rings.hh"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -80,22 +81,7 @@ struct SurfaceTree::Impl {
 
 SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
   m_triangles = boundary_facets(mesh);
-  // Triangles around each vertex, then each triangle's ring: the triangles sharing a vertex.
-  std::vector<std::vector<int>> around(static_cast<std::size_t>(mesh.num_nodes()));
-  for (std::size_t f = 0; f < m_triangles.size(); ++f)
-    for (int v : m_triangles[f]) around[static_cast<std::size_t>(v)].push_back(static_cast<int>(f));
-  m_ring_ptr.push_back(0);
-  std::vector<int> ring;
-  for (std::size_t f = 0; f < m_triangles.size(); ++f) {
-    ring.clear();
-    for (int v : m_triangles[f])
-      for (int g : around[static_cast<std::size_t>(v)])
-        if (g != static_cast<int>(f)) ring.push_back(g);
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    m_ring.insert(m_ring.end(), ring.begin(), ring.end());
-    m_ring_ptr.push_back(static_cast<int>(m_ring.size()));
-  }
+  facet_rings(m_triangles, mesh.num_nodes(), m_ring_ptr, m_ring); // the triangles sharing a vertex
   m_impl->geometry.triangles = &m_triangles;
   m_impl->geometry.x = mesh.points;
   // Margin: a quarter of the mean surface edge length (a few builds per press of a few mm;

@@ -1,4 +1,5 @@
 #include "vtb/haptics/footprint.hh"
+#include "vtb/haptics/facet_rings.hh"
 
 #include <Eigen/Geometry>
 
@@ -14,12 +15,9 @@ TipFootprint<dim>::TipFootprint(const std::vector<std::array<int, dim>>& facets,
   if (young_modulus > 0)
     m_soft = dim == 3 ? 16.0 * (1.0 - poisson_ratio * poisson_ratio) / (3.0 * M_PI * M_PI * young_modulus)
                       : 2.0 / (M_PI * young_modulus * thickness);
-  const auto nodes = static_cast<std::size_t>(rest.cols());
-  std::vector<std::vector<int>> around(nodes);
   double edges = 0;
   for (std::size_t f = 0; f < facets.size(); ++f) {
     const auto& e = facets[f];
-    for (int v : e) around[static_cast<std::size_t>(v)].push_back(static_cast<int>(f));
     double size = 0;
     if constexpr (dim == 2) {
       size = (rest.col(e[1]) - rest.col(e[0])).norm();
@@ -33,18 +31,7 @@ TipFootprint<dim>::TipFootprint(const std::vector<std::array<int, dim>>& facets,
   }
   const double edge_count = static_cast<double>(facets.size()) * (dim == 2 ? 1.0 : 3.0);
   m_mean_edge = facets.empty() ? 0.0 : edges / edge_count;
-  m_ring_ptr.push_back(0);
-  std::vector<int> ring;
-  for (std::size_t f = 0; f < facets.size(); ++f) {
-    ring.clear();
-    for (int v : facets[f])
-      for (int g : around[static_cast<std::size_t>(v)])
-        if (g != static_cast<int>(f)) ring.push_back(g);
-    std::sort(ring.begin(), ring.end());
-    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
-    m_ring.insert(m_ring.end(), ring.begin(), ring.end());
-    m_ring_ptr.push_back(static_cast<int>(m_ring.size()));
-  }
+  facet_rings(facets, static_cast<int>(rest.cols()), m_ring_ptr, m_ring);
 }
 
 template <int dim> Vec<dim> TipFootprint<dim>::normal(int f, const Nodal<dim>& x) const {
