@@ -20,7 +20,9 @@ Action add_compare(CLI::App& app) {
                                                 "and the error decomposition (compare.csv, decomposition.csv)");
   cmd->add_option("scene", o->scene, "Scene file (.toml)")->required();
   cmd->add_option("--solvers", o->solvers, "Comma-separated: " + solvers::list())->delimiter(',')->required();
-  cmd->add_option("--reference", o->reference, "fem (default) or cvode");
+  cmd->add_option("--reference", o->reference,
+                  "fem (default: the continuum, P2 refined until converged), fem-mesh (the scene's own FEM, P1 on the "
+                  "mesh by default) or cvode");
   cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");
   cmd->add_flag("--frames", o->frames, "Also write each solver's frames.pvd and frames/*.vtu in OUT/<solver>/");

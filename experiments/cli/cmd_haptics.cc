@@ -1,6 +1,7 @@
 #include "commands.hh"
 #include "overrides.hh"
 
+#include "vtb/harness/solvers.hh"
 #include "vtb/haptics/session.hh"
 
 #include <algorithm>
@@ -40,6 +41,8 @@ Action add_haptics(CLI::App& app) {
     ho.pin_cpu = o->pin_cpu;
     ho.realtime_priority = !o->no_priority;
     ho.replay = o->replay;
+    const Yardstick yardstick = harness::continuum_yardstick(); // the default springs, as vtb run's
+    ho.yardstick = &yardstick;
     const HapticsReport r = run_haptics(scene, ho);
     for (const auto& note : r.notes) std::cerr << "note: " << note << '\n';
     const std::filesystem::path out =

@@ -54,6 +54,8 @@ Action add_run(CLI::App& app) {
       springs =
           " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
     if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
+    if (!r.calibration_target.empty() && r.calibration_target.rfind("the continuum", 0) != 0)
+      std::cout << "vtb run: the fit trained on " << r.calibration_target << "\n";
     if (r.fallback_steps > 0) // the filter's claim does not hold on these steps: say so
       std::cout << "vtb run: " << r.fallback_steps << " of " << r.steps_taken << " steps (" << std::setprecision(3)
                 << 100.0 * static_cast<double>(r.fallback_steps) / static_cast<double>(r.steps_taken)
@@ -66,17 +68,25 @@ Action add_run(CLI::App& app) {
                         ? 100.0 * static_cast<double>(r.steps_over_budget) / static_cast<double>(r.steps_taken)
                         : 0.0)
                 << std::setprecision(6) << " %) took longer than the step budget of " << r.step_budget * 1e6 << " us\n";
-    std::string load_check; // the springs against P1 FEM on this scene's loads
+    std::string load_check; // the springs against the yardstick (the continuum) on this scene's loads
     if (std::isfinite(r.calibration_load_error)) {
-      std::ostringstream pct;
-      pct << std::setprecision(2) << 100 * r.calibration_load_error << " %";
-      load_check = " (" + pct.str() + " from P1 FEM on the scene's loads, static)";
+      const auto pct = [](double x) {
+        std::ostringstream s;
+        s << std::setprecision(2) << 100 * x << " %";
+        return s.str();
+      };
+      const bool continuum = std::isfinite(r.mesh_fem_load_error);
+      load_check = " (" + pct(r.calibration_load_error) + " from " + (continuum ? "the continuum" : "P1 FEM") +
+                   " on the scene's loads, static" +
+                   (continuum ? "; P1 on this mesh " + pct(r.mesh_fem_load_error) : std::string()) + ")";
+      std::cout << "vtb run: the springs' load check against " << r.calibration_yardstick << "\n";
       if (r.calibration_load_error > kLoadErrorGoal)
-        std::cout << "vtb run: the " << r.calibration << " springs are " << pct.str()
-                  << " from P1 FEM on this scene's loads (static, linear; above " << 100 * kLoadErrorGoal << " %): "
+        std::cout << "vtb run: the " << r.calibration << " springs are " << pct(r.calibration_load_error) << " from "
+                  << (continuum ? "the continuum" : "P1 FEM") << " on this scene's loads (static, linear; above "
+                  << 100 * kLoadErrorGoal << " %): "
                   << (r.calibration == "fitted"
-                          ? "central springs miss part of this response (a load concentrated at an edge or "
-                            "corner, or nu near 0.5; docs/fidelity.md)"
+                          ? "central springs miss part of this response (bending of a part a few cells thick, a "
+                            "load concentrated at an edge or corner, or nu near 0.5; docs/fidelity.md)"
                           : "springs = \"fitted\" fits them to the FEM (docs/fidelity.md)")
                   << "; vtb compare --reference fem measures the run\n";
     }

@@ -3,6 +3,7 @@
 #include "vtb/problem/solver_registry.hh"
 
 #include "../viewer/viewer.hh"
+#include "vtb/harness/solvers.hh"
 
 #include <iostream>
 #include <memory>
@@ -43,6 +44,7 @@ Action add_view(CLI::App& app) {
     if (!o->filter.empty()) v.filter = o->filter;
     if (o->dt != 0) v.dt = o->dt;
     v.device = o->device;
+    v.yardstick = harness::continuum_yardstick();
     try {
       return viewer::run_viewer(scene, v);
     } catch (const viewer::NoDisplay& e) {

@@ -15,8 +15,8 @@
 namespace vtb::viewer {
 
 template <int dim>
-LiveSim<dim>::LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls)
-    : m_scene(scene), m_mesh(std::move(mesh)), m_controls(std::move(controls)),
+LiveSim<dim>::LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls, Yardstick yardstick)
+    : m_scene(scene), m_mesh(std::move(mesh)), m_yardstick(std::move(yardstick)), m_controls(std::move(controls)),
       m_grab_radius((scene.haptics ? *scene.haptics : HapticsDesc{}).tip_radius_for(dim)),
       m_on_boundary(static_cast<std::size_t>(m_mesh.num_nodes()), 0) {
   for (const auto& f : boundary_facets(m_mesh))
@@ -41,8 +41,12 @@ template <int dim> void LiveSim<dim>::rebuild() {
   // The springs' error on the scene's loads does not change with the stiffness, dt, the solver
   // or the filter: measured again only when the springs change (about 2 s at 10k nodes).
   const bool same_springs = m_model && m_model->net.calibration_requested == m_controls.springs;
-  auto model = std::make_unique<Model<dim>>(build_model<dim>(s, m_mesh, {}, !same_springs));
-  if (same_springs) model->net.calibration_load_error = m_model->net.calibration_load_error;
+  auto model = std::make_unique<Model<dim>>(build_model<dim>(s, m_mesh, {}, !same_springs, &m_yardstick));
+  if (same_springs) {
+    model->net.calibration_load_error = m_model->net.calibration_load_error;
+    model->net.mesh_fem_load_error = m_model->net.mesh_fem_load_error;
+    model->net.calibration_yardstick = m_model->net.calibration_yardstick;
+  }
   IntegratorOptions o = integrator_options(s.solver);
   o.kind = m_controls.solver;
   o.filter = m_controls.filter;

@@ -86,7 +86,9 @@ public:
   static constexpr int kTrace = 600; ///< probe samples kept (the last seconds at 1 per step group)
 
   /// Builds the model of the scene's mesh; throws InputError for a scene the solvers refuse.
-  LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls);
+  /// `yardstick`: what the springs' load check measures against (build_model; the viewer's
+  /// CLI gives the continuum, tests may leave P1 on the mesh).
+  LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls, Yardstick yardstick = {});
 
   /// Applies new controls (solver, filter, dt, stiffness): InputError if they are refused
   /// (the previous configuration is kept); the state is kept when the model is unchanged.
@@ -162,6 +164,7 @@ private:
 
   Scene m_scene;
   Mesh<dim> m_mesh;
+  Yardstick m_yardstick;
   SimControls m_controls;
   std::unique_ptr<Model<dim>> m_model;
   std::unique_ptr<Integrator<dim>> m_integ;

@@ -190,7 +190,7 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
         // The simulation is built before the window opens, so that a scene the solvers refuse
         // is reported as bad input (exit 1) whether or not there is a display.
         std::string note;
-        auto sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), initial_controls(scene, o, &note));
+        auto sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), initial_controls(scene, o, &note), o.yardstick);
         if (o.drag && !o.device) check_drag_start(sim->model(), o.drag->first);
         if (o.device) device_plane(scene, sim->model().mesh); // a plane the scene cannot hold is bad input now
         Window win(o, "vtb view: " + scene.name);

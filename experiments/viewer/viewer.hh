@@ -8,6 +8,7 @@
 /// PNG and exits: the mode that tests and figures use under xvfb-run.
 
 #include "vtb/problem/scene.hh"
+#include "vtb/springs/load_check.hh"
 
 #include <Eigen/Core>
 
@@ -26,6 +27,7 @@ struct ViewOptions {
   bool device =
       false; ///< device mode: the mouse (or the drag) is the hand on the simulated ProCAT (3D: in [haptics.plane])
   int width = 1280, height = 760;
+  Yardstick yardstick; ///< what the panel's load check measures the springs against (empty: P1 on the mesh)
 };
 
 /// "X0,Y0:X1,Y1" (or with Z in 3D) -> the two points; InputError naming --drag otherwise.

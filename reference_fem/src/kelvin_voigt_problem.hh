@@ -44,6 +44,8 @@
 #include <deal.II/fe/mapping_fe.h>
 #include <deal.II/lac/affine_constraints.h>
 
+#include <Eigen/Core>
+
 #include <sstream>
 
 namespace vtb::fem {
@@ -62,6 +64,12 @@ public:
         m_timer(m_timer_stream, dealii::TimerOutput::never, dealii::TimerOutput::wall_times) {}
 
   RunReport run(Trajectory<dim>& out, bool record_field);
+
+  /// Static answers (the options' static solve) at the scene's nodes, one column per column of
+  /// `g`: the body force per unit mass whose nodal values (node v, component i) -> dim v + i
+  /// are g's, linear over each of the scene's cells (a P1 field, exact on every refinement),
+  /// with the supports held at zero. Serial backend only (kelvin_voigt_answers.cc).
+  Eigen::MatrixXd body_force_answers(const Eigen::MatrixXd& g);
 
 private:
   RunReport header() const;

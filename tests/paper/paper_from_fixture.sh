@@ -67,7 +67,7 @@ grep -q 'write18 enabled' "$tmp/paper/vtb.log" && fail "pdflatex ran with shell 
 grep -q 'Quick reproduction' "$tmp/vtb.txt" || fail "a --quick reproduction's paper does not say so"
 # The references: BibTeX ran (a References section listing the works), every citation resolved
 # (an unresolved \cite prints [?]), and the seed paper and the calibrations are among them.
-grep -q '^ *References' "$tmp/vtb.txt" || fail "the paper has no References section"
+grep -qP '^[\f ]*References' "$tmp/vtb.txt" || fail "the paper has no References section" # (a form feed where it opens a page)
 grep -qF '[?]' "$tmp/vtb.txt" && fail "a citation did not resolve ([?] in the PDF)"
 # (BibTeX's plain style lowercases titles and LaTeX may hyphenate a word at a line's end: the
 # phrases are matched without case on the text with its lines joined.)

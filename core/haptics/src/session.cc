@@ -426,7 +426,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
   if (!scene.haptics)
     throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
-  return with_model(scene, [&](const auto& model) { return run_session(scene, opt, model); });
+  return with_model(
+      scene, [&](const auto& model) { return run_session(scene, opt, model); }, {}, opt.yardstick);
 }
 
 } // namespace vtb

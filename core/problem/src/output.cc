@@ -55,7 +55,12 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
       j["calibration_cached"] = r.calibration_cached;
       j["calibration_validation_error"] = r.calibration_validation;
     }
-    if (std::isfinite(r.calibration_load_error)) j["calibration_load_error"] = r.calibration_load_error;
+    if (std::isfinite(r.calibration_load_error)) {
+      j["calibration_load_error"] = r.calibration_load_error;
+      j["calibration_yardstick"] = r.calibration_yardstick;
+    }
+    if (std::isfinite(r.mesh_fem_load_error)) j["mesh_fem_load_error"] = r.mesh_fem_load_error;
+    if (!r.calibration_target.empty()) j["calibration_target"] = r.calibration_target;
     if (!r.calibration_note.empty()) j["calibration_note"] = r.calibration_note;
     j["effective_poisson_ratio"] = r.effective_poisson_ratio;
   }

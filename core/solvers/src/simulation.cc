@@ -186,7 +186,7 @@ IntegratorOptions integrator_options(const SolverDesc& s) {
 }
 
 RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames, const FitProgress& progress,
-                    RunTables* tables) {
+                    RunTables* tables, const Yardstick* yardstick) {
   const IntegratorOptions o = integrator_options(scene.solver);
   return with_model(
       scene,
@@ -198,7 +198,7 @@ RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bo
         if (frames && !out_dir.empty()) write_frames(model, traj, out_dir);
         return rep;
       },
-      progress);
+      progress, yardstick);
 }
 
 template <int dim>

@@ -27,7 +27,8 @@ struct Fnv {
 /// The fit is equivariant in E t (its FEM, its priors, its loads scale with E t, its answers
 /// do not), so the key holds nu and not E or t: one fit per mesh, Poisson ratio and supports,
 /// and a stiffness sweep or the viewer's stiffness slider reads it back scaled.
-template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports) {
+template <int dim>
+std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports, const std::string& target) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
@@ -43,6 +44,7 @@ template <int dim> std::uint64_t key(const Mesh<dim>& mesh, double nu, const std
                          o.uniform_stress, double(o.cg_iterations), double(o.holdout), double(o.patience),
                          o.min_improvement, double(FitOptions::kEarlyStopDofs)})
     f.add(x);
+  f.add(target.data(), target.size());
   return f.h;
 }
 
@@ -85,10 +87,10 @@ std::filesystem::path fit_cache_dir() {
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
                                         const std::vector<int>& supports, CachedFit* info,
-                                        const FitProgress& progress) {
+                                        const FitProgress& progress, const FitTarget& target) {
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
-  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, nu, supports)));
+  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, nu, supports, target.key)));
   Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);
@@ -96,6 +98,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     FitOptions options;
     options.supports = supports;
     options.progress = progress;
+    options.target = target;
     FitReport report;
     k = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report); // unit E t, scaled below
     got.chosen = report.chosen;
@@ -116,8 +119,8 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
 }
 
 template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*, const FitProgress&);
+                                                    CachedFit*, const FitProgress&, const FitTarget&);
 template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*, const FitProgress&);
+                                                    CachedFit*, const FitProgress&, const FitTarget&);
 
 } // namespace vtb

@@ -359,6 +359,19 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
   tr.T.rightCols(stress.cols()) = stress;
   tr.F = K * tr.T;
   tr.Fv = K * tr.Tv;
+  if (tr.supported && o.target.answers) {
+    // The same loads, answered by the target instead of P1 (which answers them with T itself);
+    // the held rows of a load are the supports' reactions, not applied forces.
+    MatrixXd loads(N, tr.F.cols() + tr.Fv.cols());
+    loads << tr.F, tr.Fv;
+    for (const int d : tr.pins) loads.row(d).setZero();
+    const MatrixXd U = o.target.answers(loads, E, nu, thickness);
+    if (U.rows() == N && U.cols() == loads.cols() && U.allFinite()) {
+      tr.T = U.leftCols(tr.F.cols());
+      tr.Tv = U.rightCols(tr.Fv.cols());
+      for (const int d : tr.pins) tr.T.row(d).setZero(), tr.Tv.row(d).setZero();
+    }
+  }
   return tr;
 }
 

@@ -40,32 +40,60 @@ template <int dim> SpMat free_dof_block(const SpMat& K, const Problem<dim>& p) {
 }
 
 template <int dim>
-double static_load_error(const Problem<dim>& problem, const SpringNetwork<dim>& net, const MaterialDesc& material) {
-  constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+LoadCheck static_load_check(const Problem<dim>& problem, const SpringNetwork<dim>& net, const MaterialDesc& material,
+                            const Yardstick* yardstick) {
+  LoadCheck check;
   const int nf = static_cast<int>(problem.free_nodes.size());
-  if (problem.loads.empty() || dim * nf > kLoadCheckDofs) return nan;
+  if (problem.loads.empty() || dim * nf > kLoadCheckDofs) return check;
   std::vector<int> held;
   for (int v = 0; v < problem.num_nodes(); ++v)
     if (problem.constrained[static_cast<std::size_t>(v)]) held.push_back(v);
-  if (!supports_hold(problem.mesh, held)) return nan;
+  if (!supports_hold(problem.mesh, held)) return check;
   Nodal<dim> loads(dim, problem.num_nodes());
   problem.external_forces(std::numeric_limits<double>::infinity(), loads); // every load at its full value
   Eigen::VectorXd f(dim * nf);
   for (int a = 0; a < nf; ++a)
     f.template segment<dim>(dim * a) = loads.col(problem.free_nodes[static_cast<std::size_t>(a)]);
-  if (f.squaredNorm() == 0) return nan;
+  if (f.squaredNorm() == 0) return check;
   const SpMat K_fem = free_dof_block(
       fem_stiffness_matrix(problem.mesh, material.young_modulus, material.poisson_ratio, material.thickness), problem);
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, problem.num_nodes());
   const SpMat K_springs = free_dof_block(SpMat(-force_jacobians(net, rest, false).K), problem);
   Eigen::VectorXd u_fem, u_springs;
-  if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return nan;
-  return (u_springs - u_fem).norm() / u_fem.norm();
+  if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return check;
+  std::optional<YardstickAnswer<dim>> continuum;
+  if (yardstick) {
+    const YardstickSolve<dim>* solve_continuum = nullptr;
+    if constexpr (dim == 2)
+      solve_continuum = &yardstick->plane;
+    else
+      solve_continuum = &yardstick->solid;
+    if (*solve_continuum) continuum = (*solve_continuum)(problem, material);
+  }
+  if (!continuum || continuum->u.squaredNorm() == 0) {
+    check.springs = (u_springs - u_fem).norm() / u_fem.norm();
+    check.yardstick = "P1 FEM on the mesh";
+    return check;
+  }
+  // Both answers at every node (held nodes at zero) against the continuum's at the same nodes.
+  Nodal<dim> us = rest, up1 = rest;
+  for (int a = 0; a < nf; ++a) {
+    const int v = problem.free_nodes[static_cast<std::size_t>(a)];
+    us.col(v) = u_springs.template segment<dim>(dim * a);
+    up1.col(v) = u_fem.template segment<dim>(dim * a);
+  }
+  const double norm = continuum->u.norm();
+  check.springs = (us - continuum->u).norm() / norm;
+  check.mesh_fem = (up1 - continuum->u).norm() / norm;
+  check.yardstick = "the continuum (" + continuum->how + ")";
+  return check;
 }
 
 template Eigen::SparseMatrix<double> free_dof_block<2>(const Eigen::SparseMatrix<double>&, const Problem<2>&);
 template Eigen::SparseMatrix<double> free_dof_block<3>(const Eigen::SparseMatrix<double>&, const Problem<3>&);
-template double static_load_error<2>(const Problem<2>&, const SpringNetwork<2>&, const MaterialDesc&);
-template double static_load_error<3>(const Problem<3>&, const SpringNetwork<3>&, const MaterialDesc&);
+template LoadCheck static_load_check<2>(const Problem<2>&, const SpringNetwork<2>&, const MaterialDesc&,
+                                        const Yardstick*);
+template LoadCheck static_load_check<3>(const Problem<3>&, const SpringNetwork<3>&, const MaterialDesc&,
+                                        const Yardstick*);
 
 } // namespace vtb

@@ -6,14 +6,29 @@
 namespace vtb {
 
 template <int dim>
-Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress, bool check_loads) {
+Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& progress, bool check_loads,
+                       const Yardstick* yardstick) {
   Model<dim> model;
   static_cast<Problem<dim>&>(model) = build_problem<dim>(scene, std::move(mesh));
   std::vector<int> supports; // the fit trains on the body as the scene holds it
   for (int v = 0; v < model.num_nodes(); ++v)
     if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
-  model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress);
-  if (check_loads) model.net.calibration_load_error = static_load_error<dim>(model, model.net, scene.material);
+  FitTarget target; // the continuum's answers where the yardstick gives them, else P1's
+  if (yardstick) {
+    const FitTargetFor<dim>* target_for = nullptr;
+    if constexpr (dim == 2)
+      target_for = &yardstick->plane_target;
+    else
+      target_for = &yardstick->solid_target;
+    if (*target_for) target = (*target_for)(model, scene.material);
+  }
+  model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress, target);
+  if (check_loads) {
+    const LoadCheck check = static_load_check<dim>(model, model.net, scene.material, yardstick);
+    model.net.calibration_load_error = check.springs;
+    model.net.mesh_fem_load_error = check.mesh_fem;
+    model.net.calibration_yardstick = check.yardstick;
+  }
   return model;
 }
 
@@ -29,6 +44,9 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
   rep.calibration_requested = model.net.calibration_requested;
   rep.calibration_validation = model.net.calibration_validation;
   rep.calibration_load_error = model.net.calibration_load_error;
+  rep.mesh_fem_load_error = model.net.mesh_fem_load_error;
+  rep.calibration_yardstick = model.net.calibration_yardstick;
+  rep.calibration_target = model.net.calibration_target;
   rep.calibration_note = model.net.calibration_note;
   rep.calibration_seconds = model.net.calibration_seconds;
   rep.calibration_cached = model.net.calibration_cached;
@@ -38,7 +56,7 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
 
 template RunReport spring_report<2>(const Model<2>&, const std::string&);
 template RunReport spring_report<3>(const Model<3>&, const std::string&);
-template Model<2> build_model<2>(const Scene&, Mesh<2>, const FitProgress&, bool);
-template Model<3> build_model<3>(const Scene&, Mesh<3>, const FitProgress&, bool);
+template Model<2> build_model<2>(const Scene&, Mesh<2>, const FitProgress&, bool, const Yardstick*);
+template Model<3> build_model<3>(const Scene&, Mesh<3>, const FitProgress&, bool, const Yardstick*);
 
 } // namespace vtb

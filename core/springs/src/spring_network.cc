@@ -12,7 +12,8 @@ namespace vtb {
 
 template <int dim>
 SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat, std::string_view calibration,
-                                 const std::vector<int>& supports, const FitProgress& progress) {
+                                 const std::vector<int>& supports, const FitProgress& progress,
+                                 const FitTarget& target) {
   SpringNetwork<dim> net;
   net.rest = mesh.points;
   net.mass = lumped_masses(mesh, mat.density, mat.thickness);
@@ -33,7 +34,9 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     CachedFit fit;
     try {
       net.stiffness =
-          cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit, progress);
+          cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit, progress,
+                                  target);
+      net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
       if (net.calibration_requested != "auto") throw;
       net.calibration = "lloyd";
@@ -107,7 +110,7 @@ template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const No
 
 #define VTB_INSTANTIATE(D)                                                                                             \
   template SpringNetwork<D> build_network<D>(const Mesh<D>&, const MaterialDesc&, std::string_view,                    \
-                                             const std::vector<int>&, const FitProgress&);                             \
+                                             const std::vector<int>&, const FitProgress&, const FitTarget&);           \
   template double max_strain<D>(const SpringNetwork<D>&, const Nodal<D>&);                                             \
   template double elastic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);                                         \
   template double kinetic_energy<D>(const SpringNetwork<D>&, const Nodal<D>&);

@@ -4,6 +4,8 @@
 
 #include "vtb/harness/solvers.hh"
 
+#include "vtb/fem/continuum.hh"
+
 #include "vtb/problem/output.hh"
 
 #include <chrono>
@@ -15,6 +17,24 @@
 
 namespace vtb::harness {
 namespace {
+
+/// The scene as `compare` runs the FEM named `name`: `fem` is the continuum (P2 at the
+/// coarsest refinement the static ladder found within 1 % of the next, continuum.hh), `fem-mesh`
+/// the scene's own FEM. `note` says which.
+template <int dim> Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& name, std::string& note) {
+  Scene s = scene;
+  if (name != solvers::kFem) {
+    note = "the scene's FEM: P" + std::to_string(s.solver.degree) + ", " + std::to_string(s.solver.refinements) +
+           " refinements, on the mesh";
+    return s;
+  }
+  s.solver.degree = 2;
+  const auto ladder = fem::continuum_static<dim>(model, scene.material);
+  s.solver.refinements = ladder ? ladder->sufficient_refinements : 0;
+  note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) + "x (static ladder: " + ladder->how + ")"
+                : "P2 on the mesh (the static ladder's first level is above its budget of dofs)";
+  return s;
+}
 
 template <int dim>
 CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const std::vector<std::string>& solvers,
@@ -33,7 +53,13 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
     const auto a = std::chrono::steady_clock::now();
     CompareRow row;
     row.solver = name;
-    row.report = run_solver(scene, model, name, dt, runs[name]);
+    if (name == solvers::kFem || name == solvers::kFemMesh) {
+      const Scene fs = fem_scene(scene, model, name, name == reference ? res.reference_note : row.note);
+      row.report = run_solver(fs, model, solvers::kFem, dt, runs[name]);
+      row.report.solver = name;
+    } else {
+      row.report = run_solver(scene, model, name, dt, runs[name]);
+    }
     row.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count();
     if (progress) *progress << " " << std::fixed << std::setprecision(2) << row.wall_seconds << " s\n";
     if (!keep.runs_dir.empty()) {
@@ -80,13 +106,18 @@ std::string num(double x) {
 
 CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
                           double dt, std::ostream* progress, const KeepRuns& keep) {
-  if (reference != solvers::kFem && reference != solvers::kCvode)
-    throw InputError("--reference must be fem or cvode, not " + reference);
-  for (const auto& s : solvers) solvers::find(s, "--solvers"); // an unknown name: InputError with the nearest one
-  return with_model(scene, [&](const auto& model) {
-    constexpr int dim = std::decay_t<decltype(model)>::dimension;
-    return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);
-  });
+  if (reference != solvers::kFem && reference != solvers::kFemMesh && reference != solvers::kCvode)
+    throw InputError("--reference must be fem, fem-mesh or cvode, not " + reference);
+  for (const auto& s : solvers)
+    if (s != solvers::kFemMesh) solvers::find(s, "--solvers"); // an unknown name: InputError with the nearest one
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  return with_model(
+      scene,
+      [&](const auto& model) {
+        constexpr int dim = std::decay_t<decltype(model)>::dimension;
+        return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);
+      },
+      {}, &yardstick);
 }
 
 void write_compare(const CompareResult& r, const std::filesystem::path& dir) {
@@ -115,7 +146,7 @@ std::string format_compare(const CompareResult& r) {
   std::ostringstream os;
   char line[256];
   os << "scene " << r.scene << ": " << r.nodes << " nodes, " << r.duration << " s simulated, reference " << r.reference
-     << "\n";
+     << (r.reference_note.empty() ? "" : " (" + r.reference_note + ")") << "\n";
   std::snprintf(line, sizeof line, "%-20s %10s %7s %12s %12s %12s %12s %12s %9s\n", "solver", "dt [s]", "stable",
                 "disp err", "final err", "react err", "precomp [ms]", "step [us]", "RT factor");
   os << line;
@@ -129,8 +160,9 @@ std::string format_compare(const CompareResult& r) {
                   row.error.reaction_max, p.precompute_seconds * 1e3, p.step_seconds.median * 1e6, rt);
     os << line;
     if (!p.stable) os << "  " << row.solver << ": unstable (" << p.failure << " at t = " << p.failure_time << " s)\n";
+    if (!row.note.empty()) os << "  " << row.solver << ": " << row.note << "\n";
   }
-  if (!r.point_loads.empty() && r.reference == solvers::kFem) {
+  if (!r.point_loads.empty() && r.reference != solvers::kCvode) {
     os << "note: point load";
     for (const auto& n : r.point_loads) os << " " << n;
     os << ": under a point force the continuum displacement is singular (log r in 2D, 1/r in 3D), so the FEM "

@@ -152,7 +152,8 @@ TimingPart run_timing(const ReproduceOptions& o, double duration) {
     const Case& cs = cases[c];
     if (log) *log << "[timing " << c + 1 << "/" << cases.size() << "] " << cs.label << "\n";
     const Scene scene = scene_for(o, cs.scene_file, duration);
-    const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
+    const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+    const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)), {}, true, &yardstick);
     std::map<std::string, Trajectory<2>> runs;
     std::map<std::string, RunReport> reports;
     std::map<std::string, double> wall;
@@ -227,7 +228,8 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
   std::ostringstream acc;
   acc << "solver,dt,rtol,stable,error_vs_cvode,error_vs_fem,wall_seconds,step_median_us\n";
   const Scene scene = scene_for(o, "plate123_step.toml", duration);
-  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)), {}, true, &yardstick);
   Scene tight = scene;
   tight.solver.rtol = 1e-10;
   tight.solver.atol = 1e-14;

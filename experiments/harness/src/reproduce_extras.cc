@@ -41,7 +41,8 @@ void write_meta(const std::filesystem::path& out, bool quick, double duration, c
 void write_creep(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
   if (log) *log << "[creep] strip against the Kelvin-Voigt law\n";
   const Scene scene = read_scene(scenes_dir / "creep_strip.toml");
-  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)), {}, true, &yardstick);
   const double tau = scene.material.retardation_time;
   const double u_static = linear_static(model, scene.duration).col(model.probes.at(0).second)(0);
   const std::vector<std::string> solvers = {solvers::kFilteredFull, solvers::kImplicitEuler, solvers::kCvode};
@@ -61,7 +62,8 @@ void write_creep(const std::filesystem::path& out, const std::filesystem::path& 
 void write_transient(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
   if (log) *log << "[transient] cantilever step: the filters' lag against CVODE\n";
   const Scene scene = read_scene(scenes_dir / "cantilever_step.toml");
-  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)));
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)), {}, true, &yardstick);
   Trajectory<2> ref;
   run_solver(scene, model, solvers::kCvode, 0, ref); // rtol 1e-10 from the scene
   std::ostringstream os;
@@ -92,6 +94,7 @@ void write_tip_force(const std::filesystem::path& out, const std::filesystem::pa
   const double a = 0.004, nu = base.material.poisson_ratio;
   const double half_space = 16 * (1 - nu * nu) / (3 * M_PI * M_PI * base.material.young_modulus * a);
   const double chain = 1 / h.coupling_stiffness + 1 / h.hand->grip_stiffness + half_space;
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb haptics builds them
   std::ostringstream os;
   os << std::setprecision(6) << "mesh,nodes,tip_radius,depth,force\n";
   for (double d : depths) os << "half-space,0," << a << ',' << d << ',' << d / chain << '\n';
@@ -106,6 +109,7 @@ void write_tip_force(const std::filesystem::path& out, const std::filesystem::pa
                                       Eigen::Vector2d(0.1, top - d), Eigen::Vector2d(0.1, 0.05)};
         HapticsOptions ho;
         ho.lockstep = true;
+        ho.yardstick = &yardstick;
         const HapticsReport r = run_haptics(s, ho);
         double sum = 0;
         int n = 0;
@@ -125,6 +129,8 @@ void write_haptics(const std::filesystem::path& out, const std::filesystem::path
   Scene scene = read_scene(scenes_dir / "haptic_press.toml");
   scene.solver.filter = solvers::kFilterFull;
   HapticsOptions ho;
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb haptics builds them
+  ho.yardstick = &yardstick;
   ho.fault = HapticsOptions::Fault::stall;
   ho.fault_time = stall_time;
   const HapticsReport r = run_haptics(scene, ho);

@@ -2,6 +2,7 @@
 #include "vtb/harness/bullet.hh"
 #include "vtb/problem/solver_registry.hh"
 
+#include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/solvers/explicit_euler.hh"
@@ -36,6 +37,43 @@ RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::str
   return r;
 }
 
+namespace {
+template <int dim> YardstickSolve<dim> continuum_solve() {
+  return [](const Problem<dim>& problem, const MaterialDesc& material) -> std::optional<YardstickAnswer<dim>> {
+    auto answer = fem::continuum_static<dim>(problem, material);
+    if (!answer) return std::nullopt;
+    return YardstickAnswer<dim>{std::move(answer->u), answer->how};
+  };
+}
+/// The version of the continuum's training answers in the fit cache's key: a change to the
+/// ladder or its budget makes new fits.
+constexpr const char* kTargetKey = "continuum-p2-ladder-1";
+
+template <int dim> FitTargetFor<dim> continuum_target() {
+  return [](const Problem<dim>& problem, const MaterialDesc&) {
+    FitTarget t;
+    const long dofs = fem::continuum_first_dofs(problem.mesh), budget = fem::continuum_budget(dim);
+    if (dofs > budget) {
+      t.how = "P1 FEM on the mesh: the continuum's P2 would need " + std::to_string(dofs) +
+              " dofs, above the budget of " + std::to_string(budget);
+      return t;
+    }
+    t.key = kTargetKey;
+    t.how = "the continuum (P2 refined until a refinement moves the answers by less than 1 %, within " +
+            std::to_string(budget) + " dofs)";
+    t.answers = [p = problem](const Eigen::MatrixXd& F, double E, double nu, double thickness) {
+      const auto a = fem::continuum_answers<dim>(p, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, F);
+      return a ? a->u : Eigen::MatrixXd();
+    };
+    return t;
+  };
+}
+} // namespace
+
+Yardstick continuum_yardstick() {
+  return {continuum_solve<2>(), continuum_solve<3>(), continuum_target<2>(), continuum_target<3>()};
+}
+
 Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;
   if (ov.solver) solvers::select(*ov.solver, "--solver", scene.solver.kind, scene.solver.filter);
@@ -60,7 +98,10 @@ RunTables run(const Scene& scene, const std::filesystem::path& out_dir, bool fra
   else if (scene.solver.kind == solvers::kBullet)
     run_bullet_scene(scene, out_dir, frames, &tables);
   else
-    run_scene(scene, out_dir, frames, progress, &tables);
+  {
+    const Yardstick yardstick = continuum_yardstick();
+    run_scene(scene, out_dir, frames, progress, &tables, &yardstick);
+  }
   return tables;
 }
 

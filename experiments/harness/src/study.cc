@@ -463,10 +463,14 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
     scene.duration = 1.0;
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
-  return with_model(scene, [&](const auto& model) {
-    constexpr int dim = std::decay_t<decltype(model)>::dimension;
-    return study_impl<dim>(scene, model, o, log);
-  });
+  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  return with_model(
+      scene,
+      [&](const auto& model) {
+        constexpr int dim = std::decay_t<decltype(model)>::dimension;
+        return study_impl<dim>(scene, model, o, log);
+      },
+      {}, &yardstick);
 }
 
 namespace {

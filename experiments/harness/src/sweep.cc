@@ -61,6 +61,7 @@ std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, 
   // The scale in hand: its model, the explicit limit and the CVODE reference (each rank makes
   // those of the scales whose cells it takes; the cells come grouped by scale).
   std::size_t current = scales.size();
+  const Yardstick yardstick = continuum_yardstick(); // the default springs' fit target, as vtb run's
   std::optional<Model<dim>> model;
   Scene scene = scene_in;
   Trajectory<dim> ref;
@@ -74,7 +75,7 @@ std::vector<SweepCell> sweep_impl(const Scene& scene_in, const Mesh<dim>& mesh, 
       current = t.scale;
       scene = scene_in;
       scene.material.young_modulus *= scales[current];
-      model.emplace(build_model<dim>(scene, Mesh<dim>(mesh)));
+      model.emplace(build_model<dim>(scene, Mesh<dim>(mesh), {}, false, &yardstick));
       model->output_interval = model->duration / 20;
       const double w2 = max_omega_squared(*model, model->free_nodes.size() * dim <= 1500);
       courant = explicit_critical_dt(w2, scene.material.retardation_time, scene.material.mass_damping);

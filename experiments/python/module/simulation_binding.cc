@@ -1,6 +1,7 @@
 #include "bindings.hh"
 
 #include "live_sim.hh"
+#include "vtb/harness/solvers.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/region.hh"
 #include "vtb/problem/cell_fields.hh"
@@ -32,7 +33,7 @@ public:
     std::visit(
         [&](auto& m) {
           constexpr int dim = std::decay_t<decltype(m)>::points_dim;
-          m_sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), controls);
+          m_sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), controls, harness::continuum_yardstick());
         },
         mesh);
   }

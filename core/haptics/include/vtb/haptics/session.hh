@@ -10,6 +10,10 @@
 #include <filesystem>
 
 namespace vtb {
+struct Yardstick; // vtb/springs/load_check.hh
+}
+
+namespace vtb {
 
 struct HapticsOptions {
   enum class Fault { none, stall, nan } fault = Fault::none;
@@ -20,6 +24,9 @@ struct HapticsOptions {
   bool realtime_priority = true; ///< ask for SCHED_FIFO 80 (granted to root or CAP_SYS_NICE)
   bool lock_memory = false;      ///< mlockall(MCL_CURRENT | MCL_FUTURE) for the session's length
   int pin_cpu = -1;              ///< >= 0: the servo thread pinned to that core, the physics kept off it
+  /// What the model's springs are fitted to and checked against (build_model); null: P1 on
+  /// the mesh. `vtb haptics` gives the continuum, as `vtb run` does.
+  const Yardstick* yardstick = nullptr;
 };
 
 /// One probe's record: handle position and the force sent to its device, per servo sample

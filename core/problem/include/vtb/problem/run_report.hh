@@ -51,9 +51,12 @@ struct RunReport {
   double calibration_seconds = 0;    ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
   bool calibration_cached = false;   ///< a fit's constants read from the fit cache instead of fitted
   double calibration_validation = std::numeric_limits<double>::quiet_NaN(); ///< the fit's held-out error, if one ran
-  /// Spring solvers: the springs' linear static error against P1 FEM on the scene's own loads
-  /// (load_check.hh), if measured.
+  /// Spring solvers: the springs' linear static error on the scene's own loads against the
+  /// yardstick (the continuum, else P1 FEM on the mesh; load_check.hh), if measured.
   double calibration_load_error = std::numeric_limits<double>::quiet_NaN();
+  double mesh_fem_load_error = std::numeric_limits<double>::quiet_NaN(); ///< P1 on the mesh against the continuum
+  std::string calibration_yardstick; ///< what calibration_load_error is measured against
+  std::string calibration_target;    ///< what a fit was trained on: the continuum or P1 on the mesh
   std::string calibration_note; ///< why the constants are not what was asked for (auto's fallback, the fit's guard)
   double effective_poisson_ratio = 0;
   std::string filter;           ///< filtered: the filter it ran

@@ -16,6 +16,9 @@ inline constexpr const char* kFilteredTensorMultigrid = "filtered-tensor-multigr
 inline constexpr const char* kImplicitEuler = "implicit-euler";
 inline constexpr const char* kCvode = "cvode";
 inline constexpr const char* kFem = "fem";
+/// A reference of `vtb compare` only: the FEM with the scene's own [solver] degree and
+/// refinements (P1 on the mesh by default), beside `fem`, which there is the continuum.
+inline constexpr const char* kFemMesh = "fem-mesh";
 inline constexpr const char* kBullet = "bullet"; ///< a peer library (the harness runs it)
 
 /// The filters of `filtered` ([solver].filter).

@@ -65,8 +65,10 @@ IntegratorOptions integrator_options(const Entry& entry, const SolverDesc& solve
 /// probes.csv, reactions.csv and summary.json into `out_dir` (all or nothing), and with
 /// `frames` frames.pvd + frames/frame_NNNN.vtu, one per sample; `progress` is told how a
 /// spring fit advances. An empty `out_dir` writes nothing; `tables`, when set, receives what
-/// the files hold (finish_run). Returns the report.
+/// the files hold (finish_run); `yardstick`: what the springs' load check measures against
+/// (build_model). Returns the report.
 RunReport run_scene(const Scene& scene, const std::filesystem::path& out_dir, bool frames = false,
-                    const FitProgress& progress = {}, RunTables* tables = nullptr);
+                    const FitProgress& progress = {}, RunTables* tables = nullptr,
+                    const Yardstick* yardstick = nullptr);
 
 } // namespace vtb

@@ -27,6 +27,24 @@ namespace vtb {
 /// cap (the fit may stop earlier). For a progress bar; it never changes the fit.
 using FitProgress = std::function<void(const char* stage, int step, int steps)>;
 
+/// The training answers' source (FitOptions::target): given the training loads (nodal forces,
+/// row dim v + i for node v and component i, one column per load) and the fit's E, nu and
+/// thickness, their static answers at the mesh's nodes with the supports held at zero; an
+/// empty matrix where it cannot answer (then P1's answers are used). The continuum's
+/// (reference_fem's continuum_answers, given by the harness: core does not link deal.II) makes
+/// the fit's target the material rather than P1 on the mesh, which locks in bending of thin
+/// parts and near incompressibility (docs/fidelity.md).
+using TrainingAnswers =
+    std::function<Eigen::MatrixXd(const Eigen::MatrixXd& loads, double young_modulus, double nu, double thickness)>;
+struct FitTarget {
+  TrainingAnswers answers; ///< empty: P1 FEM on the mesh, whose answers are the modes themselves
+  /// Names the source in the fit cache's key (empty with P1): fits to different targets are
+  /// different constants.
+  std::string key;
+  /// One line for the run: what the fit was trained on ("the continuum (...)", or why P1).
+  std::string how;
+};
+
 struct FitOptions {
   int modes = 0;           ///< training modes; 0: 16 in 2D, 24 in 3D
   double pull = 1e-2;      ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
@@ -87,6 +105,8 @@ struct FitOptions {
   }
   double min_improvement = 0.15;
   FitProgress progress; ///< empty: nothing is told (not part of the fit's result or cache key)
+  /// With supports that hold the body: the training answers' source (empty: P1 on the mesh).
+  FitTarget target;
 };
 
 struct FitReport {

@@ -28,9 +28,17 @@ template <int dim> struct SpringNetwork {
   /// When a fit ran (or was read): the used constants' relative error on the fit's held-out
   /// modes (FitReport::validation); NaN otherwise.
   double calibration_validation = std::numeric_limits<double>::quiet_NaN();
-  /// The springs' linear static error against the P1 FEM on the scene's own loads
-  /// (static_load_error, load_check.hh; set by build_model); NaN where not measured.
+  /// The springs' linear static error on the scene's own loads against the yardstick
+  /// (static_load_check, load_check.hh; set by build_model): the continuum where it was
+  /// solved, else P1 FEM on the mesh. NaN where not measured.
   double calibration_load_error = std::numeric_limits<double>::quiet_NaN();
+  /// P1 FEM on the mesh against the continuum on the same check: the mesh's own error (its
+  /// locking in bending and near incompressibility). NaN without the continuum.
+  double mesh_fem_load_error = std::numeric_limits<double>::quiet_NaN();
+  std::string calibration_yardstick;
+  /// What a fit was trained on (FitTarget::how): the continuum, or P1 FEM on the mesh; empty
+  /// without a fit.
+  std::string calibration_target; ///< what calibration_load_error is measured against (LoadCheck::yardstick)
   /// One line when the constants are not what was asked for: auto beyond its budget, or the
   /// fit's guard keeping a prior. Empty otherwise.
   std::string calibration_note;
@@ -49,7 +57,8 @@ template <int dim> struct SpringNetwork {
 /// how a fit advances (fitted_springs.hh).
 template <int dim>
 SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& material, std::string_view calibration,
-                                 const std::vector<int>& supports = {}, const FitProgress& progress = {});
+                                 const std::vector<int>& supports = {}, const FitProgress& progress = {},
+                                 const FitTarget& target = {});
 
 /// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
 /// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt

@@ -15,6 +15,7 @@ struct CompareRow {
   RunReport report;
   ErrorMetrics error; ///< against the reference
   double wall_seconds = 0;
+  std::string note; ///< for fem and fem-mesh: which FEM ran
 };
 
 /// One term of the decomposition: `a` measured against `b`.
@@ -25,6 +26,7 @@ struct DecompositionRow {
 
 struct CompareResult {
   std::string scene, reference;
+  std::string reference_note; ///< for fem and fem-mesh: which FEM the reference is
   /// Names of the point loads (a force on one node): under them the continuum answer is
   /// singular and the FEM reference does not converge with refinement.
   std::vector<std::string> point_loads;
@@ -42,7 +44,9 @@ struct KeepRuns {
   bool frames = false;
 };
 
-/// Runs `solvers` and the reference (fem or cvode) on the scene. `dt` > 0 overrides the
+/// Runs `solvers` and the reference on the scene: `fem`, the continuum (P2 at the refinement
+/// the static ladder of vtb/fem/continuum.hh found converged), `fem-mesh`, the scene's own FEM
+/// (P1 on the mesh by default), or `cvode`, the springs' exact trajectory. `dt` > 0 overrides the
 /// scene's step for every fixed-step solver. Progress goes to `progress` if non-null.
 CompareResult run_compare(const Scene& scene, const std::vector<std::string>& solvers, const std::string& reference,
                           double dt = 0, std::ostream* progress = nullptr, const KeepRuns& keep = {});

@@ -8,6 +8,7 @@
 #include "vtb/problem/output.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/solvers/simulation.hh"
+#include "vtb/springs/load_check.hh"
 
 #include <filesystem>
 #include <optional>
@@ -20,6 +21,10 @@ namespace vtb::harness {
 template <int dim>
 RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::string& solver, double dt,
                      Trajectory<dim>& out);
+
+/// The continuum as the springs' yardstick (load_check.hh): reference_fem's continuum_static,
+/// P2 refined until converged within its budget of dofs (vtb/fem/continuum.hh).
+Yardstick continuum_yardstick();
 
 /// Options of `vtb run` that override the scene.
 struct RunOverrides {

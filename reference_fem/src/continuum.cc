@@ -1,0 +1,217 @@
+// The continuum's static answer by a ladder of uniform refinements of P2 (continuum.hh).
+#include "vtb/fem/continuum.hh"
+
+#include "kelvin_voigt_problem.hh"
+#include "vtb/fem/kelvin_voigt.hh"
+
+#include <Eigen/SparseCholesky>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <set>
+
+namespace vtb::fem {
+
+namespace {
+
+/// Vertices, edges, faces and cells of a simplex mesh, and the counts after one uniform
+/// refinement (a triangle into 4; a tetrahedron into 8, one new interior edge each).
+struct Counts {
+  double v = 0, e = 0, f = 0, c = 0;
+  Counts refined(int dim) const {
+    if (dim == 2) return {v + e, 2 * e + 3 * c, 4 * c, 4 * c};
+    return {v + e, 2 * e + 3 * f + c, 4 * f + 8 * c, 8 * c};
+  }
+  double p2_dofs(int dim) const { return dim * (v + e); }
+};
+
+template <int dim> Counts counts(const Mesh<dim>& mesh) {
+  std::set<std::array<int, 2>> edges;
+  std::set<std::array<int, 3>> faces;
+  for (const auto& cell : mesh.cells) {
+    for (int a = 0; a <= dim; ++a)
+      for (int b = a + 1; b <= dim; ++b)
+        edges.insert({std::min(cell[a], cell[b]), std::max(cell[a], cell[b])});
+    if constexpr (dim == 3)
+      for (int skip = 0; skip < 4; ++skip) {
+        std::array<int, 3> f{};
+        int k = 0;
+        for (int a = 0; a < 4; ++a)
+          if (a != skip) f[static_cast<std::size_t>(k++)] = cell[a];
+        std::sort(f.begin(), f.end());
+        faces.insert(f);
+      }
+  }
+  return {static_cast<double>(mesh.num_nodes()), static_cast<double>(edges.size()),
+          static_cast<double>(dim == 2 ? mesh.num_cells() : static_cast<int>(faces.size())),
+          static_cast<double>(mesh.num_cells())};
+}
+
+std::string thousands(long n) {
+  std::string s = std::to_string(n);
+  for (int i = static_cast<int>(s.size()) - 3; i > 0; i -= 3) s.insert(static_cast<std::size_t>(i), ",");
+  return s;
+}
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g %%", 100 * x);
+  return buf;
+}
+
+/// The P1 consistent mass of the mesh at unit density (times the thickness in 2D), per dof:
+/// (rho t |T| / ((d+1)(d+2))) (1 + delta_ab) between the cell's nodes, on each component.
+template <int dim> Eigen::SparseMatrix<double> p1_mass(const Mesh<dim>& mesh, double thickness) {
+  std::vector<Eigen::Triplet<double>> t;
+  for (const auto& cell : mesh.cells) {
+    Eigen::Matrix<double, dim, dim> J;
+    for (int a = 0; a < dim; ++a) J.col(a) = mesh.points.col(cell[a + 1]) - mesh.points.col(cell[0]);
+    const double volume = std::abs(J.determinant()) / (dim == 2 ? 2.0 : 6.0) * (dim == 2 ? thickness : 1.0);
+    const double m = volume / ((dim + 1) * (dim + 2));
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b)
+        for (int i = 0; i < dim; ++i) t.emplace_back(dim * cell[a] + i, dim * cell[b] + i, (a == b ? 2 : 1) * m);
+  }
+  const auto n = static_cast<Eigen::Index>(dim * mesh.num_nodes());
+  Eigen::SparseMatrix<double> M(n, n);
+  M.setFromTriplets(t.begin(), t.end());
+  return M;
+}
+
+/// What a ladder decided, as ContinuumAnswer::how says it.
+std::string ladder_how(int refinements, long dofs, bool converged, double change, const std::string& stop) {
+  std::string how = "P2 refined " + std::to_string(refinements) + "x (" + thousands(dofs) + " dofs), ";
+  if (converged) return how + "converged: the last refinement moved it " + percent(change);
+  if (change >= 0) return how + "not converged: the last refinement moved it " + percent(change) + " (" + stop + ")";
+  return how + "convergence not checked (" + stop + ")";
+}
+
+} // namespace
+
+template <int dim> long continuum_first_dofs(const Mesh<dim>& mesh) {
+  return static_cast<long>(counts(mesh).p2_dofs(dim));
+}
+
+long continuum_budget(int dim, const ContinuumOptions& options) {
+  return options.max_dofs > 0 ? options.max_dofs : (dim == 2 ? kContinuumDofs2D : kContinuumDofs3D);
+}
+
+template <int dim>
+std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, const MaterialDesc& material,
+                                                  const Eigen::MatrixXd& F, const ContinuumOptions& options) {
+  const long budget = continuum_budget(dim, options);
+  const Problem<dim> p = static_problem(problem);
+  Counts level = counts(p.mesh);
+  if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> mass(p1_mass(p.mesh, material.thickness));
+  const Eigen::MatrixXd g = mass.solve(F);
+  MaterialDesc unit = material;
+  unit.density = 1.0;
+  ContinuumAnswers ans;
+  FemOptions o;
+  o.degree = 2;
+  o.static_solve = true;
+  o.dt = 1.0;
+  std::string stop;
+  long dofs = 0;
+  for (int r = 0;; ++r) {
+    o.refinements = r;
+    KelvinVoigtProblem<dim, SerialBackend<dim>> fem(p, unit, o, MPI_COMM_SELF);
+    Eigen::MatrixXd u = fem.body_force_answers(g);
+    dofs = static_cast<long>(level.p2_dofs(dim));
+    ans.refinements = r;
+    if (r > 0) {
+      const double norm = u.norm();
+      ans.change = norm > 0 ? (u - ans.u).norm() / norm : 0.0;
+      ans.converged = ans.change < options.tolerance;
+    }
+    ans.u = std::move(u);
+    if (ans.converged) break;
+    level = level.refined(dim);
+    if (r + 1 > options.max_refinements) {
+      stop = "refinement " + std::to_string(r + 1) + " is past the ladder's " + std::to_string(options.max_refinements);
+      break;
+    }
+    if (level.p2_dofs(dim) > static_cast<double>(budget)) {
+      stop = "refined once more it would need ~" + thousands(static_cast<long>(level.p2_dofs(dim))) +
+             " dofs, above the budget of " + thousands(budget);
+      break;
+    }
+  }
+  ans.how = ladder_how(ans.refinements, dofs, ans.converged, ans.change, stop);
+  return ans;
+}
+
+template <int dim> Problem<dim> static_problem(const Problem<dim>& problem) {
+  Problem<dim> p = problem;
+  for (auto& load : p.loads) load.start = load.ramp = 0;
+  for (auto& s : p.supports) {
+    s.driven = false;
+    s.displacement.setZero();
+  }
+  p.duration = p.output_interval = 1.0;
+  return p;
+}
+
+template <int dim>
+std::optional<ContinuumAnswer<dim>> continuum_static(const Problem<dim>& problem, const MaterialDesc& material,
+                                                     const ContinuumOptions& options) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const long budget = continuum_budget(dim, options);
+  const Problem<dim> p = static_problem(problem);
+  Counts level = counts(p.mesh);
+  if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
+  ContinuumAnswer<dim> ans;
+  FemOptions o;
+  o.degree = 2;
+  o.static_solve = true;
+  o.dt = 1.0;
+  std::string stop;
+  for (int r = 0;; ++r) {
+    o.refinements = r;
+    Trajectory<dim> out;
+    const RunReport rep = simulate<dim>(p, material, o, out, true);
+    Nodal<dim> u = out.field.back();
+    for (const auto& [key, value] : rep.extra)
+      if (key == "dofs") ans.dofs = static_cast<long>(value);
+    ans.refinements = r;
+    if (r > 0) {
+      const double norm = u.norm();
+      ans.change = norm > 0 ? (u - ans.u).norm() / norm : 0.0;
+      ans.converged = ans.change < options.tolerance;
+    }
+    ans.u = std::move(u);
+    if (ans.converged) break;
+    level = level.refined(dim);
+    if (r + 1 > options.max_refinements) {
+      stop = "refinement " + std::to_string(r + 1) + " is past the ladder's " + std::to_string(options.max_refinements);
+      break;
+    }
+    if (level.p2_dofs(dim) > static_cast<double>(budget)) {
+      stop = "refined once more it would need ~" + thousands(static_cast<long>(level.p2_dofs(dim))) +
+             " dofs, above the budget of " + thousands(budget);
+      break;
+    }
+  }
+  ans.sufficient_refinements = ans.converged ? ans.refinements - 1 : ans.refinements;
+  ans.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ans.how = ladder_how(ans.refinements, ans.dofs, ans.converged, ans.change, stop);
+  return ans;
+}
+
+template std::optional<ContinuumAnswers> continuum_answers<2>(const Problem<2>&, const MaterialDesc&,
+                                                              const Eigen::MatrixXd&, const ContinuumOptions&);
+template std::optional<ContinuumAnswers> continuum_answers<3>(const Problem<3>&, const MaterialDesc&,
+                                                              const Eigen::MatrixXd&, const ContinuumOptions&);
+template long continuum_first_dofs<2>(const Mesh<2>&);
+template long continuum_first_dofs<3>(const Mesh<3>&);
+template Problem<2> static_problem<2>(const Problem<2>&);
+template Problem<3> static_problem<3>(const Problem<3>&);
+template std::optional<ContinuumAnswer<2>> continuum_static<2>(const Problem<2>&, const MaterialDesc&,
+                                                               const ContinuumOptions&);
+template std::optional<ContinuumAnswer<3>> continuum_static<3>(const Problem<3>&, const MaterialDesc&,
+                                                               const ContinuumOptions&);
+
+} // namespace vtb::fem
