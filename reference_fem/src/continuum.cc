@@ -144,13 +144,16 @@ std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, c
   return ans;
 }
 
-template <int dim> Problem<dim> static_problem(const Problem<dim>& problem) {
+template <int dim> Problem<dim> static_problem(const Problem<dim>& problem, bool drives_displaced) {
   Problem<dim> p = problem;
   for (auto& load : p.loads) load.start = load.ramp = 0;
-  for (auto& s : p.supports) {
-    s.driven = false;
-    s.displacement.setZero();
-  }
+  for (auto& s : p.supports)
+    if (drives_displaced) {
+      s.start = s.ramp = 0;
+    } else {
+      s.driven = false;
+      s.displacement.setZero();
+    }
   p.duration = p.output_interval = 1.0;
   return p;
 }
@@ -160,7 +163,7 @@ std::optional<ContinuumAnswer<dim>> continuum_static(const Problem<dim>& problem
                                                      const ContinuumOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const long budget = continuum_budget(dim, options);
-  const Problem<dim> p = static_problem(problem);
+  const Problem<dim> p = static_problem(problem, options.drives_displaced);
   Counts level = counts(p.mesh);
   if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
   ContinuumAnswer<dim> ans;
@@ -207,8 +210,8 @@ template std::optional<ContinuumAnswers> continuum_answers<3>(const Problem<3>&,
                                                               const Eigen::MatrixXd&, const ContinuumOptions&);
 template long continuum_first_dofs<2>(const Mesh<2>&);
 template long continuum_first_dofs<3>(const Mesh<3>&);
-template Problem<2> static_problem<2>(const Problem<2>&);
-template Problem<3> static_problem<3>(const Problem<3>&);
+template Problem<2> static_problem<2>(const Problem<2>&, bool);
+template Problem<3> static_problem<3>(const Problem<3>&, bool);
 template std::optional<ContinuumAnswer<2>> continuum_static<2>(const Problem<2>&, const MaterialDesc&,
                                                                const ContinuumOptions&);
 template std::optional<ContinuumAnswer<3>> continuum_static<3>(const Problem<3>&, const MaterialDesc&,

@@ -47,7 +47,7 @@ template <int dim> YardstickSolve<dim> continuum_solve() {
 }
 /// The version of the continuum's training answers in the fit cache's key: a change to the
 /// ladder or its budget makes new fits.
-constexpr const char* kTargetKey = "continuum-p2-ladder-1";
+constexpr const char* kTargetKey = "continuum-p2-ladder-2";
 
 template <int dim> FitTargetFor<dim> continuum_target() {
   return [](const Problem<dim>& problem, const MaterialDesc&) {

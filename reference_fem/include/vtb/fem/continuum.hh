@@ -22,6 +22,10 @@ struct ContinuumOptions {
   /// 10 s and 1.1 GB at 54k dofs in 3D, 0.3 s at 70k in 2D). 0: kContinuumDofs of the dimension.
   long max_dofs = 0;
   int max_refinements = 4;
+  /// Drives at their full prescribed displacement instead of held at zero: the final state of a
+  /// scene driven by displacements (a transient reference's level, `vtb study`), where the load
+  /// check holds them like fixes.
+  bool drives_displaced = false;
 };
 
 /// The default budget of dofs per dimension (ContinuumOptions::max_dofs).
@@ -70,8 +74,9 @@ template <int dim> long continuum_first_dofs(const Mesh<dim>& mesh);
 long continuum_budget(int dim, const ContinuumOptions& options = {});
 
 /// The problem as a static test: every load at its full value (no ramp), drives held at zero
-/// like fixes; the solve of `continuum_static` and of the springs' load check (load_check.hh).
-template <int dim> Problem<dim> static_problem(const Problem<dim>& problem);
+/// like fixes (or, `drives_displaced`, at their full displacement); the solve of
+/// `continuum_static` and of the springs' load check (load_check.hh).
+template <int dim> Problem<dim> static_problem(const Problem<dim>& problem, bool drives_displaced = false);
 
 /// Solves static_problem(problem) with P2 at refinements 0, 1, ... until converged, the budget
 /// or max_refinements stops it. nullopt when not even P2 on the mesh fits the budget.

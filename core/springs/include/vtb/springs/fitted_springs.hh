@@ -46,7 +46,11 @@ struct FitTarget {
 };
 
 struct FitOptions {
-  int modes = 0;           ///< training modes; 0: 16 in 2D, 24 in 3D
+  int modes = 0;           ///< training modes; 0: 16 in 2D, 24 in 3D (with a continuum target, at most the resolved share below)
+  /// With a continuum target and `modes` = 0: at most one training mode per this many free dofs
+  /// (and at least kMinModes): the modes a mesh resolves (fitted_springs.cc).
+  static constexpr int kResolvedModeShare = 16;
+  static constexpr int kMinModes = 6;
   double pull = 1e-2;      ///< mu = pull * mean diag(J^T J) at the start: the weak pull toward the prior
   double floor = 0.01;     ///< k >= floor * k_prior (the prior: Lloyd, at least 1 % of van Gelder, or van Gelder)
   int max_iterations = 40; ///< Levenberg-Marquardt iterations
