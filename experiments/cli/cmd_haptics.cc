@@ -1,8 +1,8 @@
 #include "commands.hh"
 #include "overrides.hh"
 
-#include "vtb/harness/solvers.hh"
 #include "vtb/haptics/session.hh"
+#include "vtb/harness/solvers.hh"
 
 #include <algorithm>
 #include <iostream>

@@ -32,8 +32,7 @@ template <int dim> Counts counts(const Mesh<dim>& mesh) {
   std::set<std::array<int, 3>> faces;
   for (const auto& cell : mesh.cells) {
     for (int a = 0; a <= dim; ++a)
-      for (int b = a + 1; b <= dim; ++b)
-        edges.insert({std::min(cell[a], cell[b]), std::max(cell[a], cell[b])});
+      for (int b = a + 1; b <= dim; ++b) edges.insert({std::min(cell[a], cell[b]), std::max(cell[a], cell[b])});
     if constexpr (dim == 3)
       for (int skip = 0; skip < 4; ++skip) {
         std::array<int, 3> f{};

@@ -23,7 +23,8 @@ Scene strip(int nx, int ny, const char* springs, double nu = 1.0 / 3.0) {
                          std::to_string(nx) + ", " + std::to_string(ny) +
                          "] }\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = " + std::to_string(nu) +
                          "\ndensity = 1000.0\nthickness = 0.001\n[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = "
-                         "\"right\"\ntotal_force = [0.0, -2.0e-4]\n[solver]\nsprings = \"" + springs + "\"\n",
+                         "\"right\"\ntotal_force = [0.0, -2.0e-4]\n[solver]\nsprings = \"" +
+                         springs + "\"\n",
                      "strip.toml", ".");
 }
 
@@ -54,7 +55,9 @@ Nodal<2> springs_static(const Model<2>& model) {
   return out;
 }
 
-double relative(const Nodal<2>& u, const Nodal<2>& ref) { return (u - ref).norm() / ref.norm(); }
+double relative(const Nodal<2>& u, const Nodal<2>& ref) {
+  return (u - ref).norm() / ref.norm();
+}
 
 TEST(Continuum, TheLadderStopsWhereOneMoreRefinementMovesItLessThanItsTolerance) {
   const Scene scene = strip(20, 2, "lloyd");
@@ -127,9 +130,8 @@ TEST(FittedSprings, TrainedOnTheContinuumBendThinStripsWhereP1Locks) {
   // 2D strips four and two cells thick (40 x 4, 20 x 2) and a 3D bar two cells thick
   // (10 x 2 x 2), clamped, bent by an end load: P1 on these meshes is 13 %, 37 % and 38 % stiff
   // against the continuum (docs/fidelity.md), and springs fitted to P1 inherit it. Fitted to the
-  // continuum's answers they are within the issue's 5 % (measured 0.08 %, 0.28 % and 1.2 %). The bound is the goal the fit is
-  // held to; the continuum's own uncertainty (its last refinement's change, 0.04 % and 0.7 %) is
-  // far below it.
+  // continuum's answers they are within the issue's 5 % (measured 0.08 %, 0.28 % and 1.2 %). The bound is the goal the
+  // fit is held to; the continuum's own uncertainty (its last refinement's change, 0.04 % and 0.7 %) is far below it.
   const Scene plate = strip(40, 4, "auto");
   const LoadCheck p1_trained_2d = default_springs<2>(plate, false);
   const LoadCheck trained_2d = default_springs<2>(plate, true);

@@ -119,8 +119,7 @@ TEST(PaperData, FidelityTableComesFromTheFixture) {
   EXPECT_NE(numbers.find("\\newcommand\\vtbLloydWorst{" + harness::tex_number(lloyd, 2) + "}"), std::string::npos);
   EXPECT_NE(numbers.find("\\newcommand\\vtbFittedWorstContinuum{" + harness::tex_number(fitted_continuum, 2) + "}"),
             std::string::npos);
-  EXPECT_NE(numbers.find("\\newcommand\\vtbMeshFemWorst{" + harness::tex_number(mesh_fem, 2) + "}"),
-            std::string::npos);
+  EXPECT_NE(numbers.find("\\newcommand\\vtbMeshFemWorst{" + harness::tex_number(mesh_fem, 2) + "}"), std::string::npos);
   EXPECT_NE(numbers.find("\\newcommand\\vtbLockingCases{" + harness::tex_number(locking, 3) + "}"), std::string::npos);
   EXPECT_NE(numbers.find("\\newcommand\\vtbFittedCloserCases{" + harness::tex_number(closer, 3) + "}"),
             std::string::npos);

@@ -86,11 +86,12 @@ std::filesystem::path fit_cache_dir() {
 
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
-                                        const std::vector<int>& supports, CachedFit* info,
-                                        const FitProgress& progress, const FitTarget& target) {
+                                        const std::vector<int>& supports, CachedFit* info, const FitProgress& progress,
+                                        const FitTarget& target) {
   const std::filesystem::path dir = fit_cache_dir();
   char name[40];
-  std::snprintf(name, sizeof name, "fitted-%016llx.bin", static_cast<unsigned long long>(key(mesh, nu, supports, target.key)));
+  std::snprintf(name, sizeof name, "fitted-%016llx.bin",
+                static_cast<unsigned long long>(key(mesh, nu, supports, target.key)));
   Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);

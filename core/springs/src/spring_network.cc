@@ -33,9 +33,8 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
   else if (calibration == "fitted") {
     CachedFit fit;
     try {
-      net.stiffness =
-          cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit, progress,
-                                  target);
+      net.stiffness = cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit,
+                                              progress, target);
       net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
       if (net.calibration_requested != "auto") throw;

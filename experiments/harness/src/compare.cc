@@ -21,7 +21,8 @@ namespace {
 /// The scene as `compare` runs the FEM named `name`: `fem` is the continuum (P2 at the
 /// coarsest refinement the static ladder found within 1 % of the next, continuum.hh), `fem-mesh`
 /// the scene's own FEM. `note` says which.
-template <int dim> Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& name, std::string& note) {
+template <int dim>
+Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& name, std::string& note) {
   Scene s = scene;
   if (name != solvers::kFem) {
     note = "the scene's FEM: P" + std::to_string(s.solver.degree) + ", " + std::to_string(s.solver.refinements) +
@@ -31,7 +32,8 @@ template <int dim> Scene fem_scene(const Scene& scene, const Model<dim>& model, 
   s.solver.degree = 2;
   const auto ladder = fem::continuum_static<dim>(model, scene.material);
   s.solver.refinements = ladder ? ladder->sufficient_refinements : 0;
-  note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) + "x (static ladder: " + ladder->how + ")"
+  note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) +
+                      "x (static ladder: " + ladder->how + ")"
                 : "P2 on the mesh (the static ladder's first level is above its budget of dofs)";
   return s;
 }
@@ -110,7 +112,7 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
     throw InputError("--reference must be fem, fem-mesh or cvode, not " + reference);
   for (const auto& s : solvers)
     if (s != solvers::kFemMesh) solvers::find(s, "--solvers"); // an unknown name: InputError with the nearest one
-  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  const Yardstick yardstick = continuum_yardstick();           // the default springs, as vtb run builds them
   return with_model(
       scene,
       [&](const auto& model) {

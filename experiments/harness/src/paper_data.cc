@@ -143,8 +143,8 @@ void fidelity(const std::filesystem::path& dir, Out& out) {
   for (const auto& c : cases) {
     auto& e = error[c];
     rows << tex_escape(c) << " & " << tex_number(nodes[c]) << " & " << tex_number(mesh_fem[c], 2) << " & "
-         << tex_number(e["lloyd"], 2) << " & " << tex_number(e["van-gelder"], 2) << " & "
-         << tex_number(e["fitted"], 2) << " & " << tex_number(against_p1[c]["fitted"], 2) << " \\\\\n";
+         << tex_number(e["lloyd"], 2) << " & " << tex_number(e["van-gelder"], 2) << " & " << tex_number(e["fitted"], 2)
+         << " & " << tex_number(against_p1[c]["fitted"], 2) << " \\\\\n";
     lloyd_worst = std::max(lloyd_worst, e["lloyd"]);
     fitted_worst = std::max(fitted_worst, against_p1[c]["fitted"]);
     fitted_worst_continuum = std::max(fitted_worst_continuum, e["fitted"]);

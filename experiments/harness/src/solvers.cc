@@ -97,8 +97,7 @@ RunTables run(const Scene& scene, const std::filesystem::path& out_dir, bool fra
     fem::run_scene(scene, out_dir, frames, &tables);
   else if (scene.solver.kind == solvers::kBullet)
     run_bullet_scene(scene, out_dir, frames, &tables);
-  else
-  {
+  else {
     const Yardstick yardstick = continuum_yardstick();
     run_scene(scene, out_dir, frames, progress, &tables, &yardstick);
   }

@@ -84,9 +84,10 @@ std::string reference_run(const Scene& scene, const Model<dim>& model, const std
     f.static_solve = false;
     const long steps = std::lround(model.duration / f.dt);
     const std::string level = "P2 refined " + std::to_string(f.refinements) + "x";
-    const std::string why = ladder ? "static ladder: " + ladder->how
-                                   : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
-    if (log) *log << "reference: fem, " << level << " (" << why << "), " << steps << " steps at dt = " << f.dt << " s ...\n";
+    const std::string why =
+        ladder ? "static ladder: " + ladder->how : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
+    if (log)
+      *log << "reference: fem, " << level << " (" << why << "), " << steps << " steps at dt = " << f.dt << " s ...\n";
     rr = distributed ? fem::simulate_distributed<dim>(model, scene.material, f, ref, true)
                      : fem::simulate<dim>(model, scene.material, f, ref, true);
     note = "fem, " + level + " (" + why + "), " + f.scheme + ", dt = " + std::to_string(f.dt) + " s" +
@@ -476,13 +477,21 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
   const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  // A fit of seconds to minutes (3D) comes first: the log says how it advances.
+  FitProgress progress;
+  if (log)
+    progress = [log, last = std::string()](const char* stage, int step, int steps) mutable {
+      if (last != stage) *log << "springs: " << stage << (std::string(stage) == "done" ? "\n" : " ...\n");
+      last = stage;
+      if (std::string(stage) == "fit") *log << "  step " << step << " (at most " << steps << ")\n";
+    };
   return with_model(
       scene,
       [&](const auto& model) {
         constexpr int dim = std::decay_t<decltype(model)>::dimension;
         return study_impl<dim>(scene, model, o, log);
       },
-      {}, &yardstick);
+      progress, &yardstick);
 }
 
 namespace {

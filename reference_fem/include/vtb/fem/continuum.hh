@@ -34,16 +34,16 @@ inline constexpr long kContinuumDofs3D = 60000;
 
 /// What the ladder of refinements found.
 template <int dim> struct ContinuumAnswer {
-  Nodal<dim> u;          ///< static displacement at the scene's nodes (the finest level solved)
-  int refinements = 0;   ///< of the finest level solved
-  long dofs = 0;         ///< of the finest level solved
-  double change = -1;    ///< relative change of the last refinement; < 0: only one level solved
+  Nodal<dim> u;           ///< static displacement at the scene's nodes (the finest level solved)
+  int refinements = 0;    ///< of the finest level solved
+  long dofs = 0;          ///< of the finest level solved
+  double change = -1;     ///< relative change of the last refinement; < 0: only one level solved
   bool converged = false; ///< change < tolerance
   /// The coarsest level within the tolerance of the finest (converged: the level before the
   /// last, whose answer the last refinement moved by `change`; else the finest): the level a
   /// transient continuum reference runs at (`vtb compare --reference fem`).
   int sufficient_refinements = 0;
-  double seconds = 0;    ///< all levels
+  double seconds = 0; ///< all levels
   /// One line: "P2 refined 1x (53,907 dofs), converged: the last refinement moved it 0.16 %", or
   /// why convergence was not checked (the next level's dofs above the budget).
   std::string how;

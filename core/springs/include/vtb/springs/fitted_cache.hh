@@ -32,7 +32,8 @@ struct CachedFit {
 /// nodes), through the cache: the fit at unit E t, scaled by E t (the fit is equivariant in
 /// them, so this equals the direct fit to rounding), kept in the file fitted-<key>.bin, key a
 /// 64-bit FNV-1a hash of the format version, the points, the cells, nu, the supports, the
-/// fit's options and its target's key (FitTarget: the continuum or P1). A file of the wrong size or header is refitted and replaced (atomically).
+/// fit's options and its target's key (FitTarget: the continuum or P1). A file of the wrong
+/// size or header is refitted and replaced (atomically).
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},

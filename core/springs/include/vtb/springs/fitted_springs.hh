@@ -46,7 +46,9 @@ struct FitTarget {
 };
 
 struct FitOptions {
-  int modes = 0;           ///< training modes; 0: 16 in 2D, 24 in 3D (with a continuum target, at most the resolved share below)
+  /// Training modes; 0: 16 in 2D, 24 in 3D (with a continuum target, at most the resolved share
+  /// below).
+  int modes = 0;
   /// With a continuum target and `modes` = 0: at most one training mode per this many free dofs
   /// (and at least kMinModes): the modes a mesh resolves (fitted_springs.cc).
   static constexpr int kResolvedModeShare = 16;

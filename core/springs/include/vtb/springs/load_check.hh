@@ -54,7 +54,7 @@ struct Yardstick {
 
 /// The load check's numbers: the springs against the yardstick, and P1 on the mesh against it.
 struct LoadCheck {
-  double springs = std::numeric_limits<double>::quiet_NaN(); ///< the springs' error against the yardstick
+  double springs = std::numeric_limits<double>::quiet_NaN();  ///< the springs' error against the yardstick
   double mesh_fem = std::numeric_limits<double>::quiet_NaN(); ///< P1 on the mesh against the continuum
   std::string yardstick; ///< "the continuum (P2 refined 1x ...)" or "P1 FEM on the mesh"
 };
