@@ -170,7 +170,8 @@ private:
   std::vector<dof_t> m_node;                   ///< [node * dim + component], kUnseen if not seen here
   dealii::AffineConstraints<double> m_constraints;
   Matrix m_K, m_M, m_C, m_A, m_A0, m_M0, m_T; ///< m_T: the nonlinear tangent
-  typename Backend::Solver m_solver, m_newton;
+  typename Backend::SpdSolver m_solver;       ///< the linear step's A0 (symmetric positive definite)
+  typename Backend::Solver m_newton;          ///< the nonlinear tangent
   Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
   Vector m_ghosted, m_ghosted_v, m_frame_prev, m_frame_last, m_frame_mix;
   double m_max_strain = 0, m_max_rotation = 0;

@@ -95,7 +95,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::initial
   m_K.vmult(m_tmp, m_u);
   m_rhs -= m_tmp;
   zero_prescribed(m_rhs);
-  typename Backend::Solver mass;
+  typename Backend::SpdSolver mass;
   mass.factor(m_M0);
   mass.solve(m_a, m_rhs);
 }
