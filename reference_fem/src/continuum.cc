@@ -87,39 +87,30 @@ std::string ladder_how(int refinements, long dofs, bool converged, double change
   return how + "convergence not checked (" + stop + ")";
 }
 
-} // namespace
-
-template <int dim> long continuum_first_dofs(const Mesh<dim>& mesh) {
-  return static_cast<long>(counts(mesh).p2_dofs(dim));
-}
-
-long continuum_budget(int dim, const ContinuumOptions& options) {
-  return options.max_dofs > 0 ? options.max_dofs : (dim == 2 ? kContinuumDofs2D : kContinuumDofs3D);
-}
-
-template <int dim>
-std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, const MaterialDesc& material,
-                                                  const Eigen::MatrixXd& F, const ContinuumOptions& options) {
-  const long budget = continuum_budget(dim, options);
-  const Problem<dim> p = static_problem(problem);
-  Counts level = counts(p.mesh);
-  if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
-  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> mass(p1_mass(p.mesh, material.thickness));
-  const Eigen::MatrixXd g = mass.solve(F);
-  MaterialDesc unit = material;
-  unit.density = 1.0;
-  ContinuumAnswers ans;
-  FemOptions o;
-  o.degree = 2;
-  o.static_solve = true;
-  o.dt = 1.0;
-  std::string stop;
+/// What the ladder found: the finest level's answer and how it stopped.
+template <class Answer> struct Ladder {
+  Answer u;
+  int refinements = 0;
   long dofs = 0;
+  double change = -1;
+  bool converged = false;
+  std::string how;
+};
+
+/// P2 at refinements 0, 1, ... of `mesh`: `solve(r, dofs)` returns level r's answer (and may set
+/// its dofs; they are counted otherwise), until a refinement moves it by less than the tolerance
+/// (relative, whole answer), the next level's counted dofs exceed the budget, or max_refinements.
+/// nullopt when not even level 0 fits the budget.
+template <int dim, class Answer, class Solve>
+std::optional<Ladder<Answer>> ladder(const Mesh<dim>& mesh, const ContinuumOptions& options, long budget,
+                                     Solve&& solve) {
+  Counts level = counts(mesh);
+  if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
+  Ladder<Answer> ans;
+  std::string stop;
   for (int r = 0;; ++r) {
-    o.refinements = r;
-    KelvinVoigtProblem<dim, SerialBackend<dim>> fem(p, unit, o, MPI_COMM_SELF);
-    Eigen::MatrixXd u = fem.body_force_answers(g);
-    dofs = static_cast<long>(level.p2_dofs(dim));
+    ans.dofs = static_cast<long>(level.p2_dofs(dim));
+    Answer u = solve(r, ans.dofs);
     ans.refinements = r;
     if (r > 0) {
       const double norm = u.norm();
@@ -139,8 +130,46 @@ std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, c
       break;
     }
   }
-  ans.how = ladder_how(ans.refinements, dofs, ans.converged, ans.change, stop);
+  ans.how = ladder_how(ans.refinements, ans.dofs, ans.converged, ans.change, stop);
   return ans;
+}
+
+/// The options of every level's static P2 solve.
+FemOptions static_p2(int refinements) {
+  FemOptions o;
+  o.degree = 2;
+  o.refinements = refinements;
+  o.static_solve = true;
+  o.dt = 1.0;
+  return o;
+}
+
+} // namespace
+
+template <int dim> long continuum_first_dofs(const Mesh<dim>& mesh) {
+  return static_cast<long>(counts(mesh).p2_dofs(dim));
+}
+
+long continuum_budget(int dim, const ContinuumOptions& options) {
+  return options.max_dofs > 0 ? options.max_dofs : (dim == 2 ? kContinuumDofs2D : kContinuumDofs3D);
+}
+
+template <int dim>
+std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, const MaterialDesc& material,
+                                                  const Eigen::MatrixXd& F, const ContinuumOptions& options) {
+  const Problem<dim> p = static_problem(problem);
+  if (static_cast<double>(continuum_first_dofs(p.mesh)) > static_cast<double>(continuum_budget(dim, options)))
+    return std::nullopt; // before the mass solve
+  const Eigen::SimplicialLLT<Eigen::SparseMatrix<double>> mass(p1_mass(p.mesh, material.thickness));
+  const Eigen::MatrixXd g = mass.solve(F);
+  MaterialDesc unit = material;
+  unit.density = 1.0;
+  auto found = ladder<dim, Eigen::MatrixXd>(p.mesh, options, continuum_budget(dim, options), [&](int r, long&) {
+    KelvinVoigtProblem<dim, SerialBackend<dim>> fem(p, unit, static_p2(r), MPI_COMM_SELF);
+    return fem.body_force_answers(g);
+  });
+  if (!found) return std::nullopt;
+  return ContinuumAnswers{std::move(found->u), found->refinements, found->change, found->converged, found->how};
 }
 
 template <int dim> Problem<dim> static_problem(const Problem<dim>& problem, bool drives_displaced) {
@@ -161,45 +190,24 @@ template <int dim>
 std::optional<ContinuumAnswer<dim>> continuum_static(const Problem<dim>& problem, const MaterialDesc& material,
                                                      const ContinuumOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
-  const long budget = continuum_budget(dim, options);
   const Problem<dim> p = static_problem(problem, options.drives_displaced);
-  Counts level = counts(p.mesh);
-  if (level.p2_dofs(dim) > static_cast<double>(budget)) return std::nullopt;
-  ContinuumAnswer<dim> ans;
-  FemOptions o;
-  o.degree = 2;
-  o.static_solve = true;
-  o.dt = 1.0;
-  std::string stop;
-  for (int r = 0;; ++r) {
-    o.refinements = r;
+  auto found = ladder<dim, Nodal<dim>>(p.mesh, options, continuum_budget(dim, options), [&](int r, long& dofs) {
     Trajectory<dim> out;
-    const RunReport rep = simulate<dim>(p, material, o, out, true);
-    Nodal<dim> u = out.field.back();
+    const RunReport rep = simulate<dim>(p, material, static_p2(r), out, true);
     for (const auto& [key, value] : rep.extra)
-      if (key == "dofs") ans.dofs = static_cast<long>(value);
-    ans.refinements = r;
-    if (r > 0) {
-      const double norm = u.norm();
-      ans.change = norm > 0 ? (u - ans.u).norm() / norm : 0.0;
-      ans.converged = ans.change < options.tolerance;
-    }
-    ans.u = std::move(u);
-    if (ans.converged) break;
-    level = level.refined(dim);
-    if (r + 1 > options.max_refinements) {
-      stop = "refinement " + std::to_string(r + 1) + " is past the ladder's " + std::to_string(options.max_refinements);
-      break;
-    }
-    if (level.p2_dofs(dim) > static_cast<double>(budget)) {
-      stop = "refined once more it would need ~" + thousands(static_cast<long>(level.p2_dofs(dim))) +
-             " dofs, above the budget of " + thousands(budget);
-      break;
-    }
-  }
+      if (key == "dofs") dofs = static_cast<long>(value); // the solve's own count
+    return Nodal<dim>(out.field.back());
+  });
+  if (!found) return std::nullopt;
+  ContinuumAnswer<dim> ans;
+  ans.u = std::move(found->u);
+  ans.refinements = found->refinements;
+  ans.dofs = found->dofs;
+  ans.change = found->change;
+  ans.converged = found->converged;
+  ans.how = found->how;
   ans.sufficient_refinements = ans.converged ? ans.refinements - 1 : ans.refinements;
   ans.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  ans.how = ladder_how(ans.refinements, ans.dofs, ans.converged, ans.change, stop);
   return ans;
 }
 

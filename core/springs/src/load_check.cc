@@ -62,14 +62,7 @@ LoadCheck static_load_check(const Problem<dim>& problem, const SpringNetwork<dim
   Eigen::VectorXd u_fem, u_springs;
   if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return check;
   std::optional<YardstickAnswer<dim>> continuum;
-  if (yardstick) {
-    const YardstickSolve<dim>* solve_continuum = nullptr;
-    if constexpr (dim == 2)
-      solve_continuum = &yardstick->plane;
-    else
-      solve_continuum = &yardstick->solid;
-    if (*solve_continuum) continuum = (*solve_continuum)(problem, material);
-  }
+  if (yardstick && yardstick->solve<dim>()) continuum = yardstick->solve<dim>()(problem, material);
   if (!continuum || continuum->u.squaredNorm() == 0) {
     check.springs = (u_springs - u_fem).norm() / u_fem.norm();
     check.yardstick = "P1 FEM on the mesh";

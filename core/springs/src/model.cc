@@ -14,14 +14,7 @@ Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& pr
   for (int v = 0; v < model.num_nodes(); ++v)
     if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
   FitTarget target; // the continuum's answers where the yardstick gives them, else P1's
-  if (yardstick) {
-    const FitTargetFor<dim>* target_for = nullptr;
-    if constexpr (dim == 2)
-      target_for = &yardstick->plane_target;
-    else
-      target_for = &yardstick->solid_target;
-    if (*target_for) target = (*target_for)(model, scene.material);
-  }
+  if (yardstick && yardstick->target<dim>()) target = yardstick->target<dim>()(model, scene.material);
   model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress, target);
   if (check_loads) {
     const LoadCheck check = static_load_check<dim>(model, model.net, scene.material, yardstick);

@@ -50,6 +50,18 @@ struct Yardstick {
   YardstickSolve<3> solid;
   FitTargetFor<2> plane_target; ///< empty: fits train on P1 on the mesh
   FitTargetFor<3> solid_target;
+  template <int dim> const YardstickSolve<dim>& solve() const {
+    if constexpr (dim == 2)
+      return plane;
+    else
+      return solid;
+  }
+  template <int dim> const FitTargetFor<dim>& target() const {
+    if constexpr (dim == 2)
+      return plane_target;
+    else
+      return solid_target;
+  }
 };
 
 /// The load check's numbers: the springs against the yardstick, and P1 on the mesh against it.
