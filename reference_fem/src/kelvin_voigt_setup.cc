@@ -38,8 +38,11 @@ RunReport KelvinVoigtProblem<dim, Backend>::run(Trajectory<dim>& out, bool recor
   march(
       m_scheme, m_model.duration, m_model.output_interval, rep,
       [&](double t) {
-        dealii::TimerOutput::Scope s(m_timer, "time stepping");
-        step(t);
+        {
+          dealii::TimerOutput::Scope s(m_timer, "time stepping");
+          step(t);
+        }
+        if (m_opt.progress) m_opt.progress(std::min(1.0, t / m_model.duration));
       },
       [&] { return std::isfinite(m_u.l2_norm()); },
       [&](double t) {

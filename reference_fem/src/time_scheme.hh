@@ -53,9 +53,11 @@ struct TimeScheme {
       tmp *= -af;
       tmp.add(-(1 - af), dv);
       C.vmult_add(rhs, tmp);
-      tmp = u;
-      tmp *= -af;
-      K.vmult_add(rhs, tmp);
+      if (af != 0) { // generalized-alpha at rho_inf = 0 has af = 0: no product with K
+        tmp = u;
+        tmp *= -af;
+        K.vmult_add(rhs, tmp);
+      }
     } else if (!is_static) {
       tmp = u;
       tmp *= 1 / (dt * dt);

@@ -85,11 +85,9 @@ total_force = [0.2, 0.1]
   EXPECT_LT(e2, e1);
 }
 
-TEST(Cvode, ImplicitEulerConvergesToCvodeAtFirstOrderIn3DWithRampsAndDrives) {
-  // The 3D path of CVODE, with a ramped traction and a ramped drive (prescribed u and v inside
-  // the right-hand side), mass damping and a clamp. Implicit Euler's error against it halves
-  // with dt (order 1: ratio 2 (1 + O(dt / T)), T = 0.01 s the shortest resolved period here,
-  // so 2 within 0.2), and the drive's node sits at its prescribed displacement in both.
+/// A 3D box with a ramped traction, a ramped drive (prescribed u and v inside the right-hand
+/// side), mass damping and a clamp.
+Model<3> ramped_driven_box() {
   const Scene s = parse_scene(R"(
 [scene]
 duration = 0.2
@@ -116,7 +114,15 @@ start = 0.0
 ramp = 0.1
 )",
                               "box.toml", ".");
-  const Model<3> model = build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
+  return build_model<3>(s, std::get<Mesh3>(load_mesh(s)));
+}
+
+TEST(Cvode, ImplicitEulerConvergesToCvodeAtFirstOrderIn3DWithRampsAndDrives) {
+  // The 3D path of CVODE, with a ramped traction and a ramped drive (prescribed u and v inside
+  // the right-hand side), mass damping and a clamp. Implicit Euler's error against it halves
+  // with dt (order 1: ratio 2 (1 + O(dt / T)), T = 0.01 s the shortest resolved period here,
+  // so 2 within 0.2), and the drive's node sits at its prescribed displacement in both.
+  const Model<3> model = ramped_driven_box();
   Trajectory<3> ref;
   ASSERT_TRUE(simulate_cvode(model, CvodeOptions{1e-10, 1e-15}, ref, true).stable);
   const int driven = model.supports.back().nodes.at(0);
@@ -138,6 +144,46 @@ ramp = 0.1
   const double e2 = error(5e-4), e3 = error(2.5e-4);
   EXPECT_NEAR(e2 / e3, 2.0, 0.2) << e2 << " " << e3;
   EXPECT_LT(e3, 0.05) << "and small in absolute terms";
+}
+
+TEST(Cvode, GmresOnTheReducedNewtonSystemFollowsKluIn3D) {
+  // In 3D CVODE's Newton systems go by default to GMRES, preconditioned by their exact inverse
+  // for the clamped Jacobian (the reduced M + gamma D + gamma^2 K by CHOLMOD), not to KLU's LU
+  // of the 2n x 2n block system. Both are CVODE at rtol 1e-9: each trajectory is within a small
+  // multiple of rtol of the exact one (the global error of a tolerance-controlled BDF run, here
+  // measured below 1e-7 relative), so they must agree to 1e-6 of the largest displacement, and
+  // the drive holds its prescribed value in both. The preconditioner is exact up to the clamp
+  // and the dashpots' omitted position terms, so GMRES needs about one iteration per Newton
+  // iteration (at most 2 on average), and a factor is kept over many steps (CVODE's jok).
+  const Model<3> model = ramped_driven_box();
+  Trajectory<3> klu, gmres;
+  CvodeOptions o{1e-9, 1e-14};
+  o.linear_solver = "klu";
+  const RunReport rk = simulate_cvode(model, o, klu, true);
+  o.linear_solver = "auto";
+  const RunReport rg = simulate_cvode(model, o, gmres, true);
+  ASSERT_TRUE(rk.stable && rg.stable);
+  const auto extra = [](const RunReport& r, const std::string& key) {
+    for (const auto& [k, v] : r.extra)
+      if (k == key) return v;
+    return std::nan("");
+  };
+  EXPECT_TRUE(std::isnan(extra(rk, "preconditioner_factors"))) << "klu has no preconditioner";
+  const double factors = extra(rg, "preconditioner_factors"), newton = extra(rg, "newton_iterations");
+  ASSERT_GT(factors, 0) << "auto is gmres in 3D";
+  EXPECT_LT(factors, extra(rg, "cvode_steps"));
+  EXPECT_LE(extra(rg, "linear_iterations"), 2 * newton);
+  double diff = 0, scale = 0;
+  ASSERT_EQ(klu.t.size(), gmres.t.size());
+  for (std::size_t k = 0; k < klu.t.size(); ++k) {
+    diff = std::max(diff, (gmres.field[k] - klu.field[k]).norm());
+    scale = std::max(scale, klu.field[k].norm());
+  }
+  EXPECT_LT(diff / scale, 1e-6);
+  const int driven = model.supports.back().nodes.at(0);
+  EXPECT_NEAR(gmres.field.back()(1, driven), 0.002, 1e-15);
+  o.linear_solver = "lu";
+  EXPECT_THROW(simulate_cvode(model, o, gmres), std::invalid_argument);
 }
 
 TEST(Cvode, NonFiniteStateIsAReportedFailureNotACrash) {

@@ -7,27 +7,41 @@
 #include <nvector/nvector_serial.h>
 #include <sundials/sundials_context.h>
 #include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
 #include <sunmatrix/sunmatrix_sparse.h>
+
+#include <Eigen/CholmodSupport>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 namespace vtb {
 namespace {
 
+/// GMRES's Krylov dimension: its preconditioner is Newton's exact inverse for the clamped
+/// Jacobian, so one or two iterations reach CVODE's linear tolerance; 5 leaves room where the
+/// clamp or the dashpots' omitted terms matter.
+constexpr int kKrylovDimension = 5;
+
 /// RAII owner of every SUNDIALS object of one integration (context first, freed last).
 class CvodeHandle {
 public:
-  explicit CvodeHandle(sunindextype n, sunindextype nnz) {
+  /// With `krylov`, GMRES (left-preconditioned, no matrix); else KLU on an n x n sparse matrix.
+  CvodeHandle(sunindextype n, sunindextype nnz, bool krylov) {
     if (SUNContext_Create(nullptr, &m_ctx) != 0) throw std::runtime_error("cvode: SUNContext_Create failed");
     m_y = N_VNew_Serial(n, m_ctx);
     m_mem = CVodeCreate(CV_BDF, m_ctx);
-    m_A = SUNSparseMatrix(n, n, nnz, CSC_MAT, m_ctx);
-    m_ls = SUNLinSol_KLU(m_y, m_A, m_ctx);
-    if (!m_y || !m_mem || !m_A || !m_ls) {
+    if (krylov) {
+      m_ls = m_y ? SUNLinSol_SPGMR(m_y, SUN_PREC_LEFT, kKrylovDimension, m_ctx) : nullptr;
+    } else {
+      m_A = SUNSparseMatrix(n, n, nnz, CSC_MAT, m_ctx);
+      m_ls = m_y && m_A ? SUNLinSol_KLU(m_y, m_A, m_ctx) : nullptr;
+    }
+    if (!m_y || !m_mem || (!krylov && !m_A) || !m_ls) {
       release();
       throw std::runtime_error("cvode: cannot allocate the integrator");
     }
@@ -58,6 +72,127 @@ private:
   void* m_mem = nullptr;
   SUNMatrix m_A = nullptr;
   SUNLinearSolver m_ls = nullptr;
+};
+
+/// Newton's matrix I - gamma J of the ODE below in 3D, inverted exactly for the clamped
+/// Jacobian (stiffness signs: J = [[0, I], [-M^-1 K, -M^-1 D]], K's transverse term clamped
+/// under compression so that the reduced matrix stays positive definite): N z = r reads
+/// z1 - gamma z2 = r1 and gamma M^-1 K z1 + z2 + gamma M^-1 D z2 = r2, so
+///   (M + gamma D + gamma^2 K) z2 = M r2 - gamma K r1,   z1 = r1 + gamma z2,
+/// one Cholesky factor of an n x n SPD matrix (CHOLMOD supernodal) where KLU's LU of the
+/// 2n x 2n block system fills in. GMRES, preconditioned by it, takes what the clamp and the
+/// dashpots' omitted terms leave. K, D and P share one pattern (the node blocks and the spring
+/// blocks between free nodes), so a refresh writes values through offsets kept at construction.
+template <int dim> class ReducedNewton {
+public:
+  explicit ReducedNewton(const Model<dim>& model) : m_model(model) {
+    const auto& net = model.net;
+    const int nf = static_cast<int>(model.free_nodes.size()), n = dim * nf;
+    std::vector<Eigen::Triplet<double>> trip;
+    const auto block = [&](int a, int b) {
+      for (int p = 0; p < dim; ++p)
+        for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, 0.0);
+    };
+    for (int a = 0; a < nf; ++a) block(a, a);
+    for (int sp = 0; sp < net.num_springs(); ++sp) {
+      const int a = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(sp)][0])];
+      const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(sp)][1])];
+      if (a >= 0 && b >= 0) {
+        block(a, b);
+        block(b, a);
+      }
+    }
+    m_K.resize(n, n);
+    m_K.setFromTriplets(trip.begin(), trip.end());
+    m_K.makeCompressed();
+    m_D = m_K;
+    m_P = m_K;
+    // Offsets of every spring's four blocks, in for_each_jacobian_block's order (ii, jj, ij, ji).
+    m_offset.assign(static_cast<std::size_t>(net.num_springs()) * 4 * dim * dim, -1);
+    for (int sp = 0; sp < net.num_springs(); ++sp) {
+      const int i = net.edge[static_cast<std::size_t>(sp)][0], j = net.edge[static_cast<std::size_t>(sp)][1];
+      const int fa = model.free_index[static_cast<std::size_t>(i)], fb = model.free_index[static_cast<std::size_t>(j)];
+      const int rows[4] = {fa, fb, fa, fb}, cols[4] = {fa, fb, fb, fa};
+      for (int w = 0; w < 4; ++w) {
+        if (rows[w] < 0 || cols[w] < 0) continue;
+        for (int p = 0; p < dim; ++p)
+          for (int q = 0; q < dim; ++q)
+            m_offset[static_cast<std::size_t>(((sp * 4 + w) * dim + p) * dim + q)] =
+                offset(rows[w] * dim + p, cols[w] * dim + q);
+      }
+    }
+    m_mass.resize(n);
+    m_diag.resize(static_cast<std::size_t>(n));
+    for (int a = 0; a < nf; ++a)
+      for (int p = 0; p < dim; ++p) {
+        m_mass[a * dim + p] = net.mass[model.free_nodes[static_cast<std::size_t>(a)]];
+        m_diag[static_cast<std::size_t>(a * dim + p)] = offset(a * dim + p, a * dim + p);
+      }
+    m_b.resize(n);
+    m_x.resize(n);
+  }
+
+  /// K and D at displacement u when `refresh` (else those of the last refresh: CVODE's jok),
+  /// then P = M + gamma D + gamma^2 K factorised. False when P is not positive definite (a
+  /// non-finite state): CVODE then retries with a smaller step.
+  bool setup(const Nodal<dim>& u, bool refresh, double gamma) {
+    const auto& net = m_model.net;
+    if (refresh) {
+      std::fill(m_K.valuePtr(), m_K.valuePtr() + m_K.nonZeros(), 0.0);
+      std::fill(m_D.valuePtr(), m_D.valuePtr() + m_D.nonZeros(), 0.0);
+      for_each_jacobian_block(net, u, true,
+                              [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
+                                const int e0 = net.edge[static_cast<std::size_t>(sp)][0];
+                                const int w = i == j ? (i == e0 ? 0 : 1) : (i == e0 ? 2 : 3);
+                                const long* at = &m_offset[static_cast<std::size_t>((sp * 4 + w) * dim * dim)];
+                                if (at[0] < 0) return;
+                                for (int p = 0; p < dim; ++p)
+                                  for (int q = 0; q < dim; ++q) {
+                                    m_K.valuePtr()[at[p * dim + q]] -= sign * K(p, q);
+                                    m_D.valuePtr()[at[p * dim + q]] -= sign * D(p, q);
+                                  }
+                              });
+      for (std::size_t d = 0; d < m_diag.size(); ++d)
+        m_D.valuePtr()[m_diag[d]] += net.mass_damping * m_mass[static_cast<Eigen::Index>(d)];
+    }
+    const double* k = m_K.valuePtr();
+    const double* c = m_D.valuePtr();
+    double* pv = m_P.valuePtr();
+    for (Eigen::Index e = 0; e < m_P.nonZeros(); ++e) pv[e] = gamma * (c[e] + gamma * k[e]);
+    for (std::size_t d = 0; d < m_diag.size(); ++d) pv[m_diag[d]] += m_mass[static_cast<Eigen::Index>(d)];
+    if (!m_analysed) {
+      m_llt.analyzePattern(m_P);
+      m_analysed = true;
+    }
+    m_llt.factorize(m_P);
+    return m_llt.info() == Eigen::Success;
+  }
+
+  /// z = N^-1 r for the gamma of the last setup (r and z: 2n doubles, [u part; v part]).
+  void solve(const double* r, double* z, double gamma) {
+    const Eigen::Index n = m_b.size();
+    const Eigen::Map<const Eigen::VectorXd> r1(r, n), r2(r + n, n);
+    m_b.noalias() = m_mass.cwiseProduct(r2);
+    m_b.noalias() -= gamma * (m_K * r1);
+    m_x = m_llt.solve(m_b);
+    Eigen::Map<Eigen::VectorXd>(z + n, n) = m_x;
+    Eigen::Map<Eigen::VectorXd>(z, n) = r1 + gamma * m_x;
+  }
+
+private:
+  long offset(int row, int col) const {
+    const int* begin = m_K.innerIndexPtr() + m_K.outerIndexPtr()[col];
+    const int* end = m_K.innerIndexPtr() + m_K.outerIndexPtr()[col + 1];
+    return static_cast<long>(std::lower_bound(begin, end, row) - m_K.innerIndexPtr());
+  }
+
+  const Model<dim>& m_model;
+  Eigen::SparseMatrix<double> m_K, m_D, m_P; ///< one pattern; stiffness signs (K, D positive)
+  std::vector<long> m_offset;                ///< per spring, block and entry: the value's offset, -1 off the free dofs
+  std::vector<long> m_diag;                  ///< per free dof: its diagonal's offset
+  Eigen::VectorXd m_mass, m_b, m_x;
+  Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> m_llt;
+  bool m_analysed = false;
 };
 
 /// The ODE of the free nodes: state y = [u_free (dim nf); v_free (dim nf)].
@@ -173,6 +308,19 @@ public:
     return 0;
   }
 
+  /// CVODE's preconditioner setup: Newton's reduced matrix at y (or at the last Jacobian's
+  /// state when `jok`), for gamma.
+  int precondition_setup(double t, const double* y, bool jok, int* jcur, double gamma) {
+    if (!m_newton) m_newton = std::make_unique<ReducedNewton<dim>>(m_model);
+    if (!jok) unpack(t, y);
+    *jcur = jok ? 0 : 1;
+    return m_newton->setup(m_u, !jok, gamma) ? 0 : 1; // > 0: recoverable (a smaller step)
+  }
+  int precondition_solve(const double* r, double* z, double gamma) {
+    m_newton->solve(r, z, gamma);
+    return 0;
+  }
+
   const Nodal<dim>& u() const { return m_u; }
   const Nodal<dim>& v() const { return m_v; }
 
@@ -183,6 +331,7 @@ private:
   Nodal<dim> m_u, m_v, m_f, m_ext;
   std::vector<std::vector<int>> m_nb;
   std::vector<sunindextype> m_colptr;
+  std::unique_ptr<ReducedNewton<dim>> m_newton; ///< GMRES's preconditioner (built at its first setup)
 };
 
 template <int dim> int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user) {
@@ -191,6 +340,28 @@ template <int dim> int rhs_fn(realtype t, N_Vector y, N_Vector ydot, void* user)
 
 template <int dim> int jac_fn(realtype t, N_Vector y, N_Vector, SUNMatrix J, void* user, N_Vector, N_Vector, N_Vector) {
   return static_cast<SpringOde<dim>*>(user)->jacobian(t, N_VGetArrayPointer(y), J);
+}
+
+template <int dim>
+int psetup_fn(realtype t, N_Vector y, N_Vector, booleantype jok, booleantype* jcur, realtype gamma, void* user) {
+  int current = 0;
+  const int flag =
+      static_cast<SpringOde<dim>*>(user)->precondition_setup(t, N_VGetArrayPointer(y), jok != 0, &current, gamma);
+  *jcur = current ? SUNTRUE : SUNFALSE;
+  return flag;
+}
+
+template <int dim>
+int psolve_fn(realtype, N_Vector, N_Vector, N_Vector r, N_Vector z, realtype gamma, realtype, int, void* user) {
+  return static_cast<SpringOde<dim>*>(user)->precondition_solve(N_VGetArrayPointer(r), N_VGetArrayPointer(z), gamma);
+}
+
+/// Whether Newton's systems go to GMRES (else KLU): CvodeOptions::linear_solver.
+bool krylov(const CvodeOptions& o, int dim) {
+  if (o.linear_solver == "gmres") return true;
+  if (o.linear_solver == "klu") return false;
+  if (o.linear_solver == "auto") return dim == 3;
+  throw std::invalid_argument("cvode: linear_solver must be auto, klu or gmres, not \"" + o.linear_solver + "\"");
 }
 
 } // namespace
@@ -216,7 +387,10 @@ template <int dim> void configure(const CvodeHandle& h, SpringOde<dim>& ode, con
   check(CVodeSStolerances(h.mem(), o.rtol, o.atol), "CVodeSStolerances");
   check(CVodeSetUserData(h.mem(), &ode), "CVodeSetUserData");
   check(CVodeSetLinearSolver(h.mem(), h.solver(), h.matrix()), "CVodeSetLinearSolver");
-  check(CVodeSetJacFn(h.mem(), jac_fn<dim>), "CVodeSetJacFn");
+  if (h.matrix())
+    check(CVodeSetJacFn(h.mem(), jac_fn<dim>), "CVodeSetJacFn");
+  else
+    check(CVodeSetPreconditioner(h.mem(), psetup_fn<dim>, psolve_fn<dim>), "CVodeSetPreconditioner");
   check(CVodeSetMaxNumSteps(h.mem(), o.max_steps), "CVodeSetMaxNumSteps");
   check(CVodeSetStopTime(h.mem(), duration), "CVodeSetStopTime");
 }
@@ -244,6 +418,12 @@ void report_statistics(void* mem, const CvodeOptions& o, double duration, double
       {"error_test_failures", static_cast<double>(netf)},
       {"nonlinear_convergence_failures", static_cast<double>(nncf)},
   };
+  long npe = 0, nli = 0;
+  if (CVodeGetNumPrecEvals(mem, &npe) == CV_SUCCESS && npe > 0) { // GMRES: its iterations, the factors
+    CVodeGetNumLinIters(mem, &nli);
+    rep.extra.emplace_back("preconditioner_factors", static_cast<double>(npe));
+    rep.extra.emplace_back("linear_iterations", static_cast<double>(nli));
+  }
 }
 
 template <int dim>
@@ -255,7 +435,7 @@ RunReport simulate_cvode(const Model<dim>& model, const CvodeOptions& o, Traject
 
   const auto t0 = clock::now();
   SpringOde<dim> ode(model, applied);
-  CvodeHandle h(ode.size(), ode.nonzeros());
+  CvodeHandle h(ode.size(), ode.nonzeros(), krylov(o, dim));
   initial_y(model, N_VGetArrayPointer(h.y()));
   double* y = N_VGetArrayPointer(h.y());
   configure(h, ode, o, model.duration);

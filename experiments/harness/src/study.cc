@@ -18,6 +18,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <numeric>
 #include <optional>
@@ -61,11 +62,57 @@ void mark_pareto(std::vector<StudyRow>& rows) {
 
 namespace {
 
+/// The transient reference's step: the largest of dt, dt / 2, dt / 4 (dt the scene's) whose time
+/// error is within `tolerance`, the bar the ladder held its space to (dt / 4 when none is). The
+/// error is estimated on P1 on the scene's mesh with the reference's own scheme (second order):
+/// the run at dt against the run at dt / 2 differ by 3/4 of the error at dt (Richardson), and a
+/// halving divides it by 4. P1 is cheap beside the P2 reference, and the time error is that of
+/// the slow modes (the creep over tau, the first vibrations), which P1 on the mesh carries as
+/// P2 does (stiffer where it locks: faster modes, a larger estimate). The error is the study's
+/// own measure (compare(): the largest relative L2 over all nodes), so a row's error and the
+/// reference's are on one scale. Returns the step and how it was chosen.
+template <int dim>
+std::pair<double, std::string> reference_step(const Scene& scene, const Model<dim>& model, double tolerance) {
+  fem::FemOptions p1 = fem::options_from(scene.solver);
+  p1.degree = 1;
+  p1.refinements = 0;
+  p1.static_solve = false;
+  p1.nonlinear = false;
+  Trajectory<dim> coarse, fine;
+  p1.dt = scene.solver.dt;
+  const RunReport a = fem::simulate<dim>(model, scene.material, p1, coarse, true);
+  p1.dt = scene.solver.dt / 2;
+  const RunReport b = fem::simulate<dim>(model, scene.material, p1, fine, true);
+  const double at_dt = a.stable && b.stable ? 4.0 / 3.0 * compare(coarse, fine).displacement_max : INFINITY;
+  const double allowed = tolerance;
+  int halvings = 0;
+  while (halvings < 2 && !(at_dt / std::pow(4.0, halvings) <= allowed)) ++halvings;
+  const double error = at_dt / std::pow(4.0, halvings);
+  std::ostringstream how;
+  how << std::setprecision(2) << "time error ~" << 100 * error << " % (P1 at dt and dt/2, second order; allowed "
+      << 100 * allowed << " %)";
+  return {scene.solver.dt / std::pow(2.0, halvings), how.str()};
+}
+
+/// A reference run's progress on `log`: a line at every tenth of the duration with the time it
+/// has taken and the estimate of what remains.
+std::function<void(double)> progress_printer(std::ostream* log) {
+  if (!log) return {};
+  return [log, start = std::chrono::steady_clock::now(), next = 0.1](double done) mutable {
+    if (done + 1e-12 < next) return;
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    *log << "  reference " << std::lround(100 * done) << " %: " << std::lround(s) << " s, ~"
+         << std::lround(s * (1 - done) / done) << " s to go\n"
+         << std::flush;
+    while (next <= done + 1e-12) next += 0.1;
+  };
+}
+
 /// The reference, converged at its own step: the continuum (P2 at the coarsest refinement whose
 /// static answer to the scene's final loads and drives is within 1 % of the next one's, by the
-/// ladder of vtb/fem/continuum.hh within its budget of dofs, at dt / 4), or the spring model's
-/// exact trajectory (CVODE at rtol 1e-10). Returns what it was; `log` is told the reference's
-/// level, dofs and steps before it runs.
+/// ladder of vtb/fem/continuum.hh within its budget of dofs, at reference_step's step), or the
+/// spring model's exact trajectory (CVODE at rtol 1e-10). Returns what it was; `log` is told the
+/// reference's level, dofs and steps before it runs, and its progress while it runs.
 /// With `distributed` (under mpirun, every rank calling) the FEM runs over all the ranks
 /// (deal.II's distributed path), each ending with the whole trajectory.
 template <int dim>
@@ -80,17 +127,20 @@ std::string reference_run(const Scene& scene, const Model<dim>& model, const std
     c.drives_displaced = true;
     const auto ladder = fem::continuum_static<dim>(model, scene.material, c);
     f.refinements = ladder ? ladder->sufficient_refinements : 0;
-    f.dt = scene.solver.dt / 4;
+    const auto [dt, dt_how] = reference_step(scene, model, c.tolerance);
+    f.dt = dt;
     f.static_solve = false;
+    f.progress = progress_printer(log);
     const long steps = std::lround(model.duration / f.dt);
     const std::string level = "P2 refined " + std::to_string(f.refinements) + "x";
     const std::string why =
         ladder ? "static ladder: " + ladder->how : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
     if (log)
-      *log << "reference: fem, " << level << " (" << why << "), " << steps << " steps at dt = " << f.dt << " s ...\n";
+      *log << "reference: fem, " << level << " (" << why << "), " << steps << " steps at dt = " << f.dt << " s ("
+           << dt_how << ") ...\n";
     rr = distributed ? fem::simulate_distributed<dim>(model, scene.material, f, ref, true)
                      : fem::simulate<dim>(model, scene.material, f, ref, true);
-    note = "fem, " + level + " (" + why + "), " + f.scheme + ", dt = " + std::to_string(f.dt) + " s" +
+    note = "fem, " + level + " (" + why + "), " + f.scheme + ", dt = " + std::to_string(f.dt) + " s (" + dt_how + ")" +
            (distributed ? ", over " + std::to_string(world().size) + " ranks" : "");
   } else if (reference == solvers::kCvode) {
     rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
@@ -314,7 +364,8 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
     if (log)
       *log << "  " << row.solver << (row.rtol > 0 ? " rtol " : " dt ") << (row.rtol > 0 ? row.rtol : row.dt)
            << (row.stable ? "" : " UNSTABLE") << ": error " << std::to_string(row.error_all) << ", "
-           << std::to_string(row.total_seconds) << " s\n";
+           << std::to_string(row.total_seconds) << " s\n"
+           << std::flush;
     res.rows.push_back(std::move(row));
   };
   const auto run_cell = [&](std::size_t i, long taken) {
@@ -328,7 +379,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
       row = skipped_row(c.solver, c.dt, c.steps, c.budget);
       row.cell = static_cast<long>(i);
       row.binding = where;
-      if (log) *log << "  " << row.solver << " dt " << row.dt << " " << row.failure << "\n";
+      if (log) *log << "  " << row.solver << " dt " << row.dt << " " << row.failure << "\n" << std::flush;
       res.rows.push_back(std::move(row));
       return;
     }

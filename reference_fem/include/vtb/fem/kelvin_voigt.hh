@@ -9,6 +9,7 @@
 #include "vtb/problem/run_report.hh"
 
 #include <filesystem>
+#include <functional>
 
 #include <memory>
 
@@ -26,6 +27,9 @@ struct FemOptions {
   bool nonlinear = false;
   double dt = 1e-3;
   std::filesystem::path frames_dir; ///< if set: frames/frame_NNNN.vtu per sample (deal.II DataOut)
+  /// If set: called after every step with the share of the duration done (0-1], so that a long
+  /// reference can show its progress.
+  std::function<void(double)> progress;
 };
 
 FemOptions options_from(const SolverDesc& solver);

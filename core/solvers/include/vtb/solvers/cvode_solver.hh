@@ -4,9 +4,14 @@
 ///   u' = v,   M v' = f_int(u, v) + f_ext(t)
 /// over the free nodes (supports prescribe u and v inside the right-hand side), with the
 /// analytic sparse Jacobian [[0, I], [M^-1 K, M^-1 C]] (K the exact spring Jacobian, C the
-/// dashpots', the dependence of the dashpot direction on x omitted) solved by KLU.
+/// dashpots', the dependence of the dashpot direction on x omitted) solved by KLU; or (3D, by
+/// default) Newton's systems solved by GMRES, preconditioned by their exact inverse for the
+/// clamped Jacobian: the 2 x 2 block system reduced to the SPD M + gamma D + gamma^2 K, which
+/// CHOLMOD factorises (docs/harness.md, "CVODE's linear solver").
 
 #include "vtb/solvers/simulation.hh"
+
+#include <string>
 
 namespace vtb {
 
@@ -14,6 +19,10 @@ struct CvodeOptions {
   double rtol = 1e-8;
   double atol = 1e-12;
   long max_steps = 2'000'000; ///< CVODE steps in the whole run before it gives up
+  /// Newton's linear solver: "auto" (klu in 2D, gmres in 3D), "klu" (the 2n x 2n system by
+  /// sparse LU) or "gmres" (GMRES preconditioned by the reduced system's Cholesky factor). KLU's
+  /// LU of the 3D block system fills in: on a 2,415-node tissue block a CVODE step cost 1.8 s.
+  std::string linear_solver = "auto";
 };
 
 /// Integrates the model to each sample time (CVODE's own dense output: exact at the
