@@ -24,7 +24,9 @@ Action add_study(CLI::App& app) {
                   "Comma-separated, of " + solvers::list(solvers::is_spring) +
                       " (default: every filter that suits the scene, implicit-euler, explicit, cvode)")
       ->delimiter(',');
-  cmd->add_option("--reference", o->reference, "fem (P2, one refinement, dt/4; default) or cvode (rtol 1e-10)");
+  cmd->add_option("--reference", o->reference,
+                  "fem (the continuum: P2 at the static ladder's level, at dt or the smaller step its measured time "
+                  "error needs; default) or cvode (rtol 1e-10)");
   cmd->add_flag("--quick", o->quick, "Short ladders and at most 1 s of simulated time");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-study)");
   cmd->add_option("--shard", o->shard,

@@ -3,7 +3,9 @@
 #include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/compare.hh"
+#include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/harness/study.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/load_check.hh"
 #include "vtb/springs/model.hh"
@@ -11,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
+
+#include <iostream>
 
 namespace vtb {
 namespace {
@@ -187,6 +191,52 @@ TEST(Compare, TheFemReferenceIsTheContinuumAndFemMeshTheScenesOwn) {
   // P1 on this mesh locks (the test above): its run is far from the continuum's.
   EXPECT_GT(res.rows[0].error.displacement_max, 0.2);
   EXPECT_THROW(harness::run_compare(scene, {"fem-mesh"}, "fem-coarse"), InputError);
+}
+
+/// The strip above (10 x 2 cells), its load a step at t = 0: it creeps and rings, damped over a
+/// retardation time of 2 ms, with the scene's step `dt`.
+Scene ringing_strip(double dt) {
+  Scene s = strip(10, 2, "lloyd", 0.3);
+  s.duration = 0.1;
+  s.output_interval = 0.002;
+  s.material.retardation_time = 0.002;
+  s.solver.dt = dt;
+  return s;
+}
+
+TEST(Continuum, TheStudysReferenceHoldsItsTimeErrorWithinTheTolerance) {
+  // vtb study's FEM reference runs P2 at 4 dt, 2 dt and dt, estimates the order and its time
+  // error at dt from the runs' differences, and runs again at dt/2 or dt/4 where that is above
+  // 1 %. The claim checked against the truth: the kept run against P2 at an eighth of its step
+  // (whose own error is at most 1/8 of the kept one's, order >= 1) differs by at most the
+  // tolerance, and the estimate is that difference within a factor 2 (Richardson with the
+  // observed order is exact as dt -> 0; here 4 dt reaches 8x the retardation time, the creep's
+  // time scale). The strip's load is a step at t = 0: the transient's observed order is below
+  // the scheme's 2, which an estimate assuming 2 (or made on P1 on the mesh) missed 2.3-2.6x
+  // low on a plate of this kind. With a coarse step the reference halves it; with a fine one it keeps the scene's step.
+  constexpr double kTolerance = 0.01;
+  for (const double dt : {4e-3, 2.5e-4}) {
+    const Scene s = ringing_strip(dt);
+    const Model<2> model = build_model<2>(s, std::get<Mesh2>(load_mesh(s)));
+    Trajectory<2> kept, fine;
+    const harness::ReferenceStep step = harness::fem_reference_in_time<2>(s, model, 0, kTolerance, kept);
+    fem::FemOptions o = fem::options_from(s.solver);
+    o.degree = 2;
+    o.dt = step.dt / 8;
+    fem::simulate<2>(model, s.material, o, fine, true);
+    const double truth = harness::compare(kept, fine).displacement_max;
+    std::cout << "scene dt " << dt << ": reference dt " << step.dt << ", " << step.how << "; against dt/8 " << truth
+              << "\n";
+    EXPECT_GE(step.order, 1.0);
+    EXPECT_LE(step.order, 2.0);
+    EXPECT_LE(truth, kTolerance);
+    EXPECT_GT(step.error, truth / 2);
+    EXPECT_LT(step.error, 2 * truth);
+    if (dt > 1e-3)
+      EXPECT_LT(step.dt, dt) << "the coarse step is halved";
+    else
+      EXPECT_EQ(step.dt, dt) << "the fine step is kept";
+  }
 }
 
 } // namespace

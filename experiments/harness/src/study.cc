@@ -62,55 +62,90 @@ void mark_pareto(std::vector<StudyRow>& rows) {
 
 namespace {
 
-/// The transient reference's step: the largest of dt, dt / 2, dt / 4 (dt the scene's) whose time
-/// error is within `tolerance`, the bar the ladder held its space to (dt / 4 when none is). The
-/// error is estimated on P1 on the scene's mesh with the reference's own scheme (second order):
-/// the run at dt against the run at dt / 2 differ by 3/4 of the error at dt (Richardson), and a
-/// halving divides it by 4. P1 is cheap beside the P2 reference, and the time error is that of
-/// the slow modes (the creep over tau, the first vibrations), which P1 on the mesh carries as
-/// P2 does (stiffer where it locks: faster modes, a larger estimate). The error is the study's
-/// own measure (compare(): the largest relative L2 over all nodes), so a row's error and the
-/// reference's are on one scale. Returns the step and how it was chosen.
-template <int dim>
-std::pair<double, std::string> reference_step(const Scene& scene, const Model<dim>& model, double tolerance) {
-  fem::FemOptions p1 = fem::options_from(scene.solver);
-  p1.degree = 1;
-  p1.refinements = 0;
-  p1.static_solve = false;
-  p1.nonlinear = false;
-  Trajectory<dim> coarse, fine;
-  p1.dt = scene.solver.dt;
-  const RunReport a = fem::simulate<dim>(model, scene.material, p1, coarse, true);
-  p1.dt = scene.solver.dt / 2;
-  const RunReport b = fem::simulate<dim>(model, scene.material, p1, fine, true);
-  const double at_dt = a.stable && b.stable ? 4.0 / 3.0 * compare(coarse, fine).displacement_max : INFINITY;
-  const double allowed = tolerance;
-  int halvings = 0;
-  while (halvings < 2 && !(at_dt / std::pow(4.0, halvings) <= allowed)) ++halvings;
-  const double error = at_dt / std::pow(4.0, halvings);
-  std::ostringstream how;
-  how << std::setprecision(2) << "time error ~" << 100 * error << " % (P1 at dt and dt/2, second order; allowed "
-      << 100 * allowed << " %)";
-  return {scene.solver.dt / std::pow(2.0, halvings), how.str()};
-}
-
-/// A reference run's progress on `log`: a line at every tenth of the duration with the time it
-/// has taken and the estimate of what remains.
-std::function<void(double)> progress_printer(std::ostream* log) {
+/// A reference run's progress on `log` (`what` names the run): a line at every tenth of the duration with the time it
+/// has taken and the estimate of what remains (at the rate of the steps since the first, whose
+/// time holds the set-up).
+std::function<void(double)> progress_printer(std::ostream* log, const char* what) {
   if (!log) return {};
-  return [log, start = std::chrono::steady_clock::now(), next = 0.1](double done) mutable {
+  using clock = std::chrono::steady_clock;
+  return [log, what, start = clock::now(), first = clock::time_point(), first_done = 0.0,
+          next = 0.1](double done) mutable {
+    const auto now = clock::now();
+    if (first_done == 0) {
+      first = now;
+      first_done = done;
+    }
     if (done + 1e-12 < next) return;
-    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    *log << "  reference " << std::lround(100 * done) << " %: " << std::lround(s) << " s, ~"
-         << std::lround(s * (1 - done) / done) << " s to go\n"
+    const double s = std::chrono::duration<double>(now - start).count();
+    const double rate =
+        done > first_done ? std::chrono::duration<double>(now - first).count() / (done - first_done) : 0;
+    *log << "    " << what << " " << std::lround(100 * done) << " %: " << std::lround(s) << " s, ~"
+         << std::lround(rate * (1 - done)) << " s to go\n"
          << std::flush;
     while (next <= done + 1e-12) next += 0.1;
   };
 }
 
+} // namespace
+
+template <int dim>
+ReferenceStep fem_reference_in_time(const Scene& scene, const Problem<dim>& problem, int refinements, double tolerance,
+                                    Trajectory<dim>& out, std::ostream* log, bool distributed) {
+  fem::FemOptions f = fem::options_from(scene.solver);
+  f.degree = 2;
+  f.refinements = refinements;
+  f.static_solve = false;
+  f.nonlinear = false;
+  const auto run = [&](double dt, Trajectory<dim>& tr, const char* what) {
+    f.dt = dt;
+    f.progress = progress_printer(log, what);
+    if (log)
+      *log << "  " << what << ": " << std::lround(problem.duration / dt) << " steps at dt = " << dt << " s ...\n"
+           << std::flush;
+    tr = Trajectory<dim>();
+    const RunReport r = distributed ? fem::simulate_distributed<dim>(problem, scene.material, f, tr, true)
+                                    : fem::simulate<dim>(problem, scene.material, f, tr, true);
+    if (!r.stable) throw std::runtime_error("vtb study: the reference run failed: " + r.failure);
+  };
+  const double dt = scene.solver.dt;
+  Trajectory<dim> at4, at2;
+  run(4 * dt, at4, "reference at 4 dt (for the time error's estimate)");
+  run(2 * dt, at2, "reference at 2 dt (for the time error's estimate)");
+  run(dt, out, "reference at dt");
+  // Differences d(h) = u(2h) - u(h) ~ C (2^p - 1) h^p: their ratio is 2^p, and the error at dt
+  // is d(dt) / (2^p - 1). The order is clamped to [1, 2]: the scheme's own, or less where the
+  // loads switch on as steps (then the start is inconsistent and the transient first order).
+  const double d4 = compare(at4, at2).displacement_max, d2 = compare(at2, out).displacement_max;
+  const double p = d2 > 0 && d4 > 0 ? std::clamp(std::log2(d4 / d2), 1.0, 2.0) : 2.0;
+  ReferenceStep r;
+  r.dt = dt;
+  r.order = p;
+  r.error = d2 / (std::pow(2.0, p) - 1);
+  int halvings = 0;
+  while (halvings < 2 && !(r.error / std::pow(2.0, p * halvings) <= tolerance)) ++halvings;
+  std::ostringstream how;
+  how << std::setprecision(2) << "time error at dt ~" << 100 * r.error << " % (P2 at 4 dt, 2 dt and dt: order " << p;
+  if (halvings > 0) {
+    r.dt = dt / std::pow(2.0, halvings);
+    r.error /= std::pow(2.0, p * halvings);
+    how << "; at dt/" << (1 << halvings) << " ~" << 100 * r.error << " %";
+    run(r.dt, out, "reference at the smaller step");
+  }
+  how << "; allowed " << 100 * tolerance << " %)";
+  r.how = how.str();
+  return r;
+}
+
+template ReferenceStep fem_reference_in_time<2>(const Scene&, const Problem<2>&, int, double, Trajectory<2>&,
+                                                std::ostream*, bool);
+template ReferenceStep fem_reference_in_time<3>(const Scene&, const Problem<3>&, int, double, Trajectory<3>&,
+                                                std::ostream*, bool);
+
+namespace {
+
 /// The reference, converged at its own step: the continuum (P2 at the coarsest refinement whose
 /// static answer to the scene's final loads and drives is within 1 % of the next one's, by the
-/// ladder of vtb/fem/continuum.hh within its budget of dofs, at reference_step's step), or the
+/// ladder of vtb/fem/continuum.hh within its budget of dofs, converged in time by fem_reference_in_time), or the
 /// spring model's exact trajectory (CVODE at rtol 1e-10). Returns what it was; `log` is told the
 /// reference's level, dofs and steps before it runs, and its progress while it runs.
 /// With `distributed` (under mpirun, every rank calling) the FEM runs over all the ranks
@@ -118,7 +153,6 @@ std::function<void(double)> progress_printer(std::ostream* log) {
 template <int dim>
 std::string reference_run(const Scene& scene, const Model<dim>& model, const std::string& reference,
                           Trajectory<dim>& ref, std::ostream* log, bool distributed = false) {
-  RunReport rr;
   std::string note;
   if (reference == solvers::kFem) {
     fem::FemOptions f = fem::options_from(scene.solver);
@@ -126,29 +160,22 @@ std::string reference_run(const Scene& scene, const Model<dim>& model, const std
     fem::ContinuumOptions c;
     c.drives_displaced = true;
     const auto ladder = fem::continuum_static<dim>(model, scene.material, c);
-    f.refinements = ladder ? ladder->sufficient_refinements : 0;
-    const auto [dt, dt_how] = reference_step(scene, model, c.tolerance);
-    f.dt = dt;
-    f.static_solve = false;
-    f.progress = progress_printer(log);
-    const long steps = std::lround(model.duration / f.dt);
-    const std::string level = "P2 refined " + std::to_string(f.refinements) + "x";
+    const int refinements = ladder ? ladder->sufficient_refinements : 0;
+    const std::string level = "P2 refined " + std::to_string(refinements) + "x";
     const std::string why =
         ladder ? "static ladder: " + ladder->how : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
-    if (log)
-      *log << "reference: fem, " << level << " (" << why << "), " << steps << " steps at dt = " << f.dt << " s ("
-           << dt_how << ") ...\n";
-    rr = distributed ? fem::simulate_distributed<dim>(model, scene.material, f, ref, true)
-                     : fem::simulate<dim>(model, scene.material, f, ref, true);
-    note = "fem, " + level + " (" + why + "), " + f.scheme + ", dt = " + std::to_string(f.dt) + " s (" + dt_how + ")" +
-           (distributed ? ", over " + std::to_string(world().size) + " ranks" : "");
+    if (log) *log << "reference: fem, " << level << " (" << why << ")\n" << std::flush;
+    const ReferenceStep step =
+        fem_reference_in_time<dim>(scene, model, refinements, c.tolerance, ref, log, distributed);
+    note = "fem, " + level + " (" + why + "), generalized-alpha, dt = " + std::to_string(step.dt) + " s (" + step.how +
+           ")" + (distributed ? ", over " + std::to_string(world().size) + " ranks" : "");
   } else if (reference == solvers::kCvode) {
-    rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
+    const RunReport rr = simulate_cvode(model, CvodeOptions{1e-10, 1e-14}, ref, true);
+    if (!rr.stable) throw std::runtime_error("vtb study: the reference run failed: " + rr.failure);
     note = "cvode, rtol 1e-10, atol 1e-14";
   } else {
     throw InputError("vtb study: --reference must be fem or cvode, not \"" + reference + "\"");
   }
-  if (!rr.stable) throw std::runtime_error("vtb study: the reference run failed: " + rr.failure);
   return note;
 }
 
@@ -535,6 +562,7 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
       if (last != stage) *log << "springs: " << stage << (std::string(stage) == "done" ? "\n" : " ...\n");
       last = stage;
       if (std::string(stage) == "fit") *log << "  step " << step << " (at most " << steps << ")\n";
+      *log << std::flush;
     };
   return with_model(
       scene,

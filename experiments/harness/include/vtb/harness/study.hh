@@ -12,6 +12,8 @@
 /// parts' study.json files. Errors are the serial run's to the bit; timing columns are not.
 
 #include "vtb/harness/ranks.hh"
+#include "vtb/problem/problem.hh"
+#include "vtb/problem/run_report.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/problem/solver_names.hh"
 
@@ -23,10 +25,12 @@
 namespace vtb::harness {
 
 struct StudyOptions {
-  std::vector<std::string> solvers;      ///< empty: default_study_solvers(the scene's dimension)
-  Shard shard;                           ///< --shard K/N: only the K-th of N parts
-  std::string reference = solvers::kFem; ///< fem: P2 with one refinement at dt / 4; cvode: rtol 1e-10
-  bool quick = false;                    ///< shorter ladders
+  std::vector<std::string> solvers; ///< empty: default_study_solvers(the scene's dimension)
+  Shard shard;                      ///< --shard K/N: only the K-th of N parts
+  /// fem: the continuum (P2 at the static ladder's level, at fem_reference_step's step);
+  /// cvode: the spring model's exact trajectory (rtol 1e-10)
+  std::string reference = solvers::kFem;
+  bool quick = false; ///< shorter ladders
 };
 
 struct StudyRow {
@@ -76,6 +80,27 @@ void mark_pareto(std::vector<StudyRow>& rows);
 /// Runs the study (this rank's or this shard's share of it). Under MPI every rank calls it and
 /// rank 0 gets the whole result; the others get their own rows only and write nothing.
 StudyResult run_study(const Scene& scene, const StudyOptions& options, std::ostream* progress = nullptr);
+
+/// The FEM reference converged in time: P2 on the scene's mesh refined `refinements` times (the
+/// static ladder's level), run at 4 dt, 2 dt and dt (dt the scene's). The differences of
+/// successive runs, on compare()'s measure (the largest relative L2 over all nodes, the scale of
+/// a study row's error), fall as h^p: their ratio gives the observed order p (clamped to [1, 2]:
+/// generalized-alpha is second order, first order in a transient started by a step load, whose
+/// start is inconsistent) and the error at dt, d(dt) / (2^p - 1). Within `tolerance` the run at
+/// dt is `out`; else it runs again at dt / 2 or dt / 4, the first whose error (2^-p per halving)
+/// is within, dt / 4 at most. The estimate is the reference's own: P1 on the mesh as a proxy,
+/// assuming order 2, missed it 2.3x low on a strip two cells thick under a step load. Cost: 1.75
+/// runs at dt where dt suffices. `log` gets a line per run and its progress; `distributed` runs
+/// each over the MPI ranks.
+struct ReferenceStep {
+  double dt = 0;    ///< the kept run's step
+  double error = 0; ///< its estimated time error (relative)
+  double order = 2; ///< the observed order of the time error, in [1, 2]
+  std::string how;  ///< e.g. "time error at dt ~0.5 % (P2 at 4 dt, 2 dt and dt: order 1.3; allowed 1 %)"
+};
+template <int dim>
+ReferenceStep fem_reference_in_time(const Scene& scene, const Problem<dim>& problem, int refinements, double tolerance,
+                                    Trajectory<dim>& out, std::ostream* log = nullptr, bool distributed = false);
 
 /// Joins the parts of a sharded study (each part's study.json) into the whole: InputError
 /// naming the folder when the parts are of different studies, or a part is missing or twice.
