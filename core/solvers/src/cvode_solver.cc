@@ -158,6 +158,7 @@ public:
     const double* k = m_K.valuePtr();
     const double* c = m_D.valuePtr();
     double* pv = m_P.valuePtr();
+    m_gamma = gamma;
     for (Eigen::Index e = 0; e < m_P.nonZeros(); ++e) pv[e] = gamma * (c[e] + gamma * k[e]);
     for (std::size_t d = 0; d < m_diag.size(); ++d) pv[m_diag[d]] += m_mass[static_cast<Eigen::Index>(d)];
     if (!m_analysed) {
@@ -168,8 +169,10 @@ public:
     return m_llt.info() == Eigen::Success;
   }
 
-  /// z = N^-1 r for the gamma of the last setup (r and z: 2n doubles, [u part; v part]).
-  void solve(const double* r, double* z, double gamma) {
+  /// z = N^-1 r for the gamma of the last setup, the matrix its factor holds (CVODE may call with
+  /// a gamma that has moved since; the factor's inverse is still the preconditioner it asked for).
+  void solve(const double* r, double* z) {
+    const double gamma = m_gamma;
     const Eigen::Index n = m_b.size();
     const Eigen::Map<const Eigen::VectorXd> r1(r, n), r2(r + n, n);
     m_b.noalias() = m_mass.cwiseProduct(r2);
@@ -193,6 +196,7 @@ private:
   Eigen::VectorXd m_mass, m_b, m_x;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> m_llt;
   bool m_analysed = false;
+  double m_gamma = 0; ///< of the factor
 };
 
 /// The ODE of the free nodes: state y = [u_free (dim nf); v_free (dim nf)].
@@ -316,8 +320,8 @@ public:
     *jcur = jok ? 0 : 1;
     return m_newton->setup(m_u, !jok, gamma) ? 0 : 1; // > 0: recoverable (a smaller step)
   }
-  int precondition_solve(const double* r, double* z, double gamma) {
-    m_newton->solve(r, z, gamma);
+  int precondition_solve(const double* r, double* z) {
+    m_newton->solve(r, z);
     return 0;
   }
 
@@ -352,8 +356,8 @@ int psetup_fn(realtype t, N_Vector y, N_Vector, booleantype jok, booleantype* jc
 }
 
 template <int dim>
-int psolve_fn(realtype, N_Vector, N_Vector, N_Vector r, N_Vector z, realtype gamma, realtype, int, void* user) {
-  return static_cast<SpringOde<dim>*>(user)->precondition_solve(N_VGetArrayPointer(r), N_VGetArrayPointer(z), gamma);
+int psolve_fn(realtype, N_Vector, N_Vector, N_Vector r, N_Vector z, realtype, realtype, int, void* user) {
+  return static_cast<SpringOde<dim>*>(user)->precondition_solve(N_VGetArrayPointer(r), N_VGetArrayPointer(z));
 }
 
 /// Whether Newton's systems go to GMRES (else KLU): CvodeOptions::linear_solver.
