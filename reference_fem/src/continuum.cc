@@ -1,52 +1,19 @@
 // The continuum's static answer by a ladder of uniform refinements of P2 (continuum.hh).
 #include "vtb/fem/continuum.hh"
 
+#include "continuum_counts.hh"
 #include "kelvin_voigt_problem.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 
 #include <Eigen/SparseCholesky>
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <cstdio>
-#include <set>
 
 namespace vtb::fem {
 
 namespace {
-
-/// Vertices, edges, faces and cells of a simplex mesh, and the counts after one uniform
-/// refinement (a triangle into 4; a tetrahedron into 8, one new interior edge each).
-struct Counts {
-  double v = 0, e = 0, f = 0, c = 0;
-  Counts refined(int dim) const {
-    if (dim == 2) return {v + e, 2 * e + 3 * c, 4 * c, 4 * c};
-    return {v + e, 2 * e + 3 * f + c, 4 * f + 8 * c, 8 * c};
-  }
-  double p2_dofs(int dim) const { return dim * (v + e); }
-};
-
-template <int dim> Counts counts(const Mesh<dim>& mesh) {
-  std::set<std::array<int, 2>> edges;
-  std::set<std::array<int, 3>> faces;
-  for (const auto& cell : mesh.cells) {
-    for (int a = 0; a <= dim; ++a)
-      for (int b = a + 1; b <= dim; ++b) edges.insert({std::min(cell[a], cell[b]), std::max(cell[a], cell[b])});
-    if constexpr (dim == 3)
-      for (int skip = 0; skip < 4; ++skip) {
-        std::array<int, 3> f{};
-        int k = 0;
-        for (int a = 0; a < 4; ++a)
-          if (a != skip) f[static_cast<std::size_t>(k++)] = cell[a];
-        std::sort(f.begin(), f.end());
-        faces.insert(f);
-      }
-  }
-  return {static_cast<double>(mesh.num_nodes()), static_cast<double>(edges.size()),
-          static_cast<double>(dim == 2 ? mesh.num_cells() : static_cast<int>(faces.size())),
-          static_cast<double>(mesh.num_cells())};
-}
 
 std::string thousands(long n) {
   std::string s = std::to_string(n);
@@ -146,14 +113,6 @@ FemOptions static_p2(int refinements) {
 
 } // namespace
 
-template <int dim> long continuum_first_dofs(const Mesh<dim>& mesh) {
-  return static_cast<long>(counts(mesh).p2_dofs(dim));
-}
-
-long continuum_budget(int dim, const ContinuumOptions& options) {
-  return options.max_dofs > 0 ? options.max_dofs : (dim == 2 ? kContinuumDofs2D : kContinuumDofs3D);
-}
-
 template <int dim>
 std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, const MaterialDesc& material,
                                                   const Eigen::MatrixXd& F, const ContinuumOptions& options) {
@@ -170,20 +129,6 @@ std::optional<ContinuumAnswers> continuum_answers(const Problem<dim>& problem, c
   });
   if (!found) return std::nullopt;
   return ContinuumAnswers{std::move(found->u), found->refinements, found->change, found->converged, found->how};
-}
-
-template <int dim> Problem<dim> static_problem(const Problem<dim>& problem, bool drives_displaced) {
-  Problem<dim> p = problem;
-  for (auto& load : p.loads) load.start = load.ramp = 0;
-  for (auto& s : p.supports)
-    if (drives_displaced) {
-      s.start = s.ramp = 0;
-    } else {
-      s.driven = false;
-      s.displacement.setZero();
-    }
-  p.duration = p.output_interval = 1.0;
-  return p;
 }
 
 template <int dim>
@@ -215,10 +160,6 @@ template std::optional<ContinuumAnswers> continuum_answers<2>(const Problem<2>&,
                                                               const Eigen::MatrixXd&, const ContinuumOptions&);
 template std::optional<ContinuumAnswers> continuum_answers<3>(const Problem<3>&, const MaterialDesc&,
                                                               const Eigen::MatrixXd&, const ContinuumOptions&);
-template long continuum_first_dofs<2>(const Mesh<2>&);
-template long continuum_first_dofs<3>(const Mesh<3>&);
-template Problem<2> static_problem<2>(const Problem<2>&, bool);
-template Problem<3> static_problem<3>(const Problem<3>&, bool);
 template std::optional<ContinuumAnswer<2>> continuum_static<2>(const Problem<2>&, const MaterialDesc&,
                                                                const ContinuumOptions&);
 template std::optional<ContinuumAnswer<3>> continuum_static<3>(const Problem<3>&, const MaterialDesc&,
