@@ -15,6 +15,7 @@
 #include "vtb/solvers/implicit_euler.hh"
 #include "vtb/solvers/warped_filter.hh"
 #include "vtb/springs/force_jacobian.hh"
+#include "vtb/springs/load_check.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
@@ -134,6 +135,33 @@ template <int dim> void check_force_jacobians(const Model<dim>& m) {
   EXPECT_LT((Dv - Dfd).cwiseAbs().maxCoeff(), kTol * Dv.cwiseAbs().maxCoeff());
   EXPECT_GT(D.cwiseAbs().maxCoeff(), 0.0);
   EXPECT_LT((K - K.transpose()).cwiseAbs().maxCoeff(), 1e-12 * K.cwiseAbs().maxCoeff()) << "K is symmetric";
+}
+
+/// free_stiffness (the load check's matrix, assembled on free_block_pattern without triplets) is
+/// -K of the reference assembly on the free dofs, entry for entry: the same blocks summed in the
+/// same order, so equal to round-off of the order of the entries (1e-14 relative).
+template <int dim> void check_free_stiffness(const Model<dim>& m) {
+  ASSERT_LT(m.free_nodes.size(), static_cast<std::size_t>(m.num_nodes())) << "a case with held nodes";
+  const State<dim> s = random_state(m, 0.0, 11);
+  const int nf = static_cast<int>(m.free_nodes.size());
+  for (bool clamp : {false, true}) {
+    const Eigen::MatrixXd want(free_dof_block(Eigen::SparseMatrix<double>(-force_jacobians(m.net, s.u, clamp).K), m));
+    const Eigen::SparseMatrix<double> got = free_stiffness(m.net, s.u, m.free_index, nf, clamp);
+    EXPECT_LT((Eigen::MatrixXd(got) - want).cwiseAbs().maxCoeff(), 1e-14 * want.cwiseAbs().maxCoeff());
+    // The pattern is the node blocks and the blocks of springs between free nodes, no more.
+    long blocks = nf;
+    for (const auto& e : m.net.edge)
+      blocks +=
+          2 * (m.free_index[static_cast<std::size_t>(e[0])] >= 0 && m.free_index[static_cast<std::size_t>(e[1])] >= 0);
+    EXPECT_EQ(got.nonZeros(), blocks * dim * dim);
+  }
+}
+
+TEST(ForceJacobians, FreeStiffnessIsTheReferenceOnTheFreeDofs2D) {
+  check_free_stiffness(model_of<2>(kPlate2));
+}
+TEST(ForceJacobians, FreeStiffnessIsTheReferenceOnTheFreeDofs3D) {
+  check_free_stiffness(model_of<3>(kBox3));
 }
 
 TEST(ForceJacobians, MatchForceDifferences2D) {

@@ -88,23 +88,7 @@ public:
   explicit ReducedNewton(const Model<dim>& model) : m_model(model) {
     const auto& net = model.net;
     const int nf = static_cast<int>(model.free_nodes.size()), n = dim * nf;
-    std::vector<Eigen::Triplet<double>> trip;
-    const auto block = [&](int a, int b) {
-      for (int p = 0; p < dim; ++p)
-        for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, 0.0);
-    };
-    for (int a = 0; a < nf; ++a) block(a, a);
-    for (int sp = 0; sp < net.num_springs(); ++sp) {
-      const int a = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(sp)][0])];
-      const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(sp)][1])];
-      if (a >= 0 && b >= 0) {
-        block(a, b);
-        block(b, a);
-      }
-    }
-    m_K.resize(n, n);
-    m_K.setFromTriplets(trip.begin(), trip.end());
-    m_K.makeCompressed();
+    m_K = free_block_pattern(net, model.free_index, nf);
     m_D = m_K;
     m_P = m_K;
     // Offsets of every spring's four blocks, in for_each_jacobian_block's order (ii, jj, ij, ji).

@@ -8,26 +8,11 @@
 namespace vtb {
 namespace {
 
-/// The pattern of the free-dof system: full dim x dim blocks for each node and each spring
-/// between free nodes.
+/// The free-dof system's pattern, values 1 (the first factorisation only sizes the factor).
 template <int dim> Eigen::SparseMatrix<double> block_pattern(const Model<dim>& model) {
-  const auto& net = model.net;
-  const int n = static_cast<int>(model.free_nodes.size()) * dim;
-  std::vector<Eigen::Triplet<double>> trip;
-  auto block = [&](int a, int b) {
-    for (int p = 0; p < dim; ++p)
-      for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, 1.0);
-  };
-  for (int a = 0; a < static_cast<int>(model.free_nodes.size()); ++a) block(a, a);
-  for (int s = 0; s < net.num_springs(); ++s) {
-    const int a = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][0])];
-    const int b = model.free_index[static_cast<std::size_t>(net.edge[static_cast<std::size_t>(s)][1])];
-    if (a < 0 || b < 0) continue;
-    block(a, b);
-    block(b, a);
-  }
-  Eigen::SparseMatrix<double> A(n, n);
-  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SparseMatrix<double> A =
+      free_block_pattern(model.net, model.free_index, static_cast<int>(model.free_nodes.size()));
+  A.coeffs().setOnes();
   return A;
 }
 

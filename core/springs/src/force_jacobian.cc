@@ -1,5 +1,7 @@
 #include "vtb/springs/force_jacobian.hh"
 
+#include <algorithm>
+#include <array>
 #include <vector>
 
 namespace vtb {
@@ -28,6 +30,76 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
   return J;
 }
 
+template <int dim>
+Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, const std::vector<int>& free_index,
+                                               int free_count) {
+  // Each free node's free neighbours, itself included, in one array cut by start[] (counted,
+  // then filled), sorted and made unique per node (parallel springs share a block).
+  const auto nf = static_cast<std::size_t>(free_count);
+  const auto ends = [&](int s) {
+    const auto& e = net.edge[static_cast<std::size_t>(s)];
+    return std::array<int, 2>{free_index[static_cast<std::size_t>(e[0])], free_index[static_cast<std::size_t>(e[1])]};
+  };
+  std::vector<int> start(nf + 1, 0);
+  for (std::size_t a = 0; a < nf; ++a) start[a + 1] = 1;
+  for (int s = 0; s < net.num_springs(); ++s)
+    if (const auto [a, b] = ends(s); a >= 0 && b >= 0) {
+      ++start[static_cast<std::size_t>(a) + 1];
+      ++start[static_cast<std::size_t>(b) + 1];
+    }
+  for (std::size_t a = 0; a < nf; ++a) start[a + 1] += start[a];
+  std::vector<int> near(static_cast<std::size_t>(start[nf])), fill(start.begin(), start.end() - 1);
+  for (std::size_t a = 0; a < nf; ++a) near[static_cast<std::size_t>(fill[a]++)] = static_cast<int>(a);
+  for (int s = 0; s < net.num_springs(); ++s)
+    if (const auto [a, b] = ends(s); a >= 0 && b >= 0) {
+      near[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b;
+      near[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = a;
+    }
+  Eigen::VectorXi per_column(dim * free_count);
+  for (std::size_t a = 0; a < nf; ++a) {
+    const auto first = near.begin() + start[a], last = near.begin() + start[a + 1];
+    std::sort(first, last);
+    fill[a] = static_cast<int>(std::unique(first, last) - first); // now: the node's count of blocks
+    per_column.template segment<dim>(dim * static_cast<Eigen::Index>(a)).setConstant(dim * fill[a]);
+  }
+  Eigen::SparseMatrix<double> A(dim * free_count, dim * free_count);
+  A.reserve(per_column);
+  for (std::size_t a = 0; a < nf; ++a) // rows in increasing order within each column
+    for (int q = 0; q < dim; ++q)
+      for (int k = 0; k < fill[a]; ++k)
+        for (int p = 0; p < dim; ++p)
+          A.insert(dim * near[static_cast<std::size_t>(start[a] + k)] + p, dim * static_cast<int>(a) + q) = 0.0;
+  A.makeCompressed();
+  return A;
+}
+
+template <int dim>
+Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
+                                           const std::vector<int>& free_index, int free_count, bool clamp_compression) {
+  Eigen::SparseMatrix<double> A = free_block_pattern(net, free_index, free_count);
+  const int* outer = A.outerIndexPtr();
+  const int* inner = A.innerIndexPtr();
+  double* value = A.valuePtr();
+  for_each_jacobian_block(net, u, clamp_compression,
+                          [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
+                            const int a = free_index[static_cast<std::size_t>(i)];
+                            const int b = free_index[static_cast<std::size_t>(j)];
+                            if (a < 0 || b < 0) return;
+                            for (int q = 0; q < dim; ++q) {
+                              const int col = dim * b + q;
+                              const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
+                              for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= sign * K(p, q);
+                            }
+                          });
+  return A;
+}
+
+template Eigen::SparseMatrix<double> free_block_pattern<2>(const SpringNetwork<2>&, const std::vector<int>&, int);
+template Eigen::SparseMatrix<double> free_block_pattern<3>(const SpringNetwork<3>&, const std::vector<int>&, int);
+template Eigen::SparseMatrix<double> free_stiffness<2>(const SpringNetwork<2>&, const Nodal<2>&,
+                                                       const std::vector<int>&, int, bool);
+template Eigen::SparseMatrix<double> free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&,
+                                                       const std::vector<int>&, int, bool);
 template ForceJacobians<2> force_jacobians<2>(const SpringNetwork<2>&, const Nodal<2>&, bool);
 template ForceJacobians<3> force_jacobians<3>(const SpringNetwork<3>&, const Nodal<3>&, bool);
 

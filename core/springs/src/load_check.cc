@@ -58,7 +58,7 @@ LoadCheck static_load_check(const Problem<dim>& problem, const SpringNetwork<dim
   const SpMat K_fem = free_dof_block(
       fem_stiffness_matrix(problem.mesh, material.young_modulus, material.poisson_ratio, material.thickness), problem);
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, problem.num_nodes());
-  const SpMat K_springs = free_dof_block(SpMat(-force_jacobians(net, rest, false).K), problem);
+  const SpMat K_springs = free_stiffness(net, rest, problem.free_index, nf, false);
   Eigen::VectorXd u_fem, u_springs;
   if (!solve(K_fem, f, u_fem) || !solve(K_springs, f, u_springs) || u_fem.squaredNorm() == 0) return check;
   std::optional<YardstickAnswer<dim>> continuum;
