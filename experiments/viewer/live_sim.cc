@@ -162,7 +162,7 @@ template <int dim> void LiveSim<dim>::check(bool strain_now) {
   if (!finite || !(strain <= kRunawayStrain)) {
     std::ostringstream os;
     os << m_controls.solver
-       << (m_controls.solver == solvers::kFiltered ? " (" + chosen_filter(*m_model, m_controls.filter) + ")" : "")
+       << (m_running_filter.empty() ? "" : " (" + m_running_filter + ")") // what ran, a budget's pick included
        << " went unstable at t = " << m_state.t << " s (dt = " << m_controls.dt
        << " s): " << (finite ? "runaway strain" : "non-finite state");
     m_failure = os.str();
