@@ -117,6 +117,38 @@ TEST(Continuum, ARunsLoadCheckIsAgainstTheContinuumAndP1OnATwoCellStripLocks) {
   EXPECT_TRUE(std::isnan(p1_checked.net.mesh_fem_load_error));
 }
 
+TEST(Continuum, AReferenceTakesTheLoadChecksLadderWhereItIsTheSameSolve) {
+  // The springs' load check solves the static ladder with the drives held; a study's reference
+  // solves it with them displaced, compare's with them held. On a scene that drives nothing the
+  // study's is the load check's solve, so it is kept rather than solved again: the same answer
+  // to the bit. Another material or a driven support is another problem, solved afresh.
+  const Scene scene = strip(20, 2, "lloyd");
+  harness::KeptLadders kept;
+  const Yardstick yardstick = harness::continuum_yardstick(&kept);
+  const Model<2> model = build_model<2>(scene, std::get<Mesh<2>>(load_mesh(scene)), {}, true, &yardstick);
+  ASSERT_TRUE(kept.plane) << "the load check solved the ladder";
+  fem::ContinuumOptions displaced;
+  displaced.drives_displaced = true;
+  bool reused = false;
+  const auto kept_answer = harness::static_ladder<2>(model, scene.material, displaced, &kept, &reused);
+  EXPECT_TRUE(reused);
+  const auto fresh = fem::continuum_static<2>(model, scene.material, displaced);
+  ASSERT_TRUE(kept_answer && fresh);
+  EXPECT_EQ((kept_answer->u - fresh->u).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(kept_answer->sufficient_refinements, fresh->sufficient_refinements);
+  MaterialDesc stiffer = scene.material;
+  stiffer.young_modulus *= 2;
+  EXPECT_TRUE(harness::static_ladder<2>(model, stiffer, displaced, &kept, &reused));
+  EXPECT_FALSE(reused) << "another material";
+  Model<2> driven = model;
+  driven.supports.front().driven = true;
+  driven.supports.front().displacement = Vec<2>(0.0, -1e-3);
+  EXPECT_TRUE(harness::static_ladder<2>(driven, scene.material, displaced, &kept, &reused));
+  EXPECT_FALSE(reused) << "a displaced drive";
+  harness::static_ladder<2>(driven, scene.material, fem::ContinuumOptions{}, &kept, &reused);
+  EXPECT_TRUE(reused) << "drives held, as the load check holds them";
+}
+
 /// The load check's two numbers for the default springs ("auto": fitted) of a scene, with the
 /// fit trained on the continuum (`continuum_target`) or on P1 on the mesh (the check alone).
 template <int dim> LoadCheck default_springs(const Scene& scene, bool continuum_target) {

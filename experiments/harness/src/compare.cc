@@ -22,7 +22,8 @@ namespace {
 /// coarsest refinement the static ladder found within 1 % of the next, continuum.hh), `fem-mesh`
 /// the scene's own FEM. `note` says which.
 template <int dim>
-Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& name, std::string& note) {
+Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& name, std::string& note,
+                KeptLadders* kept) {
   Scene s = scene;
   if (name != solvers::kFem) {
     note = "the scene's FEM: P" + std::to_string(s.solver.degree) + ", " + std::to_string(s.solver.refinements) +
@@ -30,7 +31,7 @@ Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& 
     return s;
   }
   s.solver.degree = 2;
-  const auto ladder = fem::continuum_static<dim>(model, scene.material);
+  const auto ladder = static_ladder<dim>(model, scene.material, {}, kept); // the load check's
   s.solver.refinements = ladder ? ladder->sufficient_refinements : 0;
   note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) +
                       "x (static ladder: " + ladder->how + ")"
@@ -40,7 +41,8 @@ Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& 
 
 template <int dim>
 CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const std::vector<std::string>& solvers,
-                           const std::string& reference, double dt, std::ostream* progress, const KeepRuns& keep) {
+                           const std::string& reference, double dt, std::ostream* progress, const KeepRuns& keep,
+                           KeptLadders* kept) {
   CompareResult res;
   res.scene = scene.name;
   res.reference = reference;
@@ -56,7 +58,7 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
     CompareRow row;
     row.solver = name;
     if (name == solvers::kFem || name == solvers::kFemMesh) {
-      const Scene fs = fem_scene(scene, model, name, name == reference ? res.reference_note : row.note);
+      const Scene fs = fem_scene(scene, model, name, name == reference ? res.reference_note : row.note, kept);
       row.report = run_solver(fs, model, solvers::kFem, dt, runs[name]);
       row.report.solver = name;
     } else {
@@ -112,12 +114,13 @@ CompareResult run_compare(const Scene& scene, const std::vector<std::string>& so
     throw InputError("--reference must be fem, fem-mesh or cvode, not " + reference);
   for (const auto& s : solvers)
     if (s != solvers::kFemMesh) solvers::find(s, "--solvers"); // an unknown name: InputError with the nearest one
-  const Yardstick yardstick = continuum_yardstick();           // the default springs, as vtb run builds them
+  KeptLadders kept;                                            // the load check's static ladder
+  const Yardstick yardstick = continuum_yardstick(&kept);      // the default springs, as vtb run builds them
   return with_model(
       scene,
       [&](const auto& model) {
         constexpr int dim = std::decay_t<decltype(model)>::dimension;
-        return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep);
+        return compare_impl<dim>(scene, model, solvers, reference, dt, progress, keep, &kept);
       },
       {}, &yardstick);
 }

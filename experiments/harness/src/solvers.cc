@@ -38,9 +38,16 @@ RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::str
 }
 
 namespace {
-template <int dim> YardstickSolve<dim> continuum_solve() {
-  return [](const Problem<dim>& problem, const MaterialDesc& material) -> std::optional<YardstickAnswer<dim>> {
+template <int dim> YardstickSolve<dim> continuum_solve(KeptLadders* keep) {
+  return [keep](const Problem<dim>& problem, const MaterialDesc& material) -> std::optional<YardstickAnswer<dim>> {
     auto answer = fem::continuum_static<dim>(problem, material);
+    if (keep) {
+      keep->get<dim>() = answer;
+      keep->nodes = problem.num_nodes();
+      keep->young_modulus = material.young_modulus;
+      keep->poisson_ratio = material.poisson_ratio;
+      keep->thickness = material.thickness;
+    }
     if (!answer) return std::nullopt;
     return YardstickAnswer<dim>{std::move(answer->u), answer->how};
   };
@@ -70,9 +77,31 @@ template <int dim> FitTargetFor<dim> continuum_target() {
 }
 } // namespace
 
-Yardstick continuum_yardstick() {
-  return {continuum_solve<2>(), continuum_solve<3>(), continuum_target<2>(), continuum_target<3>()};
+Yardstick continuum_yardstick(KeptLadders* keep) {
+  return {continuum_solve<2>(keep), continuum_solve<3>(keep), continuum_target<2>(), continuum_target<3>()};
 }
+
+template <int dim>
+std::optional<fem::ContinuumAnswer<dim>> static_ladder(const Problem<dim>& problem, const MaterialDesc& material,
+                                                       const fem::ContinuumOptions& options, KeptLadders* kept,
+                                                       bool* reused) {
+  const fem::ContinuumOptions plain;
+  const bool drives =
+      std::any_of(problem.supports.begin(), problem.supports.end(), [](const Support<dim>& s) { return s.driven; });
+  const bool same = kept && kept->get<dim>() && kept->nodes == problem.num_nodes() &&
+                    kept->young_modulus == material.young_modulus && kept->poisson_ratio == material.poisson_ratio &&
+                    kept->thickness == material.thickness && options.tolerance == plain.tolerance &&
+                    options.max_dofs == plain.max_dofs && options.max_refinements == plain.max_refinements &&
+                    (!options.drives_displaced || !drives);
+  if (reused) *reused = same;
+  if (same) return kept->get<dim>();
+  return fem::continuum_static<dim>(problem, material, options);
+}
+
+template std::optional<fem::ContinuumAnswer<2>> static_ladder<2>(const Problem<2>&, const MaterialDesc&,
+                                                                 const fem::ContinuumOptions&, KeptLadders*, bool*);
+template std::optional<fem::ContinuumAnswer<3>> static_ladder<3>(const Problem<3>&, const MaterialDesc&,
+                                                                 const fem::ContinuumOptions&, KeptLadders*, bool*);
 
 Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;

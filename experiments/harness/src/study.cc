@@ -152,18 +152,20 @@ namespace {
 /// (deal.II's distributed path), each ending with the whole trajectory.
 template <int dim>
 std::string reference_run(const Scene& scene, const Model<dim>& model, const std::string& reference,
-                          Trajectory<dim>& ref, std::ostream* log, bool distributed = false) {
+                          Trajectory<dim>& ref, std::ostream* log, bool distributed, KeptLadders* kept) {
   std::string note;
   if (reference == solvers::kFem) {
     fem::FemOptions f = fem::options_from(scene.solver);
     f.degree = 2;
     fem::ContinuumOptions c;
     c.drives_displaced = true;
-    const auto ladder = fem::continuum_static<dim>(model, scene.material, c);
+    bool reused = false;
+    const auto ladder = static_ladder<dim>(model, scene.material, c, kept, &reused);
     const int refinements = ladder ? ladder->sufficient_refinements : 0;
     const std::string level = "P2 refined " + std::to_string(refinements) + "x";
     const std::string why =
-        ladder ? "static ladder: " + ladder->how : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
+        ladder ? std::string(reused ? "static ladder, the springs' load check's: " : "static ladder: ") + ladder->how
+               : "P2 on the mesh is above the ladder's budget of dofs: run unchecked";
     if (log) *log << "reference: fem, " << level << " (" << why << ")\n" << std::flush;
     const ReferenceStep step =
         fem_reference_in_time<dim>(scene, model, refinements, c.tolerance, ref, log, distributed);
@@ -344,7 +346,8 @@ template <int dim> struct Finished {
 };
 
 template <int dim>
-StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyOptions& o, std::ostream* log) {
+StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyOptions& o, std::ostream* log,
+                       KeptLadders* kept) {
   using clock = std::chrono::steady_clock;
   const Ranks w = world();
   const bool spread = w.size > 1 && !o.shard.active();
@@ -380,7 +383,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
   std::optional<Broadcast> sent;
   if (spread && !distributed_ref) sent.emplace();
   if (w.root() || !spread || distributed_ref) {
-    res.reference_note = reference_run(scene, model, o.reference, ref, log, distributed_ref);
+    res.reference_note = reference_run(scene, model, o.reference, ref, log, distributed_ref, kept);
     have_ref = true;
     if (sent) sent->send(pack(ref));
     if (log) *log << "reference: " << res.reference_note << "\n";
@@ -554,7 +557,8 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
     scene.duration = 1.0;
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
-  const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
+  KeptLadders kept;                                       // the load check's static ladder
+  const Yardstick yardstick = continuum_yardstick(&kept); // the default springs, as vtb run builds them
   // A fit of seconds to minutes (3D) comes first: the log says how it advances.
   FitProgress progress;
   if (log)
@@ -568,7 +572,7 @@ StudyResult run_study(const Scene& scene_in, const StudyOptions& o, std::ostream
       scene,
       [&](const auto& model) {
         constexpr int dim = std::decay_t<decltype(model)>::dimension;
-        return study_impl<dim>(scene, model, o, log);
+        return study_impl<dim>(scene, model, o, log, &kept);
       },
       progress, &yardstick);
 }

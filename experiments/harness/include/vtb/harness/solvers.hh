@@ -5,6 +5,7 @@
 /// `vtb run` as a call (the CLI and the Python module both go through `run`, so their numbers
 /// are one run's).
 
+#include "vtb/fem/continuum.hh"
 #include "vtb/problem/output.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/solvers/simulation.hh"
@@ -22,9 +23,35 @@ template <int dim>
 RunReport run_solver(const Scene& scene, const Model<dim>& model, const std::string& solver, double dt,
                      Trajectory<dim>& out);
 
+/// The static ladders a yardstick solved for the springs' load check, kept for a reference that
+/// needs the same solve again (`vtb compare --reference fem`'s level always; `vtb study`'s where
+/// the scene drives nothing, so that holding the drives or displacing them is the same problem).
+/// What they were solved for is kept with them.
+struct KeptLadders {
+  std::optional<fem::ContinuumAnswer<2>> plane;
+  std::optional<fem::ContinuumAnswer<3>> solid;
+  int nodes = -1;
+  double young_modulus = 0, poisson_ratio = 0, thickness = 0;
+  template <int dim> std::optional<fem::ContinuumAnswer<dim>>& get() {
+    if constexpr (dim == 2)
+      return plane;
+    else
+      return solid;
+  }
+};
+
 /// The continuum as the springs' yardstick (load_check.hh): reference_fem's continuum_static,
-/// P2 refined until converged within its budget of dofs (vtb/fem/continuum.hh).
-Yardstick continuum_yardstick();
+/// P2 refined until converged within its budget of dofs (vtb/fem/continuum.hh). With `keep`, its
+/// answers are kept there too.
+Yardstick continuum_yardstick(KeptLadders* keep = nullptr);
+
+/// fem::continuum_static(problem, material, options), or `kept`'s answer where it is that solve:
+/// the same problem and material, the default options, and drives held or none to displace
+/// (`reused`, where given, says which).
+template <int dim>
+std::optional<fem::ContinuumAnswer<dim>> static_ladder(const Problem<dim>& problem, const MaterialDesc& material,
+                                                       const fem::ContinuumOptions& options, KeptLadders* kept,
+                                                       bool* reused = nullptr);
 
 /// Options of `vtb run` that override the scene.
 struct RunOverrides {
