@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <random>
 
 namespace vtb {
@@ -85,19 +86,43 @@ public:
     for (auto& r : m_reduced)
       if (r == 0) r = m_size++;
   }
-  /// Factorises the matrix (full indices; pinned rows and columns dropped).
+  /// Factorises the matrix (full indices; pinned rows and columns dropped). Every matrix has the
+  /// mesh's pattern (compressed): the first is reduced through triplets, and where each of its
+  /// values lands is kept, so that the others are copied in place (no triplets, one analysis).
   void factorize(const SpMat& full) {
-    Triplets kept;
-    kept.reserve(static_cast<std::size_t>(full.nonZeros()));
-    for (int col = 0; col < full.outerSize(); ++col)
-      for (SpMat::InnerIterator it(full, col); it; ++it) {
-        const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
-        if (r >= 0 && c >= 0) kept.emplace_back(r, c, it.value());
+    const int* outer = full.outerIndexPtr();
+    if (!full.isCompressed() || (m_analysed && !std::equal(m_outer.begin(), m_outer.end(), outer)))
+      throw std::logic_error("PinnedSolver: a matrix of another pattern than the mesh's");
+    if (!m_analysed) {
+      m_outer.assign(outer, outer + full.outerSize() + 1);
+      Triplets kept;
+      kept.reserve(static_cast<std::size_t>(full.nonZeros()));
+      for (int col = 0; col < full.outerSize(); ++col)
+        for (SpMat::InnerIterator it(full, col); it; ++it) {
+          const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
+          if (r >= 0 && c >= 0) kept.emplace_back(r, c, it.value());
+        }
+      m_A.resize(m_size, m_size);
+      m_A.setFromTriplets(kept.begin(), kept.end());
+      // Reduced indices keep their order, so a kept column's entries are its reduced column's, in turn.
+      m_place.assign(static_cast<std::size_t>(full.nonZeros()), -1);
+      for (int col = 0; col < full.outerSize(); ++col) {
+        const int c = m_reduced[static_cast<std::size_t>(col)];
+        if (c < 0) continue;
+        int next = m_A.outerIndexPtr()[c];
+        for (int k = full.outerIndexPtr()[col]; k < full.outerIndexPtr()[col + 1]; ++k)
+          if (m_reduced[static_cast<std::size_t>(full.innerIndexPtr()[k])] >= 0)
+            m_place[static_cast<std::size_t>(k)] = next++;
       }
-    SpMat A(m_size, m_size);
-    A.setFromTriplets(kept.begin(), kept.end());
-    if (!m_analysed) m_llt.analyzePattern(A), m_analysed = true; // the pattern is the mesh's: one analysis
-    m_llt.factorize(A);
+      m_llt.analyzePattern(m_A);
+      m_analysed = true;
+    } else {
+      const double* v = full.valuePtr();
+      double* a = m_A.valuePtr();
+      for (std::size_t k = 0; k < m_place.size(); ++k)
+        if (m_place[k] >= 0) a[m_place[k]] = v[k];
+    }
+    m_llt.factorize(m_A);
     if (m_llt.info() != Eigen::Success)
       throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
                        "pinned (is the mesh in one piece?)");
@@ -122,6 +147,9 @@ private:
   /// 0.2 s (docs/fidelity.md).
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> m_llt;
   bool m_analysed = false;
+  SpMat m_A;                ///< the reduced matrix, its pattern made once
+  std::vector<int> m_outer; ///< the full pattern's column starts, to hold later matrices to it
+  std::vector<int> m_place; ///< per full value: its place in m_A's values, or -1 (pinned)
 };
 
 /// How far the subspace iteration converges the modes' eigenvalues (relative change per
@@ -170,14 +198,11 @@ MatrixXd lowest_modes(const SpMat& K, PinnedSolver& solver, const VectorXd& mass
   return X.leftCols(count);
 }
 
-/// The network's stiffness at rest, sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i), through
-/// the shared Jacobian assembly (force_jacobian.hh; stiffness signs).
-template <int dim> void rest_stiffness_triplets(const SpringNetwork<dim>& net, const Nodal<dim>& rest, Triplets& trip) {
-  trip.clear();
-  for_each_jacobian_block(net, rest, false, [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
-    for (int p = 0; p < dim; ++p)
-      for (int q = 0; q < dim; ++q) trip.emplace_back(dim * i + p, dim * j + q, -sign * K(p, q));
-  });
+/// 0, 1, ..., n - 1: every node free (free_index of force_jacobian.hh).
+std::vector<int> every_node(int n) {
+  std::vector<int> all(static_cast<std::size_t>(n));
+  std::iota(all.begin(), all.end(), 0);
+  return all;
 }
 
 /// The training set: M-orthonormal lowest non-rigid modes of the free mesh, projected off the
@@ -200,14 +225,17 @@ public:
   Fit(const SpringNetwork<dim>& net, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr,
       PinnedSolver& solver)
       : m_net(net), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver),
-        m_rest(Nodal<dim>::Zero(dim, net.num_nodes())) {}
+        m_rest(Nodal<dim>::Zero(dim, net.num_nodes())), m_every(every_node(net.num_nodes())),
+        m_ks(free_block_pattern(net, m_every, net.num_nodes())) {}
 
   /// Factorises K_s at x and solves the training loads; returns 1/2 ||residual||^2.
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
     m_net.stiffness = m_k;
-    rest_stiffness_triplets(m_net, m_rest, m_trip);
-    m_ks.setFromTriplets(m_trip.begin(), m_trip.end());
+    // sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i) in its pattern: the values setFromTriplets
+    // made of force_jacobians' blocks, to the bit, without the triplets (73 MB for two fits at 10k
+    // nodes; force_jacobian.hh).
+    fill_free_stiffness(m_net, m_rest, m_every, false, m_ks);
     m_solver.factorize(m_ks);
     m_U = m_solver.solve(m_F);
     m_res = project(m_U) - m_T;
@@ -261,10 +289,10 @@ private:
   const VectorXd& m_k0;
   const MatrixXd &m_Q, &m_T, &m_F;
   PinnedSolver& m_solver;
-  const Nodal<dim> m_rest; ///< zero displacement
+  const Nodal<dim> m_rest;  ///< zero displacement
+  std::vector<int> m_every; ///< every node free: the whole network's stiffness (the solver pins)
   VectorXd m_k;
-  Triplets m_trip;
-  SpMat m_ks{m_F.rows(), m_F.rows()};
+  SpMat m_ks;
   MatrixXd m_U, m_res, m_H;
 };
 

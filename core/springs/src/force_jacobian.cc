@@ -74,12 +74,12 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
 }
 
 template <int dim>
-Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
-                                           const std::vector<int>& free_index, int free_count, bool clamp_compression) {
-  Eigen::SparseMatrix<double> A = free_block_pattern(net, free_index, free_count);
+void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, const std::vector<int>& free_index,
+                         bool clamp_compression, Eigen::SparseMatrix<double>& A) {
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
   double* value = A.valuePtr();
+  std::fill(value, value + A.nonZeros(), 0.0);
   for_each_jacobian_block(net, u, clamp_compression,
                           [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
                             const int a = free_index[static_cast<std::size_t>(i)];
@@ -91,6 +91,13 @@ Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const 
                               for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= sign * K(p, q);
                             }
                           });
+}
+
+template <int dim>
+Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
+                                           const std::vector<int>& free_index, int free_count, bool clamp_compression) {
+  Eigen::SparseMatrix<double> A = free_block_pattern(net, free_index, free_count);
+  fill_free_stiffness(net, u, free_index, clamp_compression, A);
   return A;
 }
 
@@ -100,6 +107,10 @@ template Eigen::SparseMatrix<double> free_stiffness<2>(const SpringNetwork<2>&, 
                                                        const std::vector<int>&, int, bool);
 template Eigen::SparseMatrix<double> free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&,
                                                        const std::vector<int>&, int, bool);
+template void fill_free_stiffness<2>(const SpringNetwork<2>&, const Nodal<2>&, const std::vector<int>&, bool,
+                                     Eigen::SparseMatrix<double>&);
+template void fill_free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&, const std::vector<int>&, bool,
+                                     Eigen::SparseMatrix<double>&);
 template ForceJacobians<2> force_jacobians<2>(const SpringNetwork<2>&, const Nodal<2>&, bool);
 template ForceJacobians<3> force_jacobians<3>(const SpringNetwork<3>&, const Nodal<3>&, bool);
 

@@ -59,5 +59,12 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
 template <int dim>
 Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
                                            const std::vector<int>& free_index, int free_count, bool clamp_compression);
+/// free_stiffness's values written into A, a free_block_pattern of the same network and
+/// free_index (the fit's assembly at each of its steps, allocation-free). Each entry sums its
+/// springs' blocks in the springs' order, as setFromTriplets sums force_jacobians' triplets: the
+/// same values to the bit.
+template <int dim>
+void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, const std::vector<int>& free_index,
+                         bool clamp_compression, Eigen::SparseMatrix<double>& A);
 
 } // namespace vtb
