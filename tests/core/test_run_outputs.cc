@@ -5,12 +5,17 @@
 #include "vtb/problem/output.hh"
 #include "vtb/solvers/simulation.hh"
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <Eigen/SVD>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <random>
 #include <sstream>
 
 namespace vtb {
@@ -179,6 +184,47 @@ TEST(RunOutputs, MaxRotationIsTheCellsPolarAngle) {
   const Eigen::Matrix3d R3 = Eigen::AngleAxisd(theta, Eigen::Vector3d(1, 2, 2).normalized()).toRotationMatrix();
   const Nodal<3> u3 = (R3 - Eigen::Matrix3d::Identity()) * b.points;
   EXPECT_NEAR(max_rotation<3>(b, u3), theta, 1e-12);
+  // Any deformation, against the polar rotation of F's SVD on each cell (F = U S V^T, R = U V^T,
+  // the closest proper rotation where a cell is inverted), its angle by atan2 as well: random
+  // node motions of up to a cell's size (rotations to past 1 rad, some cells inverted). Both are
+  // R to round-off, so the angles agree to 1e-12.
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<double> r(-1.0, 1.0);
+  for (double size : {1e-4, 1e-2, 0.5}) {
+    Nodal<3> w(3, b.num_nodes());
+    for (Eigen::Index k = 0; k < w.size(); ++k) w.data()[k] = size * 0.03 * r(gen);
+    double want = 0;
+    for (const auto& cell : b.cells) {
+      Eigen::Matrix3d Dm, Ds;
+      for (int k = 0; k < 3; ++k) {
+        Dm.col(k) = b.points.col(cell[k + 1]) - b.points.col(cell[0]);
+        Ds.col(k) = Dm.col(k) + w.col(cell[k + 1]) - w.col(cell[0]);
+      }
+      const Eigen::JacobiSVD<Eigen::Matrix3d> svd(Ds * Dm.inverse(), Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d U = svd.matrixU();
+      if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(2) *= -1;
+      const Eigen::Matrix3d Rc = U * svd.matrixV().transpose();
+      const Eigen::Vector3d axial(Rc(2, 1) - Rc(1, 2), Rc(0, 2) - Rc(2, 0), Rc(1, 0) - Rc(0, 1));
+      want = std::max(want, std::atan2(0.5 * axial.norm(), 0.5 * (Rc.trace() - 1)));
+    }
+    EXPECT_NEAR(max_rotation<3>(b, w), want, 1e-12) << "motions of " << size << " cells";
+    // The largest small strain, by the closed form, against the iterative eigensolver: equal to
+    // round-off of the strain's size.
+    double strain = 0;
+    for (const auto& cell : b.cells) {
+      Eigen::Matrix3d Dm, Du;
+      for (int k = 0; k < 3; ++k) {
+        Dm.col(k) = b.points.col(cell[k + 1]) - b.points.col(cell[0]);
+        Du.col(k) = w.col(cell[k + 1]) - w.col(cell[0]);
+      }
+      const Eigen::Matrix3d g = Du * Dm.inverse(), eps = 0.5 * (g + g.transpose());
+      strain = std::max(strain, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(eps, Eigen::EigenvaluesOnly)
+                                    .eigenvalues()
+                                    .cwiseAbs()
+                                    .maxCoeff());
+    }
+    EXPECT_NEAR(max_small_strain<3>(b, w), strain, 1e-13 * strain);
+  }
   // The regime note: silent inside the limits, names the rotation beyond them.
   EXPECT_EQ(small_strain_regime_note(0.05, 0.005), "");
   EXPECT_NE(small_strain_regime_note(0.3, 0.005).find("max rotation 0.3 rad"), std::string::npos);

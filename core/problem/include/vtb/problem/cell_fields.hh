@@ -23,7 +23,8 @@ template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<di
 
 /// The largest rotation of a cell (radians, in [0, pi]), max over cells: the angle of R in
 /// the polar decomposition F = R U of the P1 interpolant's deformation gradient (2D: the
-/// signed angle's magnitude; 3D: acos((tr R - 1) / 2)). NaN propagates.
+/// signed angle's magnitude; 3D: atan2 of R's axial vector's length and (tr R - 1) / 2; an
+/// inverted cell: the closest proper rotation's). NaN propagates.
 template <int dim> double max_rotation(const Mesh<dim>& mesh, const Nodal<dim>& u);
 
 /// The regime in which the linear (small-strain) FEM is a reference for a run that reached
