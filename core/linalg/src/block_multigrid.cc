@@ -259,6 +259,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     for (int i = 0; i < n; ++i) members[static_cast<std::size_t>(agg[static_cast<std::size_t>(i)])].push_back(i);
     Eigen::MatrixXd coarse_modes = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(nc) * kModes, kModes);
     Level lev;
+    auto tr = std::make_shared<Transfer>();
     trip.clear();
     for (int a = 0; a < nc; ++a) {
       const auto& mem = members[static_cast<std::size_t>(a)];
@@ -276,7 +277,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
         for (int p = 0; p < nb; ++p)
           for (Eigen::Index c = 0; c < k; ++c)
             trip.emplace_back(mem[t] * nb + p, a * kModes + c, Q(static_cast<Eigen::Index>(t) * nb + p, c));
-      for (Eigen::Index c = k; c < kModes; ++c) lev.dead.push_back(a * kModes + static_cast<int>(c));
+      for (Eigen::Index c = k; c < kModes; ++c) tr->dead.push_back(a * kModes + static_cast<int>(c));
     }
     RowSparse P0(static_cast<Eigen::Index>(n) * nb, static_cast<Eigen::Index>(nc) * kModes);
     P0.setFromTriplets(trip.begin(), trip.end());
@@ -316,42 +317,26 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     const RowSparse APn = An * Pn;
     const RowSparse Cn = RowSparse(Pn.transpose()) * APn;
     const int wf = m_mats[l].w;
-    rows_of(Pn, lev.prolong.ptr, lev.prolong.col);
-    lev.prolong.val.assign(lev.prolong.col.size() * static_cast<std::size_t>(wf * kModes), 0.0);
-    for (int i = 0; i < n; ++i)
-      for (int kk = lev.prolong.ptr[static_cast<std::size_t>(i)]; kk < lev.prolong.ptr[static_cast<std::size_t>(i) + 1];
-           ++kk) {
-        const int I = lev.prolong.col[static_cast<std::size_t>(kk)];
-        for (int p = 0; p < nb; ++p)
-          for (int c = 0; c < kModes; ++c)
-            lev.prolong.val[static_cast<std::size_t>(kk * wf * kModes + c * wf + p)] =
-                P.coeff(i * nb + p, I * kModes + c);
-      }
+    rows_of(Pn, tr->pptr, tr->pcol);
     const int wc = lanes_of(kModes);
-    lev.prolong.f.assign(lev.prolong.val.begin(), lev.prolong.val.end());
-    lev.ptrans.assign(lev.prolong.col.size() * static_cast<std::size_t>(wc * nb), 0.0f);
-    for (std::size_t kk = 0; kk < lev.prolong.col.size(); ++kk)
-      for (int p = 0; p < nb; ++p)
-        for (int c = 0; c < kModes; ++c)
-          lev.ptrans[kk * static_cast<std::size_t>(wc * nb) + static_cast<std::size_t>(p * wc + c)] =
-              lev.prolong.f[kk * static_cast<std::size_t>(wf * kModes) + static_cast<std::size_t>(c * wf + p)];
-    lev.prolong.val = {}; // the rounded values are P from here on
-    // P by coarse rows: the fine rows and block indices of each coarse column.
-    lev.rptr.assign(static_cast<std::size_t>(nc) + 1, 0);
-    for (int c : lev.prolong.col) ++lev.rptr[static_cast<std::size_t>(c) + 1];
-    for (int c = 0; c < nc; ++c) lev.rptr[static_cast<std::size_t>(c) + 1] += lev.rptr[static_cast<std::size_t>(c)];
-    lev.rrow.resize(lev.prolong.col.size());
-    lev.rblock.resize(lev.prolong.col.size());
-    std::vector<int> fill(lev.rptr.begin(), lev.rptr.end() - 1);
+    tr->pval.assign(tr->pcol.size() * static_cast<std::size_t>(wf * kModes), 0.0f);
+    tr->ptrans.assign(tr->pcol.size() * static_cast<std::size_t>(wc * nb), 0.0f);
     for (int i = 0; i < n; ++i)
-      for (int kk = lev.prolong.ptr[static_cast<std::size_t>(i)]; kk < lev.prolong.ptr[static_cast<std::size_t>(i) + 1];
-           ++kk) {
-        const int slot = fill[static_cast<std::size_t>(lev.prolong.col[static_cast<std::size_t>(kk)])]++;
-        lev.rrow[static_cast<std::size_t>(slot)] = i;
-        lev.rblock[static_cast<std::size_t>(slot)] = kk;
+      for (int kk = tr->pptr[static_cast<std::size_t>(i)]; kk < tr->pptr[static_cast<std::size_t>(i) + 1]; ++kk) {
+        const int I = tr->pcol[static_cast<std::size_t>(kk)];
+        for (int p = 0; p < nb; ++p)
+          for (int c = 0; c < kModes; ++c) {
+            const auto value = static_cast<float>(P.coeff(i * nb + p, I * kModes + c)); // P from here on
+            tr->pval[static_cast<std::size_t>(kk * wf * kModes + c * wf + p)] = value;
+            tr->ptrans[static_cast<std::size_t>(kk * wc * nb + p * wc + c)] = value;
+          }
       }
-    rows_of(APn, lev.ap.ptr, lev.ap.col);
-    lev.ap.val.assign(lev.ap.col.size() * static_cast<std::size_t>(wf * kModes), 0.0);
+    rows_of(APn, tr->apptr, tr->apcol);
+    int widest = 0;
+    for (int i = 0; i < n; ++i)
+      widest = std::max(widest, tr->apptr[static_cast<std::size_t>(i) + 1] - tr->apptr[static_cast<std::size_t>(i)]);
+    lev.ap_row.assign(static_cast<std::size_t>(widest) * static_cast<std::size_t>(wf * kModes), 0.0);
+    lev.t = std::move(tr);
     lev.marker.assign(static_cast<std::size_t>(nc), -1);
     lev.inv_diag.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(m_mats[l].block()), 0.0);
     m_levels.push_back(std::move(lev));
@@ -365,9 +350,31 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     modes = coarse_modes;
   }
 
+  make_coarse_factor();
+  // The setup's loop made every level's values; the rest of a refresh, its work counted.
+  bool done = false;
+  m_work += refresh_stage(1 + 3 * static_cast<int>(m_levels.size()), 0, 0, done) + 1;
+  m_work += 15.0 * static_cast<double>(m_mats.front().col.size()) * m_mats.front().nb * m_mats.front().nb +
+            1; // the finest matrix's rounding (refresh_stage's unit)
+}
+
+template <int dim>
+BlockMultigrid<dim>::BlockMultigrid(const BlockMultigrid& other)
+    : m_mats(other.m_mats), m_levels(other.m_levels), m_b(other.m_b), m_x(other.m_x), m_work(other.m_work) {
+  make_coarse_factor();
+  finish(); // the copied values' diagonal inverses (the same) and coarsest factor
+}
+
+template <int dim> void BlockMultigrid<dim>::make_coarse_factor() {
   // The coarsest matrix for a sparse LDL^T (every value of every block in its pattern).
   const BlockCsr& C = m_mats.back();
-  const Eigen::SparseMatrix<double> Cs(dofs(C));
+  std::vector<Eigen::Triplet<double>> trip;
+  for (int i = 0; i < C.rows(); ++i)
+    for (int k = C.ptr[static_cast<std::size_t>(i)]; k < C.ptr[static_cast<std::size_t>(i) + 1]; ++k)
+      for (int p = 0; p < C.nb; ++p)
+        for (int q = 0; q < C.nb; ++q) trip.emplace_back(i * C.nb + p, C.col[static_cast<std::size_t>(k)] * C.nb + q, 1.0);
+  Eigen::SparseMatrix<double> Cs(C.rows() * C.nb, C.rows() * C.nb);
+  Cs.setFromTriplets(trip.begin(), trip.end());
   m_coarse = std::make_unique<OrderedLDLT>(Cs, C.nb);
   m_coarse_offset.assign(C.f.size(), -1);
   for (int i = 0; i < C.rows(); ++i)
@@ -381,17 +388,12 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
   m_coarse_order.resize(static_cast<std::size_t>(C.rows()) * static_cast<std::size_t>(C.nb));
   for (std::size_t d = 0; d < m_coarse_order.size(); ++d) m_coarse_order[d] = m_coarse->ordered(static_cast<int>(d));
   m_coarse_rhs = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(m_coarse_order.size()), 1);
-  // The setup's loop made every level's values; the rest of a refresh, its work counted.
-  bool done = false;
-  m_work += refresh_stage(1 + 3 * static_cast<int>(m_levels.size()), 0, 0, done) + 1;
-  m_work += 15.0 * static_cast<double>(m_mats.front().col.size()) * m_mats.front().nb * m_mats.front().nb +
-            1; // the finest matrix's rounding (refresh_stage's unit)
 }
 
 template <int dim> void BlockMultigrid<dim>::finish_coarse(std::size_t l) {
   // 1 on the dead values' diagonal (their P columns are zero); then what the cycle reads.
   BlockCsr& C = m_mats[l + 1];
-  for (int d : m_levels[l].dead)
+  for (int d : m_levels[l].t->dead)
     C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
         1.0;
   round(C);
@@ -422,16 +424,21 @@ template <int dim> double BlockMultigrid<dim>::refresh_stage(int stage, int begi
     const BlockCsr& C = m_mats[l + 1];
     return kRoundValue * static_cast<double>(C.col.size()) * C.nb * C.nb;
   }
-  const int rows = kind == 0 ? m_mats[l].rows() : m_mats[l + 1].rows();
+  const int rows = kind == 0 ? m_mats[l + 1].rows() : m_mats[l].rows();
   end = std::min(end, rows);
   done = end == rows;
+  if (kind == 0) { // the coarse rows' values zeroed, for the products to add into
+    BlockCsr& C = m_mats[l + 1];
+    const auto first = static_cast<std::size_t>(C.ptr[static_cast<std::size_t>(begin)] * C.block());
+    const auto last = static_cast<std::size_t>(C.ptr[static_cast<std::size_t>(end)] * C.block());
+    std::fill(C.val.begin() + static_cast<long>(first), C.val.begin() + static_cast<long>(last), 0.0);
+    return static_cast<double>(last - first) / 4; // a quarter of a multiply-add per value
+  }
   const bool fine3 = m_mats[l].nb == 3;
   if constexpr (dim == 3)
-    return kind == 0 ? (fine3 ? ap_rows<4, 3, 8>(l, begin, end) : ap_rows<8, 6, 8>(l, begin, end))
-                     : (fine3 ? ptap_rows<4, 3, 8>(l, begin, end) : ptap_rows<8, 6, 8>(l, begin, end));
+    return fine3 ? galerkin_rows<4, 3, 8>(l, begin, end) : galerkin_rows<8, 6, 8>(l, begin, end);
   else
-    return kind == 0 ? (m_mats[l].nb == 2 ? ap_rows<2, 2, 4>(l, begin, end) : ap_rows<4, 3, 4>(l, begin, end))
-                     : (m_mats[l].nb == 2 ? ptap_rows<2, 2, 4>(l, begin, end) : ptap_rows<4, 3, 4>(l, begin, end));
+    return m_mats[l].nb == 2 ? galerkin_rows<2, 2, 4>(l, begin, end) : galerkin_rows<4, 3, 4>(l, begin, end);
 }
 
 template <int dim> void BlockMultigrid<dim>::begin_refresh() {
@@ -502,67 +509,55 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
 
 template <int dim>
 template <int W, int NB, int WC>
-double BlockMultigrid<dim>::ap_rows(std::size_t l, int begin, int end) {
-  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC;
+double BlockMultigrid<dim>::galerkin_rows(std::size_t l, int begin, int end) {
+  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
   const BlockCsr& A = m_mats[l];
+  BlockCsr& C = m_mats[l + 1];
   Level& lev = m_levels[l];
-  RectCsr& ap = lev.ap;
+  const Transfer& t = *lev.t;
   int* marker = lev.marker.data();
-  const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = lev.prolong.ptr.data(), *pc = lev.prolong.col.data();
-  const float *av = A.f.data(), *pv = lev.prolong.f.data();
-  double* apv = ap.val.data();
-  long products = 0;
-  // A P, row by row into its pattern (a scatter through the row's marker of coarse columns):
-  // column c of block (i, J) += A_ij times column c of P_jJ.
+  double* row = lev.ap_row.data();
+  const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = t.pptr.data(), *pc = t.pcol.data();
+  const int *apptr = t.apptr.data(), *apcol = t.apcol.data(), *cptr = C.ptr.data(), *ccol = C.col.data();
+  const float *av = A.f.data(), *pv = t.pval.data(), *ptv = t.ptrans.data();
+  double* cv = C.val.data();
+  long products = 0, coarse_products = 0;
   for (int i = begin; i < end; ++i) {
-    for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
-      marker[ap.col[static_cast<std::size_t>(q)]] = q;
-      std::fill_n(apv + q * PB, PB, 0.0);
+    // Row i of A P, through the marker of its coarse columns: column c of block (i, J) +=
+    // A_ij times column c of P_jJ.
+    const int a0 = apptr[i], a1 = apptr[i + 1];
+    for (int q = a0; q < a1; ++q) {
+      marker[apcol[q]] = q - a0;
+      std::fill_n(row + (q - a0) * PB, PB, 0.0);
     }
     for (int k = ptr[i]; k < ptr[i + 1]; ++k) {
       const float* a = av + k * AB;
       products += pp[col[k] + 1] - pp[col[k]];
       for (int p = pp[col[k]]; p < pp[col[k] + 1]; ++p) {
         const float* pj = pv + p * PB;
-        double* t = apv + marker[pc[p]] * PB;
-        for (int c = 0; c < NBC; ++c) store<W>(t + c * W, load<W>(t + c * W) + times<W, NB>(a, pj + c * W));
+        double* r = row + marker[pc[p]] * PB;
+        for (int c = 0; c < NBC; ++c) store<W>(r + c * W, load<W>(r + c * W) + times<W, NB>(a, pj + c * W));
+      }
+    }
+    // Its share of P^T A P: column c of block (I, J) += P_iI^T times column c of (A P)_iJ, for
+    // each block P_iI; row I's columns found by a walk (both rows sorted, A P's within C's).
+    // Each (I, J) gathers its terms in the order of i, as a product by coarse rows would.
+    for (int kk = pp[i]; kk < pp[i + 1]; ++kk) {
+      const int I = pc[kk];
+      const float* pt = ptv + kk * PTB;
+      coarse_products += a1 - a0;
+      int at = cptr[I];
+      for (int q = a0; q < a1; ++q) {
+        while (ccol[at] < apcol[q]) ++at;
+        const double* a = row + (q - a0) * PB;
+        double* target = cv + at * CB;
+        for (int c = 0; c < NBC; ++c)
+          store<WC>(target + c * WC, load<WC>(target + c * WC) + times<WC, NB>(pt, a + c * W));
       }
     }
   }
-  return static_cast<double>(products) * W * NB * NBC; // each product: NBC columns of W lanes, NB terms
-}
-
-template <int dim>
-template <int W, int NB, int WC>
-double BlockMultigrid<dim>::ptap_rows(std::size_t l, int begin, int end) {
-  constexpr int NBC = kModes, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
-  BlockCsr& C = m_mats[l + 1];
-  Level& lev = m_levels[l];
-  const RectCsr& ap = lev.ap;
-  int* marker = lev.marker.data();
-  const float* ptv = lev.ptrans.data();
-  const double* apv = ap.val.data();
-  long products = 0;
-  // P^T (A P), coarse row by coarse row: column c of block (I, J) += P_iI^T times column c of
-  // (A P)_iJ.
-  double* cv = C.val.data();
-  for (int I = begin; I < end; ++I) {
-    for (int q = C.ptr[static_cast<std::size_t>(I)]; q < C.ptr[static_cast<std::size_t>(I) + 1]; ++q) {
-      marker[C.col[static_cast<std::size_t>(q)]] = q;
-      std::fill_n(cv + q * CB, CB, 0.0);
-    }
-    for (int s = lev.rptr[static_cast<std::size_t>(I)]; s < lev.rptr[static_cast<std::size_t>(I) + 1]; ++s) {
-      const int i = lev.rrow[static_cast<std::size_t>(s)];
-      const float* pt = ptv + lev.rblock[static_cast<std::size_t>(s)] * PTB;
-      products += ap.ptr[static_cast<std::size_t>(i) + 1] - ap.ptr[static_cast<std::size_t>(i)];
-      for (int q = ap.ptr[static_cast<std::size_t>(i)]; q < ap.ptr[static_cast<std::size_t>(i) + 1]; ++q) {
-        const double* a = apv + q * PB;
-        double* t = cv + marker[ap.col[static_cast<std::size_t>(q)]] * CB;
-        for (int c = 0; c < NBC; ++c) store<WC>(t + c * WC, load<WC>(t + c * WC) + times<WC, NB>(pt, a + c * W));
-      }
-    }
-  }
-  return static_cast<double>(products) * WC * NB * NBC;
+  // each product: NBC columns of W (or WC) lanes, NB terms
+  return static_cast<double>(products) * W * NB * NBC + static_cast<double>(coarse_products) * WC * NB * NBC;
 }
 
 template <int dim> void BlockMultigrid<dim>::refresh() {
@@ -613,9 +608,10 @@ template <int dim> void BlockMultigrid<dim>::cycle(std::size_t l, const double* 
     return;
   }
   const Level& L = m_levels[l];
-  const Arrays arrays{A.ptr.data(),         A.col.data(), A.diag.data(),       L.prolong.ptr.data(),
-                      L.prolong.col.data(), A.f.data(),   L.inv_diag.data(),   L.prolong.f.data(),
-                      L.ptrans.data(),      A.rows(),     m_mats[l + 1].rows()};
+  const Transfer& T = *L.t;
+  const Arrays arrays{A.ptr.data(),      A.col.data(),       A.diag.data(),   T.pptr.data(), T.pcol.data(),
+                      A.f.data(),        L.inv_diag.data(),  T.pval.data(),   T.ptrans.data(),
+                      A.rows(),          m_mats[l + 1].rows()};
   double *bc = m_b[l].data(), *xc = m_x[l].data();
   sweep_down<dim>(arrays, A.nb, b, x, bc);
   cycle(l + 1, bc, xc);
@@ -637,10 +633,12 @@ template <int dim> std::size_t BlockMultigrid<dim>::memory_bytes() const {
   auto floats = [](const std::vector<float>& v) { return v.size() * sizeof(float); };
   for (const BlockCsr& A : m_mats)
     bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + ints(A.trans) + doubles(A.val) + floats(A.f);
-  for (const Level& L : m_levels)
-    bytes += doubles(L.inv_diag) + ints(L.prolong.ptr) + ints(L.prolong.col) + doubles(L.prolong.val) +
-             floats(L.prolong.f) + floats(L.ptrans) + ints(L.rptr) + ints(L.rrow) + ints(L.rblock) + ints(L.ap.ptr) +
-             ints(L.ap.col) + doubles(L.ap.val) + ints(L.marker) + ints(L.dead);
+  for (const Level& L : m_levels) {
+    bytes += doubles(L.inv_diag) + doubles(L.ap_row) + ints(L.marker);
+    // the shared transfers counted in full by each copy: the bytes the cycle needs
+    bytes += ints(L.t->pptr) + ints(L.t->pcol) + floats(L.t->pval) + floats(L.t->ptrans) + ints(L.t->apptr) +
+             ints(L.t->apcol) + ints(L.t->dead);
+  }
   for (std::size_t l = 0; l < m_b.size(); ++l) bytes += doubles(m_b[l]) + doubles(m_x[l]);
   return bytes;
 }

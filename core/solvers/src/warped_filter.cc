@@ -134,7 +134,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   for (Eigen::Index a = 0; a < nf; ++a) x.col(a) = model.net.rest.col(model.free_nodes[static_cast<std::size_t>(a)]);
   const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(model, dt, 0.0);
   m_h = make_warped_system<dim>(H0, x, multigrid);
-  m_next = make_warped_system<dim>(H0, x, multigrid); // the refreshes' (same ordering and pattern)
+  m_next = m_h->twin(H0); // the refreshes' (same ordering and pattern)
   m_index.resize(static_cast<std::size_t>(nf) * dim);
   for (int r = 0; r < static_cast<int>(nf) * dim; ++r) {
     m_index[static_cast<std::size_t>(r)] = m_h->index(r);
@@ -169,6 +169,8 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   m_diag_off.resize(static_cast<std::size_t>(nf) * dim);
   for (int r = 0; r < static_cast<int>(nf) * dim; ++r) m_diag_off[static_cast<std::size_t>(r)] = m_h->offset(r, r);
   m_tptr.assign(static_cast<std::size_t>(ns) + 1, 0);
+  m_tscale.assign(static_cast<std::size_t>(ns), 0.0);
+  m_tdir = Nodal<dim>::Zero(dim, ns);
   const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
   for_each_jacobian_block(
       net, rest, false, [&](int sp, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>& D) {
@@ -176,14 +178,14 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
         if (a >= 0 && b >= 0) {
           const auto& e = net.edge[static_cast<std::size_t>(sp)];
           const int block = (sign < 0 ? 0 : 2) + (i == e[0] ? 0 : 1); // (i,i), (j,j), (i,j), (j,i)
-          const Mat<dim> T = transverse_block<dim>(sign, K.trace(), D.trace(),
-                                                   direction<dim>(net.rest.col(e[0]), net.rest.col(e[1])), dt);
+          // T's scale and direction (the same from each of the spring's blocks).
+          m_tscale[static_cast<std::size_t>(sp)] = dt * D.trace() + dt * dt * K.trace();
+          m_tdir.col(sp) = direction<dim>(net.rest.col(e[0]), net.rest.col(e[1]));
           for (int p = 0; p < dim; ++p)
             for (int q = 0; q < dim; ++q) {
               const long off = m_h->offset(a * dim + p, b * dim + q);
               if (off < 0) continue;
               m_toff.push_back(static_cast<int>(off));
-              m_tval.push_back(T(p, q));
               m_tcode.push_back(static_cast<unsigned char>((block * dim + p) * dim + q));
             }
         }
@@ -213,7 +215,8 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   }
   m_spring_ref_next = m_spring_ref;
   m_base_next = m_base;
-  m_tval_next = m_tval;
+  m_tscale_next = m_tscale;
+  m_tdir_next = m_tdir;
   m_multigrid = multigrid;
   m_residual = Nodal<dim>::Zero(dim, net.num_nodes());
   m_iterate = Nodal<dim>::Zero(dim, net.num_nodes());
@@ -318,15 +321,18 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
   // the reference shape it will have (a relinearisation's, or the one in use).
   const auto& net = m_model.net;
   const std::vector<double>& base = relinearized ? m_base_next : m_base;
-  const std::vector<double>& tval = relinearized ? m_tval_next : m_tval;
   double* v = m_next->values();
   std::copy(base.begin(), base.end(), v);
-  if (!relinearized)
+  if (!relinearized) // a relinearisation starts with no cover
     for (int s = 0; s < net.num_springs(); ++s) {
       const double b = m_beta[static_cast<std::size_t>(s)];
       if (b == 0) continue;
-      for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k)
-        v[m_toff[static_cast<std::size_t>(k)]] += b * tval[static_cast<std::size_t>(k)];
+      const Mat<dim> T = transverse_of(s);
+      for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k) {
+        const int code = m_tcode[static_cast<std::size_t>(k)];
+        const double t = T((code / dim) % dim, code % dim);
+        v[m_toff[static_cast<std::size_t>(k)]] += b * (code / (dim * dim) < 2 ? t : -t); // - on (i,j), (j,i)
+      }
     }
   m_next->begin_refresh();
   m_refresh_done = 0;
@@ -368,7 +374,8 @@ template <int dim> void WarpedFilter<dim>::swap_systems() {
     m_adj_ref.swap(m_adj_ref_next);
     m_adj_scale.swap(m_adj_scale_next);
     m_base.swap(m_base_next);
-    m_tval.swap(m_tval_next);
+    m_tscale.swap(m_tscale_next);
+    m_tdir.swap(m_tdir_next);
     std::fill(m_beta.begin(), m_beta.end(), 0.0);
     std::fill(m_trigger.begin(), m_trigger.end(), MismatchTracker::to_sin2(kCoverFloor));
     m_beta_max = 0;
@@ -546,13 +553,13 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool
     const double k = net.stiffness[static_cast<std::size_t>(s)], c = net.damping[static_cast<std::size_t>(s)];
     const Mat<dim> B = dt * dashpot_jacobian<dim>(xi, xj, c) +
                        dt * dt * spring_jacobian<dim>(xi, xj, net.rest_length[static_cast<std::size_t>(s)], k, true);
-    const Mat<dim> T = transverse_block<dim>(-1.0, k, c, direction<dim>(xi, xj), dt); // the diagonal blocks'
+    m_tscale_next[static_cast<std::size_t>(s)] = dt * c + dt * dt * k; // the transverse blocks of this shape
+    m_tdir_next.col(s) = direction<dim>(xi, xj);
     for (int e = begin; e < end; ++e) {
       const int code = m_tcode[static_cast<std::size_t>(e)];
       const int p = (code / dim) % dim, q = code % dim;
       const double sign = code / (dim * dim) < 2 ? 1.0 : -1.0; // H's sign: + on (i,i), (j,j)
       m_base_next[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
-      m_tval_next[static_cast<std::size_t>(e)] = sign * T(p, q);
     }
   }
   if constexpr (dim == 3)

@@ -42,6 +42,9 @@ public:
     m_blocks.refresh();
     return true;
   }
+  std::unique_ptr<WarpedSystem<dim>> twin(const Eigen::SparseMatrix<double>& H) const override {
+    return std::make_unique<FactorSystem>(H);
+  }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
     m_blocks.solve_in_place(Eigen::Map<Nodal<dim>>(y.data(), dim, y.size() / dim)); // tile k = rows k dim ..
   }
@@ -73,6 +76,9 @@ public:
   void refresh() override { m_mg.refresh(); }
   void begin_refresh() override { m_mg.begin_refresh(); }
   bool refresh_part(double share) override { return m_mg.refresh_part(share); }
+  std::unique_ptr<WarpedSystem<dim>> twin(const Eigen::SparseMatrix<double>& /*H: this one's*/) const override {
+    return std::make_unique<MultigridSystem>(*this);
+  }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
     std::copy(y.data(), y.data() + y.size(), m_b.begin()); // the pads are 0 in and out
     m_mg.apply(m_b.data(), y.data());

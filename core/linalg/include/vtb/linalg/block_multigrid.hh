@@ -49,6 +49,12 @@ public:
   /// A: both triangles stored; its pattern is taken by node blocks (an entry of a block makes
   /// the whole block part of the pattern). x: the nodes' positions (the rigid modes').
   BlockMultigrid(const Eigen::SparseMatrix<double>& A, const Nodal<dim>& x, Eigen::Index coarsest = 64);
+  /// A second cycle with this one's hierarchy: the prolongators (which never change) shared,
+  /// the matrices' values copied, so that one can be refreshed while the other serves (the
+  /// tensor filter's two systems) for about half the memory of a second setup, and none of its
+  /// time.
+  BlockMultigrid(const BlockMultigrid& other);
+  BlockMultigrid& operator=(const BlockMultigrid&) = delete;
 
   /// The finest matrix's values: entry (dim a + p, dim b + q) at values()[offset(...)].
   double* values() { return m_mats.front().val.data(); }
@@ -88,35 +94,39 @@ private:
     int rows() const { return static_cast<int>(ptr.size()) - 1; }
     int block() const { return nb * w; }
   };
-  /// Rectangular blocks (nbf x nbc, nbc columns of wf lanes) by fine rows: P, and A P.
-  struct RectCsr {
-    std::vector<int> ptr, col;
-    std::vector<double> val;
-    std::vector<float> f; ///< P: its values rounded once, used everywhere (any P keeps B <= A^-1)
+  /// What a level's cycle and refreshes read and never change, shared by a copy: P by fine
+  /// rows, blocks nbf x nbc stored as nbc columns of wf lanes, its values rounded once (any P
+  /// keeps B <= A^-1) and each block transposed (nbf columns of wc lanes, same order); the
+  /// pattern of A P by fine rows; the coarse values with no fine support (a small aggregate).
+  struct Transfer {
+    std::vector<int> pptr, pcol;
+    std::vector<float> pval, ptrans;
+    std::vector<int> apptr, apcol;
+    std::vector<int> dead;
   };
   struct Level {
-    std::vector<double> inv_diag;        ///< per node, the inverse diagonal block (as the matrix's blocks)
-    RectCsr prolong;                     ///< P by fine rows
-    std::vector<float> ptrans;           ///< P's blocks transposed (nbf columns of wc lanes), same order
-    std::vector<int> rptr, rrow, rblock; ///< P by coarse rows: its fine rows and P's block index
-    RectCsr ap;                          ///< A P: the Galerkin product's half
-    std::vector<int> marker;             ///< per coarse node: its position in the row being summed
-    std::vector<int> dead;               ///< coarse values with no fine support (a small aggregate): 1 on the diagonal
+    std::shared_ptr<const Transfer> t;
+    std::vector<double> inv_diag; ///< per node, the inverse diagonal block (as the matrix's blocks)
+    std::vector<double> ap_row;   ///< one row of A P, the Galerkin product's scratch
+    std::vector<int> marker;      ///< per coarse node: its place in that row
   };
   void cycle(std::size_t l, const double* b, double* x);
   /// Stage `stage` of a refresh, rows [begin, end) where it has rows (else all of it; `end`
-  /// past its rows ends it): 0 rounds the finest matrix, 1 + 3 l, 2 + 3 l and 3 + 3 l make A P,
-  /// P^T A P and the rounded coarse matrix of level l, and 1 + 3 levels is finish(). Returns
-  /// its work (block products, blocks or rows) and sets `done` when the stage is complete.
+  /// past its rows ends it): 0 rounds the finest matrix; 1 + 3 l zeroes level l + 1's matrix
+  /// (by its rows), 2 + 3 l adds P^T A P into it by level l's rows and 3 + 3 l rounds it;
+  /// 1 + 3 levels is finish(). Returns its work (block products, blocks or rows) and sets
+  /// `done` when the stage is complete.
   double refresh_stage(int stage, int begin, int end, bool& done);
   /// The diagonal inverses and the coarsest factor of the levels' current values.
   void finish();
   /// m.f from m.val (BlockCsr::f).
   static void round(BlockCsr& m);
-  /// A P's fine rows [begin, end) and P^T A P's coarse rows [begin, end) of level l, for fine
-  /// nodes of NB values on W lanes (coarse: kModes on WC lanes); each returns its block products.
-  template <int W, int NB, int WC> double ap_rows(std::size_t l, int begin, int end);
-  template <int W, int NB, int WC> double ptap_rows(std::size_t l, int begin, int end);
+  /// Level l's fine rows [begin, end) of the Galerkin product: each row i of A P made in the
+  /// scratch, then P_i^T (A P)_i added into the coarse matrix, for fine nodes of NB values on W
+  /// lanes (coarse: kModes on WC lanes). Returns its block products.
+  template <int W, int NB, int WC> double galerkin_rows(std::size_t l, int begin, int end);
+  /// The coarsest level's sparse LDL^T, its offsets and ordering (pattern only).
+  void make_coarse_factor();
   /// The coarse matrix of level l + 1 from its products: 1 on the dead values, then rounded.
   void finish_coarse(std::size_t l);
 

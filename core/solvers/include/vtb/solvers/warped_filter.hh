@@ -73,6 +73,10 @@ public:
     refresh();
     return true;
   }
+  /// A second system holding this one's matrix H (given again for a system that is built
+  /// anew), laid out as this one: for the refreshes made while this one serves. The V-cycle's
+  /// copies this one's values and shares its prolongators.
+  virtual std::unique_ptr<WarpedSystem> twin(const Eigen::SparseMatrix<double>& H) const = 0;
   /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
   virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
   /// 2D, where the system can (the factor: BlockSolve::solve_turned): y <- H^-1 b with node
@@ -226,7 +230,8 @@ private:
   /// A relinearisation under way: its reference vectors, scales, H(0) values and transverse
   /// blocks, which take over with its system.
   Nodal<dim> m_spring_ref_next, m_adj_ref_next;
-  std::vector<double> m_adj_scale_next, m_base_next, m_tval_next;
+  std::vector<double> m_adj_scale_next, m_base_next, m_tscale_next;
+  Nodal<dim> m_tdir_next;
   std::vector<double> m_adj_scale;       ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
   std::vector<double> m_polar_a;         ///< 3D, per node: its scaled A (9 values), the rotations' scratch
   std::vector<unsigned char> m_polar_ok; ///< 3D, per node: whether the polar iteration converged
@@ -234,10 +239,17 @@ private:
   /// 2D, per spring (row) at the last rotations(), column by column: d . D and D x d.
   Eigen::Matrix<double, Eigen::Dynamic, 2> m_pq;
   std::vector<double> m_base; ///< H(0)'s stored values
-  /// Spring s's transverse blocks at beta = 1: values m_tval[k] at H's value offsets m_toff[k],
-  /// k in [m_tptr[s], m_tptr[s + 1]).
+  /// Spring s's transverse blocks at beta = 1, +-T_s on its diagonal and off-diagonal blocks
+  /// (transverse_of): the values at H's offsets m_toff[k], k in [m_tptr[s], m_tptr[s + 1]).
   std::vector<int> m_tptr, m_toff;
-  std::vector<double> m_tval;
+  /// Per spring: T_s's scale dt c + dt^2 k and its direction n in the reference shape.
+  std::vector<double> m_tscale;
+  Nodal<dim> m_tdir;
+  /// Spring s's transverse block T_s = (dt c + dt^2 k)(I - n n^T) (its diagonal blocks').
+  Mat<dim> transverse_of(int s) const {
+    const Vec<dim> n = m_tdir.col(s);
+    return m_tscale[static_cast<std::size_t>(s)] * (Mat<dim>::Identity() - n * n.transpose());
+  }
   std::vector<unsigned char>
       m_tcode;                 ///< per stored entry: (block * dim + p) * dim + q, blocks (i,i), (j,j), (i,j), (j,i)
   std::vector<int> m_diag_off; ///< per free dof: its diagonal's offset among H's values
