@@ -214,7 +214,6 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
     scale_neighbourhoods(m_adj_ref, m_adj_scale);
   }
   m_spring_ref_next = m_spring_ref;
-  m_base_next = m_base;
   m_tscale_next = m_tscale;
   m_tdir_next = m_tdir;
   m_multigrid = multigrid;
@@ -320,9 +319,8 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
   // H(beta) = H(0) + sum_s beta_s T_s into the second system's values, from the H(0) and T of
   // the reference shape it will have (a relinearisation's, or the one in use).
   const auto& net = m_model.net;
-  const std::vector<double>& base = relinearized ? m_base_next : m_base;
   double* v = m_next->values();
-  std::copy(base.begin(), base.end(), v);
+  if (!relinearized) std::copy(m_base.begin(), m_base.end(), v); // a relinearisation wrote its H(0) there
   if (!relinearized) // a relinearisation starts with no cover
     for (int s = 0; s < net.num_springs(); ++s) {
       const double b = m_beta[static_cast<std::size_t>(s)];
@@ -373,7 +371,7 @@ template <int dim> void WarpedFilter<dim>::swap_systems() {
     m_spring_ref.swap(m_spring_ref_next);
     m_adj_ref.swap(m_adj_ref_next);
     m_adj_scale.swap(m_adj_scale_next);
-    m_base.swap(m_base_next);
+    std::copy(m_h->values(), m_h->values() + m_base.size(), m_base.begin()); // its H(0) (refreshes leave values)
     m_tscale.swap(m_tscale_next);
     m_tdir.swap(m_tdir_next);
     std::fill(m_beta.begin(), m_beta.end(), 0.0);
@@ -541,9 +539,10 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool
   const auto& net = m_model.net;
   const auto& free = m_model.free_nodes;
   const double dt = m_dt;
-  std::fill(m_base_next.begin(), m_base_next.end(), 0.0);
+  double* base = m_next->values(); // H(0) of that shape, with no cover
+  std::fill_n(base, m_next->value_count(), 0.0);
   for (std::size_t r = 0; r < m_diag_off.size(); ++r)
-    m_base_next[static_cast<std::size_t>(m_diag_off[r])] += net.mass[free[r / dim]] * (1.0 + dt * net.mass_damping);
+    base[static_cast<std::size_t>(m_diag_off[r])] += net.mass[free[r / dim]] * (1.0 + dt * net.mass_damping);
   for (int s = 0; s < net.num_springs(); ++s) {
     const auto [i, j] = net.edge[static_cast<std::size_t>(s)];
     const Vec<dim> xi = net.rest.col(i) + u.col(i), xj = net.rest.col(j) + u.col(j);
@@ -559,7 +558,7 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool
       const int code = m_tcode[static_cast<std::size_t>(e)];
       const int p = (code / dim) % dim, q = code % dim;
       const double sign = code / (dim * dim) < 2 ? 1.0 : -1.0; // H's sign: + on (i,i), (j,j)
-      m_base_next[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
+      base[static_cast<std::size_t>(m_toff[static_cast<std::size_t>(e)])] += sign * B(p, q);
     }
   }
   if constexpr (dim == 3)

@@ -199,8 +199,9 @@ private:
   /// Sets each spring's beta at displacement u with largest mismatch `mismatch`, and starts
   /// the refactorisation in the second system (at_once: finishes it).
   void cover(const Nodal<dim>& u, double mismatch, bool at_once);
-  /// Writes H(beta) into the second system's values from m_base and m_tval, or (next) from
-  /// the relinearisation's m_base_next and m_tval_next.
+  /// Writes H(beta) into the second system's values from m_base and the transverse blocks
+  /// (relinearized: the values relinearize() wrote there stay, with no cover), and starts its
+  /// refresh.
   void start_refresh(bool relinearized);
   /// The second system takes over (and with a relinearisation, its reference shape).
   void swap_systems();
@@ -227,10 +228,10 @@ private:
   Nodal<dim> m_spring_ref;               ///< per spring: its vector in the reference shape (relinearize())
   Nodal<dim> m_adj_rest; ///< 3D, per adjacency entry of node i: X_j - X_i (the rotations read it in order)
   Nodal<dim> m_adj_ref;  ///< 3D, the same in the reference shape
-  /// A relinearisation under way: its reference vectors, scales, H(0) values and transverse
-  /// blocks, which take over with its system.
+  /// A relinearisation under way: its reference vectors, scales and transverse blocks, which
+  /// take over with its system (its H(0) is that system's values).
   Nodal<dim> m_spring_ref_next, m_adj_ref_next;
-  std::vector<double> m_adj_scale_next, m_base_next, m_tscale_next;
+  std::vector<double> m_adj_scale_next, m_tscale_next;
   Nodal<dim> m_tdir_next;
   std::vector<double> m_adj_scale;       ///< 3D, per node: 3 / sum |X_j - X_i|^2 (A's scale for the polar iteration)
   std::vector<double> m_polar_a;         ///< 3D, per node: its scaled A (9 values), the rotations' scratch
