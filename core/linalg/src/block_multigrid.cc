@@ -140,13 +140,25 @@ void rows_of(const RowSparse& S, std::vector<int>& ptr, std::vector<int>& col) {
   }
 }
 
-/// Ones where a dof-level matrix has an entry in a node block (rows / nr, cols / nc).
-RowSparse node_pattern(const RowSparse& A, int nr, int nc) {
-  std::vector<Eigen::Triplet<double>> trip;
-  for (Eigen::Index i = 0; i < A.outerSize(); ++i)
-    for (RowSparse::InnerIterator it(A, i); it; ++it) trip.emplace_back(i / nr, it.col() / nc, 1.0);
-  RowSparse S(A.rows() / nr, A.cols() / nc);
-  S.setFromTriplets(trip.begin(), trip.end(), [](double, double) { return 1.0; });
+/// Ones where a dof-level matrix has an entry in a node block (outer / nr, inner / nc), and
+/// (diagonal) on every diagonal block: by rows for a row-major A, by columns (the transpose's
+/// pattern, the same for a symmetric one) for a column-major one. Built row by row in order,
+/// no triplets (a triplet per entry was the multigrid setup's largest transient).
+template <class Sparse> RowSparse node_pattern(const Sparse& A, int nr, int nc, bool diagonal = false) {
+  RowSparse S(A.outerSize() / nr, A.innerSize() / nc);
+  S.reserve(A.nonZeros() / (static_cast<Eigen::Index>(nr) * nc) + S.rows());
+  std::vector<int> row;
+  for (Eigen::Index I = 0; I < S.rows(); ++I) {
+    row.clear();
+    if (diagonal) row.push_back(static_cast<int>(I));
+    for (Eigen::Index i = I * nr; i < (I + 1) * nr; ++i)
+      for (typename Sparse::InnerIterator it(A, i); it; ++it) row.push_back(static_cast<int>(it.index() / nc));
+    std::sort(row.begin(), row.end());
+    row.erase(std::unique(row.begin(), row.end()), row.end());
+    S.startVec(I);
+    for (int c : row) S.insertBack(I, c) = 1.0;
+  }
+  S.finalize();
   return S;
 }
 
@@ -179,8 +191,8 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
       if (it == e || *it != i) throw std::runtime_error("multigrid: a node without its diagonal block");
       m.diag.push_back(static_cast<int>(it - m.col.begin()));
     }
-    m.val.assign(m.col.size() * static_cast<std::size_t>(m.block()), 0.0);
-    m.f.assign(m.val.size(), 0.0f);
+    m.vals = std::make_shared<std::vector<double>>(m.col.size() * static_cast<std::size_t>(m.block()), 0.0);
+    m.f.assign(m.val().size(), 0.0f);
     m.trans.resize(m.col.size());
     for (int i = 0; i < m.rows(); ++i)
       for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
@@ -193,26 +205,27 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     return m;
   };
   // A block matrix as a dof-level one (for the setup's products).
+  // (every value of every block, zeros included; row by row in order, no triplets)
   auto dofs = [](const BlockCsr& m) {
-    std::vector<Eigen::Triplet<double>> trip;
-    for (int i = 0; i < m.rows(); ++i)
-      for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k)
-        for (int p = 0; p < m.nb; ++p)
-          for (int q = 0; q < m.nb; ++q)
-            trip.emplace_back(i * m.nb + p, m.col[static_cast<std::size_t>(k)] * m.nb + q,
-                              m.val[static_cast<std::size_t>(k * m.block() + q * m.w + p)]);
     RowSparse S(m.rows() * m.nb, m.rows() * m.nb);
-    S.setFromTriplets(trip.begin(), trip.end());
+    S.reserve(static_cast<Eigen::Index>(m.col.size()) * m.nb * m.nb);
+    for (int i = 0; i < m.rows(); ++i)
+      for (int p = 0; p < m.nb; ++p) {
+        S.startVec(i * m.nb + p);
+        for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k)
+          for (int q = 0; q < m.nb; ++q)
+            S.insertBack(i * m.nb + p, m.col[static_cast<std::size_t>(k)] * m.nb + q) =
+                m.val()[static_cast<std::size_t>(k * m.block() + q * m.w + p)];
+      }
+    S.finalize();
     return S;
   };
 
-  const RowSparse A0r(A0);
-  RowSparse pattern0 = node_pattern(A0r, dim, dim);
-  for (Eigen::Index i = 0; i < pattern0.rows(); ++i) pattern0.coeffRef(i, i) = 1.0;
-  m_mats.push_back(square(pattern0, dim));
-  for (Eigen::Index i = 0; i < A0r.outerSize(); ++i)
-    for (RowSparse::InnerIterator it(A0r, i); it; ++it)
-      m_mats.front().val[static_cast<std::size_t>(offset(static_cast<int>(i), static_cast<int>(it.col())))] =
+  // A0 is symmetric: its columns are its rows.
+  m_mats.push_back(square(node_pattern(A0, dim, dim, true), dim));
+  for (Eigen::Index c = 0; c < A0.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(A0, c); it; ++it)
+      m_mats.front().val()[static_cast<std::size_t>(offset(static_cast<int>(it.row()), static_cast<int>(c)))] =
           it.value();
 
   round(m_mats.front());
@@ -241,7 +254,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     for (int i = 0; i < n; ++i)
       for (int k = m_mats[l].ptr[static_cast<std::size_t>(i)]; k < m_mats[l].ptr[static_cast<std::size_t>(i) + 1];
            ++k) {
-        const auto* a = m_mats[l].val.data() + k * m_mats[l].block(); // the pads are 0
+        const auto* a = m_mats[l].val().data() + k * m_mats[l].block(); // the pads are 0
         double sq = 0;
         for (int e = 0; e < m_mats[l].block(); ++e) sq += a[e] * a[e];
         trip.emplace_back(i, m_mats[l].col[static_cast<std::size_t>(k)], std::sqrt(sq));
@@ -286,7 +299,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     // radius of D^-1 A (twenty power iterations, 5 % margin, as the scalar cycle's).
     trip.clear();
     for (int i = 0; i < n; ++i) {
-      const double* a = m_mats[l].val.data() + m_mats[l].diag[static_cast<std::size_t>(i)] * m_mats[l].block();
+      const double* a = m_mats[l].val().data() + m_mats[l].diag[static_cast<std::size_t>(i)] * m_mats[l].block();
       Small D(nb, nb);
       for (int p = 0; p < nb; ++p)
         for (int q = 0; q < nb; ++q) D(p, q) = a[q * m_mats[l].w + p];
@@ -394,7 +407,7 @@ template <int dim> void BlockMultigrid<dim>::finish_coarse(std::size_t l) {
   // 1 on the dead values' diagonal (their P columns are zero); then what the cycle reads.
   BlockCsr& C = m_mats[l + 1];
   for (int d : m_levels[l].t->dead)
-    C.val[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
+    C.val()[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
         1.0;
   round(C);
 }
@@ -431,7 +444,7 @@ template <int dim> double BlockMultigrid<dim>::refresh_stage(int stage, int begi
     BlockCsr& C = m_mats[l + 1];
     const auto first = static_cast<std::size_t>(C.ptr[static_cast<std::size_t>(begin)] * C.block());
     const auto last = static_cast<std::size_t>(C.ptr[static_cast<std::size_t>(end)] * C.block());
-    std::fill(C.val.begin() + static_cast<long>(first), C.val.begin() + static_cast<long>(last), 0.0);
+    std::fill(C.val().begin() + static_cast<long>(first), C.val().begin() + static_cast<long>(last), 0.0);
     return static_cast<double>(last - first) / 4; // a quarter of a multiply-add per value
   }
   const bool fine3 = m_mats[l].nb == 3;
@@ -480,7 +493,7 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
       for (int p = 0; p < m.nb; ++p)
         for (int q = 0; q < m.nb; ++q) {
           if (j == i && q < p) continue;
-          const float v = static_cast<float>(m.val[static_cast<std::size_t>(k * B + q * m.w + p)]);
+          const float v = static_cast<float>(m.val()[static_cast<std::size_t>(k * B + q * m.w + p)]);
           m.f[static_cast<std::size_t>(k * B + q * m.w + p)] = v;
           m.f[static_cast<std::size_t>(t * B + p * m.w + q)] = v;
         }
@@ -495,8 +508,8 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
           // the error against the value the row's symmetric counterpart was rounded from
           const double exact =
               (j > i || (j == i && q >= p))
-                  ? m.val[e]
-                  : m.val[static_cast<std::size_t>(m.trans[static_cast<std::size_t>(k)] * B + p * m.w + q)];
+                  ? m.val()[e]
+                  : m.val()[static_cast<std::size_t>(m.trans[static_cast<std::size_t>(k)] * B + p * m.w + q)];
           shift += std::abs(static_cast<double>(m.f[e]) - exact);
         }
       const auto d = static_cast<std::size_t>(m.diag[static_cast<std::size_t>(i)] * B + p * m.w + p);
@@ -520,7 +533,7 @@ double BlockMultigrid<dim>::galerkin_rows(std::size_t l, int begin, int end) {
   const int *ptr = A.ptr.data(), *col = A.col.data(), *pp = t.pptr.data(), *pc = t.pcol.data();
   const int *apptr = t.apptr.data(), *apcol = t.apcol.data(), *cptr = C.ptr.data(), *ccol = C.col.data();
   const float *av = A.f.data(), *pv = t.pval.data(), *ptv = t.ptrans.data();
-  double* cv = C.val.data();
+  double* cv = C.val().data();
   long products = 0, coarse_products = 0;
   for (int i = begin; i < end; ++i) {
     // Row i of A P, through the marker of its coarse columns: column c of block (i, J) +=
@@ -632,7 +645,7 @@ template <int dim> std::size_t BlockMultigrid<dim>::memory_bytes() const {
                       sizeof(double) * static_cast<std::size_t>(m_coarse_rhs.size());
   auto floats = [](const std::vector<float>& v) { return v.size() * sizeof(float); };
   for (const BlockCsr& A : m_mats)
-    bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + ints(A.trans) + doubles(A.val) + floats(A.f);
+    bytes += ints(A.ptr) + ints(A.col) + ints(A.diag) + ints(A.trans) + doubles(A.val()) + floats(A.f);
   for (const Level& L : m_levels) {
     bytes += doubles(L.inv_diag) + doubles(L.ap_row) + ints(L.marker);
     // the shared transfers counted in full by each copy: the bytes the cycle needs

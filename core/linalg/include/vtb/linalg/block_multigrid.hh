@@ -49,16 +49,18 @@ public:
   /// A: both triangles stored; its pattern is taken by node blocks (an entry of a block makes
   /// the whole block part of the pattern). x: the nodes' positions (the rigid modes').
   BlockMultigrid(const Eigen::SparseMatrix<double>& A, const Nodal<dim>& x, Eigen::Index coarsest = 64);
-  /// A second cycle with this one's hierarchy: the prolongators (which never change) shared,
-  /// the matrices' values copied, so that one can be refreshed while the other serves (the
-  /// tensor filter's two systems) for about half the memory of a second setup, and none of its
-  /// time.
+  /// A second cycle with this one's hierarchy, so that one can be refreshed while the other
+  /// serves (the tensor filter's two systems): what the cycle reads (the matrices in single
+  /// precision, the diagonal inverses, the coarsest factor) copied; the prolongators, which
+  /// never change, and the values in double, which only a refresh reads, shared. values() is
+  /// then the same array for both: write it for the refresh of one, and refresh that one
+  /// before the other. About a third of the memory of a second setup, and none of its time.
   BlockMultigrid(const BlockMultigrid& other);
   BlockMultigrid& operator=(const BlockMultigrid&) = delete;
 
   /// The finest matrix's values: entry (dim a + p, dim b + q) at values()[offset(...)].
-  double* values() { return m_mats.front().val.data(); }
-  std::size_t value_count() const { return m_mats.front().val.size(); }
+  double* values() { return m_mats.front().val().data(); }
+  std::size_t value_count() const { return m_mats.front().val().size(); }
   /// Offset into values() of entry (r, c), or -1 where its node block is not in the pattern.
   long offset(int r, int c) const;
   /// After values() changed: the diagonal inverses, coarse matrices and coarsest factor again.
@@ -87,7 +89,11 @@ private:
     int nb = dim, w = kLanes;
     std::vector<int> ptr, col, diag;
     std::vector<int> trans;  ///< per block (i, j): the block (j, i)
-    std::vector<double> val; ///< the level's matrix
+    /// The level's matrix, in double: where the values are written and the Galerkin products
+    /// summed, read only by a refresh (round() makes f from it). A copy of the multigrid
+    /// shares it: a refresh of either starts from what was last written.
+    std::shared_ptr<std::vector<double>> vals;
+    std::vector<double>& val() const { return *vals; }
     /// What the cycle reads: val in single precision, symmetric, each diagonal value raised by
     /// its row's rounding errors, so that the stored matrix is >= val (round()).
     std::vector<float> f;

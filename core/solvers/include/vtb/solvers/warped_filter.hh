@@ -75,7 +75,9 @@ public:
   }
   /// A second system holding this one's matrix H (given again for a system that is built
   /// anew), laid out as this one: for the refreshes made while this one serves. The V-cycle's
-  /// copies this one's values and shares its prolongators.
+  /// shares this one's prolongators and values() (block_multigrid.hh: only a refresh reads
+  /// them), so values() are written only for the refresh that follows, and read back only
+  /// after it.
   virtual std::unique_ptr<WarpedSystem> twin(const Eigen::SparseMatrix<double>& H) const = 0;
   /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
   virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
