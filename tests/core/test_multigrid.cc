@@ -273,21 +273,21 @@ TEST(MultigridFilter, LinearisedStepNeverAmplifiesAtAnyStep) {
     }
 }
 
-TEST(MultigridFilter, AutoPicksTheVCycleOnLarge3DMeshesAndTheTensorFilterBelow) {
+TEST(MultigridFilter, AutoPicksTheLagFreeFilterUpTo12kFreeNodesAndTheScalarVCycleBeyond) {
   // The default filter: in 3D the lag-free tensor filter by its factor on small meshes, by its
   // block V-cycle from kTensorCycleFreeNodes3D free nodes, and the scalar V-cycle from
-  // kLargeFreeNodes3D (docs/method.md); in 2D the tensor filter; a named filter is kept.
+  // kScalarCycleFreeNodes3D (docs/method.md); in 2D the tensor filter; a named filter is kept.
+  const Model<3> huge = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "30, 20, 20");
+  ASSERT_GE(huge.free_nodes.size(), kScalarCycleFreeNodes3D);
   const Model<3> large = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "20, 14, 14");
   ASSERT_GE(large.free_nodes.size(), kLargeFreeNodes3D);
-  const Model<3> middle = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "20, 7, 7");
-  ASSERT_GE(middle.free_nodes.size(), kTensorCycleFreeNodes3D);
-  ASSERT_LT(middle.free_nodes.size(), kLargeFreeNodes3D);
+  ASSERT_LT(large.free_nodes.size(), kScalarCycleFreeNodes3D);
   const Model<3> small = box_model("[[fix]]\ngroup = \"left\"\n");
   ASSERT_LT(small.free_nodes.size(), kTensorCycleFreeNodes3D);
   const Model<2> plate = test::model_from(test::plate_scene(70, 60, ""));
   ASSERT_GE(plate.free_nodes.size(), kLargeFreeNodes3D);
-  EXPECT_EQ(chosen_filter(large, solvers::kFilterAuto), solvers::kFilterMultigrid);
-  EXPECT_EQ(chosen_filter(middle, solvers::kFilterAuto), solvers::kFilterTensorMultigrid);
+  EXPECT_EQ(chosen_filter(huge, solvers::kFilterAuto), solvers::kFilterMultigrid);
+  EXPECT_EQ(chosen_filter(large, solvers::kFilterAuto), solvers::kFilterTensorMultigrid);
   EXPECT_EQ(chosen_filter(small, solvers::kFilterAuto), solvers::kFilterTensor);
   EXPECT_EQ(chosen_filter(plate, solvers::kFilterAuto), solvers::kFilterTensor) << "2D: the lag-free filter";
   EXPECT_EQ(chosen_filter(large, solvers::kFilterTensor), solvers::kFilterTensor);
@@ -299,7 +299,7 @@ TEST(MultigridFilter, AutoPicksTheVCycleOnLarge3DMeshesAndTheTensorFilterBelow) 
   const Model<3> pulled = box_model(
       "[[fix]]\ngroup = \"left\"\n[[load]]\ngroup = \"right\"\ntotal_force = [0.0, 0.0, -0.5]\n", 0.05, "20, 14, 14");
   FilteredImplicit<3> f(pulled, o);
-  EXPECT_EQ(f.filter(), solvers::kFilterMultigrid);
+  EXPECT_EQ(f.filter(), solvers::kFilterTensorMultigrid);
   State<3> s = initial_state(pulled);
   f.step(s);
   EXPECT_TRUE(s.u.allFinite());

@@ -19,14 +19,13 @@ template <int dim> State<dim> initial_state(const Model<dim>& model) {
 template <int dim> std::string chosen_filter(const Model<dim>& model, const std::string& filter) {
   if (filter != solvers::kFilterAuto) return filter;
   const std::size_t free = model.free_nodes.size();
-  // Large 3D meshes: the scalar V-cycle, whose step is 18-30x cheaper than implicit Euler's on
-  // the 10k slab, where the tensor filter's block V-cycle is 2.5x cheaper (and 14x more
-  // accurate over a transient: docs/method.md); the factor's fill grows like n^(4/3) there.
-  if (dim == 3 && free >= kLargeFreeNodes3D) return solvers::kFilterMultigrid;
-  // Below, the lag-free tensor filter: the full filter's extra mass costs 7-22x its transient
-  // error in 2D, 80-99 % on a twisted bar and 30 % on a loaded 2k slab in 3D (docs/method.md),
-  // at 2-3x its step in 2D and 4-7x in 3D; in 3D by its factor on small meshes and its block
-  // V-cycle from kTensorCycleFreeNodes3D.
+  // The lag-free tensor filter: the full filter's extra mass costs 7-22x its transient error in
+  // 2D, 80-99 % on a twisted bar, 30 % on a loaded 2k slab and 16 % on the 10k slab in 3D
+  // (docs/method.md), at 2-3x its step in 2D and 4-9x in 3D; in 3D by its factor on small
+  // meshes and its block V-cycle from kTensorCycleFreeNodes3D (on the 10k slab 1.9x cheaper
+  // than implicit Euler, as accurate, 192 MB peak). Beyond the sizes measured, the scalar
+  // V-cycle (a ninth of the cost, and the lag).
+  if (dim == 3 && free >= kScalarCycleFreeNodes3D) return solvers::kFilterMultigrid;
   if (dim == 3 && free >= kTensorCycleFreeNodes3D) return solvers::kFilterTensorMultigrid;
   return solvers::kFilterTensor;
 }

@@ -238,7 +238,7 @@ void creep_scaling(const std::filesystem::path& dir, Out& out) {
          << tex_number(100 * s.number(r, "error_vs_fem")) << " \\\\\n";
   }
   out.files.emplace_back("slab_rows.tex", slab.str());
-  out.number("vtbAutoMultigridNodes", static_cast<double>(kLargeFreeNodes3D)); // the auto filter's thresholds
+  out.number("vtbAutoMultigridNodes", static_cast<double>(kScalarCycleFreeNodes3D)); // the auto filter's thresholds
   out.number("vtbAutoTensorCycleNodes", static_cast<double>(kTensorCycleFreeNodes3D));
 }
 

@@ -91,8 +91,8 @@ struct IntegratorOptions {
 };
 
 /// From this many free nodes a 3D system is solved by the multigrid V-cycle rather than a
-/// sparse factor, whose fill grows like n^(4/3) there (docs/performance.md): the `auto`
-/// filter's and implicit Euler's `auto` linear solver's threshold.
+/// sparse factor, whose fill grows like n^(4/3) there (docs/performance.md): implicit Euler's
+/// `auto` linear solver's threshold, and where a step budget stops trying the full filter.
 inline constexpr std::size_t kLargeFreeNodes3D = 4000;
 
 /// From this many free nodes a 3D tensor filter solves with its block V-cycle rather than H_t's
@@ -100,10 +100,15 @@ inline constexpr std::size_t kLargeFreeNodes3D = 4000;
 /// docs/performance.md item 13).
 inline constexpr std::size_t kTensorCycleFreeNodes3D = 1000;
 
+/// From this many free nodes `auto` runs the scalar multigrid filter in 3D, whose step lags but
+/// costs about a ninth of the block V-cycle's: beyond the sizes the lag-free default was
+/// measured at (up to the 10k slab: 192 MB peak; docs/method.md, "What `auto` does with it").
+inline constexpr std::size_t kScalarCycleFreeNodes3D = 12000;
+
 /// The filter `filtered` runs for `filter` on this model: `filter` itself, or for `auto` the
-/// lag-free tensor filter (2D; 3D below kLargeFreeNodes3D free nodes, by its factor and from
-/// kTensorCycleFreeNodes3D by its block V-cycle) and the scalar multigrid filter on 3D meshes of
-/// kLargeFreeNodes3D free nodes and more, where the step's cost rules (docs/method.md).
+/// lag-free tensor filter (2D; 3D by its factor below kTensorCycleFreeNodes3D free nodes and by
+/// its block V-cycle from there) and the scalar multigrid filter on 3D meshes of
+/// kScalarCycleFreeNodes3D free nodes and more (docs/method.md).
 template <int dim> std::string chosen_filter(const Model<dim>& model, const std::string& filter);
 
 /// The factory by name: explicit | filtered | implicit-euler. Throws InputError for others.
