@@ -385,7 +385,8 @@ template <int dim> void BlockMultigrid<dim>::make_coarse_factor() {
   for (int i = 0; i < C.rows(); ++i)
     for (int k = C.ptr[static_cast<std::size_t>(i)]; k < C.ptr[static_cast<std::size_t>(i) + 1]; ++k)
       for (int p = 0; p < C.nb; ++p)
-        for (int q = 0; q < C.nb; ++q) trip.emplace_back(i * C.nb + p, C.col[static_cast<std::size_t>(k)] * C.nb + q, 1.0);
+        for (int q = 0; q < C.nb; ++q)
+          trip.emplace_back(i * C.nb + p, C.col[static_cast<std::size_t>(k)] * C.nb + q, 1.0);
   Eigen::SparseMatrix<double> Cs(C.rows() * C.nb, C.rows() * C.nb);
   Cs.setFromTriplets(trip.begin(), trip.end());
   m_coarse = std::make_unique<OrderedLDLT>(Cs, C.nb);
@@ -407,8 +408,8 @@ template <int dim> void BlockMultigrid<dim>::finish_coarse(std::size_t l) {
   // 1 on the dead values' diagonal (their P columns are zero); then what the cycle reads.
   BlockCsr& C = m_mats[l + 1];
   for (int d : m_levels[l].t->dead)
-    C.val()[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() + (d % C.nb) * (C.w + 1))] +=
-        1.0;
+    C.val()[static_cast<std::size_t>(C.diag[static_cast<std::size_t>(d / C.nb)] * C.block() +
+                                     (d % C.nb) * (C.w + 1))] += 1.0;
   round(C);
 }
 
@@ -622,9 +623,8 @@ template <int dim> void BlockMultigrid<dim>::cycle(std::size_t l, const double* 
   }
   const Level& L = m_levels[l];
   const Transfer& T = *L.t;
-  const Arrays arrays{A.ptr.data(),      A.col.data(),       A.diag.data(),   T.pptr.data(), T.pcol.data(),
-                      A.f.data(),        L.inv_diag.data(),  T.pval.data(),   T.ptrans.data(),
-                      A.rows(),          m_mats[l + 1].rows()};
+  const Arrays arrays{A.ptr.data(),      A.col.data(),  A.diag.data(),   T.pptr.data(), T.pcol.data(),       A.f.data(),
+                      L.inv_diag.data(), T.pval.data(), T.ptrans.data(), A.rows(),      m_mats[l + 1].rows()};
   double *bc = m_b[l].data(), *xc = m_x[l].data();
   sweep_down<dim>(arrays, A.nb, b, x, bc);
   cycle(l + 1, bc, xc);

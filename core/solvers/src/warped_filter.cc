@@ -321,7 +321,7 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
   const auto& net = m_model.net;
   double* v = m_next->values();
   if (!relinearized) std::copy(m_base.begin(), m_base.end(), v); // a relinearisation wrote its H(0) there
-  if (!relinearized) // a relinearisation starts with no cover
+  if (!relinearized)                                             // a relinearisation starts with no cover
     for (int s = 0; s < net.num_springs(); ++s) {
       const double b = m_beta[static_cast<std::size_t>(s)];
       if (b == 0) continue;

@@ -88,7 +88,7 @@ private:
   struct BlockCsr {
     int nb = dim, w = kLanes;
     std::vector<int> ptr, col, diag;
-    std::vector<int> trans;  ///< per block (i, j): the block (j, i)
+    std::vector<int> trans; ///< per block (i, j): the block (j, i)
     /// The level's matrix, in double: where the values are written and the Galerkin products
     /// summed, read only by a refresh (round() makes f from it). A copy of the multigrid
     /// shares it: a refresh of either starts from what was last written.
