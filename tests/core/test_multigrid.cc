@@ -223,6 +223,31 @@ TEST(BlockMultigridCycle, RefreshedInPartsIsTheSameCycleToTheBit) {
   EXPECT_EQ((Bw - Bp).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(BlockMultigridCycle, ACopyAppliesTheSameCycleAndIsRefreshedWhileTheOriginalServes) {
+  // The tensor filter's second system is a copy (block_multigrid.hh): the same cycle to the
+  // bit; new values written for the copy and refreshed there leave the original's cycle as it
+  // was (it reads its own single-precision matrices), and the original refreshed afterwards
+  // takes the same values (the values in double are shared), so the same cycle as the copy's.
+  const Model<3> m = box_model("[[fix]]\ngroup = \"left\"\n", 0.05, "12, 4, 4");
+  const Eigen::SparseMatrix<double> H0 = tensor_filter_matrix(m, 0.01, 0.0), H1 = tensor_filter_matrix(m, 0.01, 0.7);
+  BlockMultigrid<3> mg(H0, free_positions(m), 16);
+  const Eigen::MatrixXd B0 = dense_block_cycle(mg, H0.rows());
+  BlockMultigrid<3> copy(mg);
+  EXPECT_EQ((dense_block_cycle(copy, H0.rows()) - B0).cwiseAbs().maxCoeff(), 0.0);
+  for (Eigen::Index c = 0; c < H1.outerSize(); ++c)
+    for (Eigen::SparseMatrix<double>::InnerIterator it(H1, c); it; ++it)
+      copy.values()[copy.offset(static_cast<int>(it.row()), static_cast<int>(it.col()))] = it.value();
+  copy.begin_refresh();
+  while (!copy.refresh_part(1.0 / 16)) {
+    EXPECT_EQ((dense_block_cycle(mg, H0.rows()) - B0).cwiseAbs().maxCoeff(), 0.0) << "the original serves unchanged";
+  }
+  const Eigen::MatrixXd B1 = dense_block_cycle(copy, H1.rows());
+  EXPECT_EQ((dense_block_cycle(mg, H0.rows()) - B0).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT((B1 - B0).cwiseAbs().maxCoeff(), 1e-3 * B0.cwiseAbs().maxCoeff()) << "the copy uses the new values";
+  mg.refresh();
+  EXPECT_EQ((dense_block_cycle(mg, H1.rows()) - B1).cwiseAbs().maxCoeff(), 0.0);
+}
+
 /// The filtered step linearised at rest, by central differences of one step from a perturbed
 /// state: columns are d(u', v') / d(u, v) over the free nodes' coordinates.
 Eigen::MatrixXd linearised_step(const Model<3>& model, Integrator<3>& integ) {
