@@ -35,18 +35,21 @@ struct Arrays {
 /// The NB x NB block at a (NB columns of W lanes, double or float) times the node x (its first
 /// NB values), in two partial sums (even and odd columns), so that the adds form two shorter
 /// chains.
-template <int W, int NB, class T, class X> [[gnu::always_inline]] inline Lane<W> times(const T* a, const X* x) {
-  Lane<W> even = load<W>(a) * static_cast<double>(x[0]), odd = load<W>(a + W) * static_cast<double>(x[1]);
+/// S: the columns' stride (W for padded blocks; NB for the packed single-precision matrices,
+/// whose lanes past NB then hold the next values, unused).
+template <int W, int NB, int S = W, class T, class X>
+[[gnu::always_inline]] inline Lane<W> times(const T* a, const X* x) {
+  Lane<W> even = load<W>(a) * static_cast<double>(x[0]), odd = load<W>(a + S) * static_cast<double>(x[1]);
   for (int q = 2; q < NB; q += 2) {
-    even += load<W>(a + q * W) * static_cast<double>(x[q]);
-    if (q + 1 < NB) odd += load<W>(a + (q + 1) * W) * static_cast<double>(x[q + 1]);
+    even += load<W>(a + q * S) * static_cast<double>(x[q]);
+    if (q + 1 < NB) odd += load<W>(a + (q + 1) * S) * static_cast<double>(x[q + 1]);
   }
   return even + odd;
 }
-template <int W, int NB, class T> [[gnu::always_inline]] inline Lane<W> times(const T* a, Lane<W> x) {
+template <int W, int NB, int S = W, class T> [[gnu::always_inline]] inline Lane<W> times(const T* a, Lane<W> x) {
   double v[W];
   store<W>(v, x);
-  return times<W, NB>(a, static_cast<const double*>(v));
+  return times<W, NB, S>(a, static_cast<const double*>(v));
 }
 
 /// Forward block Gauss-Seidel from x = 0 (only the lower blocks meet nonzero x), then the
@@ -55,16 +58,16 @@ template <int W, int NB, class T> [[gnu::always_inline]] inline Lane<W> times(co
 /// columns of W lanes (transposed: NB columns of WC lanes), a coarse node WC lanes.
 template <int W, int NB, int WC, int NBC>
 [[gnu::always_inline]] inline void forward_and_restrict(const Arrays& L, const double* b, double* x, double* bc) {
-  constexpr int B = W * NB, PTB = WC * NB;
+  constexpr int B = W * NB, F = NB * NB, PTB = WC * NB; // F: a packed block (Arrays::val)
   for (int i = 0; i < L.n; ++i) {
     Lane<W> s = load<W>(b + i * W);
-    for (int k = L.ptr[i]; k < L.diag[i]; ++k) s -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
+    for (int k = L.ptr[i]; k < L.diag[i]; ++k) s -= times<W, NB, NB>(L.val + k * F, x + L.col[k] * W);
     store<W>(x + i * W, times<W, NB>(L.dinv + i * B, s));
   }
   for (int c = 0; c < L.nc * WC; ++c) bc[c] = 0;
   for (int i = 0; i < L.n; ++i) {
     Lane<W> r = {};
-    for (int k = L.diag[i] + 1; k < L.ptr[i + 1]; ++k) r -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
+    for (int k = L.diag[i] + 1; k < L.ptr[i + 1]; ++k) r -= times<W, NB, NB>(L.val + k * F, x + L.col[k] * W);
     double rv[W];
     store<W>(rv, r);
     for (int p = L.pp[i]; p < L.pp[i + 1]; ++p) {
@@ -81,7 +84,7 @@ constexpr int kAhead = 4;
 template <int W, int NB, int WC, int NBC>
 [[gnu::always_inline]] inline void prolongate_and_backward(const Arrays& L, const double* xc, const double* b,
                                                            double* x) {
-  constexpr int B = W * NB, PB = W * NBC;
+  constexpr int B = W * NB, F = NB * NB, PB = W * NBC;
   for (int i = 0; i < L.n; ++i) {
     Lane<W> s = load<W>(x + i * W);
     for (int p = L.pp[i]; p < L.pp[i + 1]; ++p) s += times<W, NBC>(L.pv + p * PB, xc + L.pc[p] * WC);
@@ -91,13 +94,13 @@ template <int W, int NB, int WC, int NBC>
     // The rows are read backward, each forward: a stream the hardware's prefetchers do not
     // follow. Row i - kAhead's blocks are asked for now (one touch per cache line).
     if (i >= kAhead) {
-      const char* first = reinterpret_cast<const char*>(L.val + L.ptr[i - kAhead] * B);
-      const char* last = reinterpret_cast<const char*>(L.val + L.ptr[i - kAhead + 1] * B);
+      const char* first = reinterpret_cast<const char*>(L.val + L.ptr[i - kAhead] * F);
+      const char* last = reinterpret_cast<const char*>(L.val + L.ptr[i - kAhead + 1] * F);
       for (const char* c = first; c < last; c += 64) __builtin_prefetch(c);
     }
     Lane<W> s = load<W>(b + i * W), t = {}; // two sums: two shorter chains of dependent adds
-    for (int k = L.ptr[i]; k < L.diag[i]; ++k) s -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
-    for (int k = L.diag[i] + 1; k < L.ptr[i + 1]; ++k) t -= times<W, NB>(L.val + k * B, x + L.col[k] * W);
+    for (int k = L.ptr[i]; k < L.diag[i]; ++k) s -= times<W, NB, NB>(L.val + k * F, x + L.col[k] * W);
+    for (int k = L.diag[i] + 1; k < L.ptr[i + 1]; ++k) t -= times<W, NB, NB>(L.val + k * F, x + L.col[k] * W);
     store<W>(x + i * W, times<W, NB>(L.dinv + i * B, s + t));
   }
 }
@@ -192,7 +195,7 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
       m.diag.push_back(static_cast<int>(it - m.col.begin()));
     }
     m.vals = std::make_shared<std::vector<double>>(m.col.size() * static_cast<std::size_t>(m.block()), 0.0);
-    m.f.assign(m.val().size(), 0.0f);
+    m.f.assign(m.col.size() * static_cast<std::size_t>(m.packed()) + static_cast<std::size_t>(m.w - m.nb), 0.0f);
     m.trans.resize(m.col.size());
     for (int i = 0; i < m.rows(); ++i)
       for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
@@ -397,7 +400,7 @@ template <int dim> void BlockMultigrid<dim>::make_coarse_factor() {
         for (int q = 0; q < C.nb; ++q) {
           const int r = m_coarse->ordered(i * C.nb + p);
           const int c = m_coarse->ordered(C.col[static_cast<std::size_t>(k)] * C.nb + q);
-          if (r <= c) m_coarse_offset[static_cast<std::size_t>(k * C.block() + q * C.w + p)] = m_coarse->offset(r, c);
+          if (r <= c) m_coarse_offset[static_cast<std::size_t>(k * C.packed() + q * C.nb + p)] = m_coarse->offset(r, c);
         }
   m_coarse_order.resize(static_cast<std::size_t>(C.rows()) * static_cast<std::size_t>(C.nb));
   for (std::size_t d = 0; d < m_coarse_order.size(); ++d) m_coarse_order[d] = m_coarse->ordered(static_cast<int>(d));
@@ -485,7 +488,7 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
   // to its diagonal value, rounded up: the stored matrix minus val is symmetric and
   // diagonally dominant with a nonnegative diagonal, so positive semidefinite. The cycle is
   // then one for a matrix >= val, and B <= that matrix's inverse <= val's (docs/method.md).
-  const int B = m.block();
+  const int B = m.block(), F = m.packed(); // val's blocks padded, f's packed
   for (int i = 0; i < m.rows(); ++i)
     for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k) {
       const int j = m.col[static_cast<std::size_t>(k)];
@@ -495,8 +498,8 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
         for (int q = 0; q < m.nb; ++q) {
           if (j == i && q < p) continue;
           const float v = static_cast<float>(m.val()[static_cast<std::size_t>(k * B + q * m.w + p)]);
-          m.f[static_cast<std::size_t>(k * B + q * m.w + p)] = v;
-          m.f[static_cast<std::size_t>(t * B + p * m.w + q)] = v;
+          m.f[static_cast<std::size_t>(k * F + q * m.nb + p)] = v;
+          m.f[static_cast<std::size_t>(t * F + p * m.nb + q)] = v;
         }
     }
   for (int i = 0; i < m.rows(); ++i)
@@ -511,9 +514,9 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
               (j > i || (j == i && q >= p))
                   ? m.val()[e]
                   : m.val()[static_cast<std::size_t>(m.trans[static_cast<std::size_t>(k)] * B + p * m.w + q)];
-          shift += std::abs(static_cast<double>(m.f[e]) - exact);
+          shift += std::abs(static_cast<double>(m.f[static_cast<std::size_t>(k * F + q * m.nb + p)]) - exact);
         }
-      const auto d = static_cast<std::size_t>(m.diag[static_cast<std::size_t>(i)] * B + p * m.w + p);
+      const auto d = static_cast<std::size_t>(m.diag[static_cast<std::size_t>(i)] * F + p * m.nb + p);
       const double target = static_cast<double>(m.f[d]) + shift;
       float v = static_cast<float>(target);
       if (static_cast<double>(v) < target) v = std::nextafter(v, std::numeric_limits<float>::infinity());
@@ -524,7 +527,7 @@ template <int dim> void BlockMultigrid<dim>::round(BlockCsr& m) {
 template <int dim>
 template <int W, int NB, int WC>
 double BlockMultigrid<dim>::galerkin_rows(std::size_t l, int begin, int end) {
-  constexpr int NBC = kModes, AB = W * NB, PB = W * NBC, PTB = WC * NB, CB = WC * NBC;
+  constexpr int NBC = kModes, AF = NB * NB, PB = W * NBC, PTB = WC * NB, CB = WC * NBC; // AF: A's packed block
   const BlockCsr& A = m_mats[l];
   BlockCsr& C = m_mats[l + 1];
   Level& lev = m_levels[l];
@@ -545,12 +548,12 @@ double BlockMultigrid<dim>::galerkin_rows(std::size_t l, int begin, int end) {
       std::fill_n(row + (q - a0) * PB, PB, 0.0);
     }
     for (int k = ptr[i]; k < ptr[i + 1]; ++k) {
-      const float* a = av + k * AB;
+      const float* a = av + k * AF;
       products += pp[col[k] + 1] - pp[col[k]];
       for (int p = pp[col[k]]; p < pp[col[k] + 1]; ++p) {
         const float* pj = pv + p * PB;
         double* r = row + marker[pc[p]] * PB;
-        for (int c = 0; c < NBC; ++c) store<W>(r + c * W, load<W>(r + c * W) + times<W, NB>(a, pj + c * W));
+        for (int c = 0; c < NBC; ++c) store<W>(r + c * W, load<W>(r + c * W) + times<W, NB, NB>(a, pj + c * W));
       }
     }
     // Its share of P^T A P: column c of block (I, J) += P_iI^T times column c of (A P)_iJ, for
@@ -589,9 +592,9 @@ template <int dim> void BlockMultigrid<dim>::finish() {
     double* inv = m_levels[l].inv_diag.data();
     Small D(A.nb, A.nb);
     for (int i = 0; i < A.rows(); ++i) {
-      const float* a = A.f.data() + A.diag[static_cast<std::size_t>(i)] * A.block();
+      const float* a = A.f.data() + A.diag[static_cast<std::size_t>(i)] * A.packed();
       for (int p = 0; p < A.nb; ++p)
-        for (int q = 0; q < A.nb; ++q) D(p, q) = a[q * A.w + p];
+        for (int q = 0; q < A.nb; ++q) D(p, q) = a[q * A.nb + p];
       const Small Dinv = D.inverse();
       if (!Dinv.allFinite()) throw std::runtime_error("multigrid: a singular diagonal block");
       for (int p = 0; p < A.nb; ++p)
@@ -601,7 +604,7 @@ template <int dim> void BlockMultigrid<dim>::finish() {
   double* v = m_coarse->values();
   std::fill_n(v, m_coarse->nonzeros(), 0.0);
   const std::vector<float>& cv = m_mats.back().f;
-  for (std::size_t e = 0; e < cv.size(); ++e)
+  for (std::size_t e = 0; e < m_coarse_offset.size(); ++e) // (f's tail, past the blocks, has none)
     if (m_coarse_offset[e] >= 0) v[m_coarse_offset[e]] = cv[e];
   if (!m_coarse->factorize()) throw std::runtime_error("multigrid: the coarsest matrix is not positive definite");
 }

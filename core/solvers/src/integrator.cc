@@ -23,7 +23,7 @@ template <int dim> std::string chosen_filter(const Model<dim>& model, const std:
   // 2D, 80-99 % on a twisted bar, 30 % on a loaded 2k slab and 16 % on the 10k slab in 3D
   // (docs/method.md), at 2-3x its step in 2D and 4-9x in 3D; in 3D by its factor on small
   // meshes and its block V-cycle from kTensorCycleFreeNodes3D (on the 10k slab 1.9x cheaper
-  // than implicit Euler, as accurate, 192 MB peak). Beyond the sizes measured, the scalar
+  // than implicit Euler, as accurate, 188 MB peak). Beyond the sizes measured, the scalar
   // V-cycle (a ninth of the cost, and the lag).
   if (dim == 3 && free >= kScalarCycleFreeNodes3D) return solvers::kFilterMultigrid;
   if (dim == 3 && free >= kTensorCycleFreeNodes3D) return solvers::kFilterTensorMultigrid;

@@ -95,10 +95,15 @@ private:
     std::shared_ptr<std::vector<double>> vals;
     std::vector<double>& val() const { return *vals; }
     /// What the cycle reads: val in single precision, symmetric, each diagonal value raised by
-    /// its row's rounding errors, so that the stored matrix is >= val (round()).
+    /// its row's rounding errors, so that the stored matrix is >= val (round()). Packed: value
+    /// (p, q) of block k at f[k nb nb + q nb + p] (no pad lanes: a quarter less to read in 3D),
+    /// and w - nb floats more at the end, so that a column may be loaded as w lanes (the lanes
+    /// past nb read the next values; the sweeps never use them: every stored vector is made by
+    /// the padded diagonal inverses).
     std::vector<float> f;
     int rows() const { return static_cast<int>(ptr.size()) - 1; }
     int block() const { return nb * w; }
+    int packed() const { return nb * nb; }
   };
   /// What a level's cycle and refreshes read and never change, shared by a copy: P by fine
   /// rows, blocks nbf x nbc stored as nbc columns of wf lanes, its values rounded once (any P

@@ -102,7 +102,7 @@ inline constexpr std::size_t kTensorCycleFreeNodes3D = 1000;
 
 /// From this many free nodes `auto` runs the scalar multigrid filter in 3D, whose step lags but
 /// costs about a ninth of the block V-cycle's: beyond the sizes the lag-free default was
-/// measured at (up to the 10k slab: 192 MB peak; docs/method.md, "What `auto` does with it").
+/// measured at (up to the 10k slab: 188 MB peak; docs/method.md, "What `auto` does with it").
 inline constexpr std::size_t kScalarCycleFreeNodes3D = 12000;
 
 /// The filter `filtered` runs for `filter` on this model: `filter` itself, or for `auto` the
