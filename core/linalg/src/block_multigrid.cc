@@ -207,23 +207,6 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
       }
     return m;
   };
-  // A block matrix as a dof-level one (for the setup's products).
-  // (every value of every block, zeros included; row by row in order, no triplets)
-  auto dofs = [](const BlockCsr& m) {
-    RowSparse S(m.rows() * m.nb, m.rows() * m.nb);
-    S.reserve(static_cast<Eigen::Index>(m.col.size()) * m.nb * m.nb);
-    for (int i = 0; i < m.rows(); ++i)
-      for (int p = 0; p < m.nb; ++p) {
-        S.startVec(i * m.nb + p);
-        for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k)
-          for (int q = 0; q < m.nb; ++q)
-            S.insertBack(i * m.nb + p, m.col[static_cast<std::size_t>(k)] * m.nb + q) =
-                m.val()[static_cast<std::size_t>(k * m.block() + q * m.w + p)];
-      }
-    S.finalize();
-    return S;
-  };
-
   // A0 is symmetric: its columns are its rows.
   m_mats.push_back(square(node_pattern(A0, dim, dim, true), dim));
   for (Eigen::Index c = 0; c < A0.outerSize(); ++c)
@@ -381,18 +364,27 @@ BlockMultigrid<dim>::BlockMultigrid(const BlockMultigrid& other)
   finish(); // the copied values' diagonal inverses (the same) and coarsest factor
 }
 
+template <int dim> RowSparse BlockMultigrid<dim>::dofs(const BlockCsr& m) {
+  // Row by row in order, no triplets.
+  RowSparse S(m.rows() * m.nb, m.rows() * m.nb);
+  S.reserve(static_cast<Eigen::Index>(m.col.size()) * m.nb * m.nb);
+  for (int i = 0; i < m.rows(); ++i)
+    for (int p = 0; p < m.nb; ++p) {
+      S.startVec(i * m.nb + p);
+      for (int k = m.ptr[static_cast<std::size_t>(i)]; k < m.ptr[static_cast<std::size_t>(i) + 1]; ++k)
+        for (int q = 0; q < m.nb; ++q)
+          S.insertBack(i * m.nb + p, m.col[static_cast<std::size_t>(k)] * m.nb + q) =
+              m.val()[static_cast<std::size_t>(k * m.block() + q * m.w + p)];
+    }
+  S.finalize();
+  return S;
+}
+
 template <int dim> void BlockMultigrid<dim>::make_coarse_factor() {
-  // The coarsest matrix for a sparse LDL^T (every value of every block in its pattern).
+  // The coarsest matrix for a sparse LDL^T (its pattern: every value of every block; the values
+  // come with finish()).
   const BlockCsr& C = m_mats.back();
-  std::vector<Eigen::Triplet<double>> trip;
-  for (int i = 0; i < C.rows(); ++i)
-    for (int k = C.ptr[static_cast<std::size_t>(i)]; k < C.ptr[static_cast<std::size_t>(i) + 1]; ++k)
-      for (int p = 0; p < C.nb; ++p)
-        for (int q = 0; q < C.nb; ++q)
-          trip.emplace_back(i * C.nb + p, C.col[static_cast<std::size_t>(k)] * C.nb + q, 1.0);
-  Eigen::SparseMatrix<double> Cs(C.rows() * C.nb, C.rows() * C.nb);
-  Cs.setFromTriplets(trip.begin(), trip.end());
-  m_coarse = std::make_unique<OrderedLDLT>(Cs, C.nb);
+  m_coarse = std::make_unique<OrderedLDLT>(Eigen::SparseMatrix<double>(dofs(C)), C.nb);
   m_coarse_offset.assign(C.f.size(), -1);
   for (int i = 0; i < C.rows(); ++i)
     for (int k = C.ptr[static_cast<std::size_t>(i)]; k < C.ptr[static_cast<std::size_t>(i) + 1]; ++k)

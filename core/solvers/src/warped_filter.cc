@@ -18,11 +18,16 @@ namespace vtb {
 
 namespace {
 
-/// A spring block's transverse parts at beta = 1 with H's sign: -sign (dt c + dt^2 k)(I - n n^T),
-/// k and c the spring's constants and n its direction (from its dashpot block D = c n n^T, or
-/// from its vector where c is 0).
-template <int dim> Mat<dim> transverse_block(double sign, double k, double c, const Vec<dim>& n, double dt) {
-  return -sign * (dt * c + dt * dt * k) * (Mat<dim>::Identity() - n * n.transpose());
+/// A spring's transverse scale dt c + dt^2 k, k and c its constants (at rest the traces of its
+/// blocks K = k n n^T and D = c n n^T).
+double transverse_scale(double k, double c, double dt) {
+  return dt * c + dt * dt * k;
+}
+
+/// A spring block's transverse part at beta = 1: scale (I - n n^T), n the spring's direction;
+/// scale = -sign transverse_scale with the block's stiffness sign (+ on its diagonal blocks).
+template <int dim> Mat<dim> transverse_block(double scale, const Vec<dim>& n) {
+  return scale * (Mat<dim>::Identity() - n * n.transpose());
 }
 
 /// The unit direction of x_j - x_i (zero for a spring of length 0).
@@ -53,8 +58,8 @@ Eigen::SparseMatrix<double> tensor_filter_matrix(const Model<dim>& model, double
         if (a < 0 || b < 0) return;
         const auto& e = net.edge[static_cast<std::size_t>(s)];
         const Vec<dim> n = direction<dim>(net.rest.col(e[0]), net.rest.col(e[1]));
-        const Mat<dim> B =
-            -sign * (dt * D + dt * dt * K) + transverse * transverse_block<dim>(sign, K.trace(), D.trace(), n, dt);
+        const Mat<dim> B = -sign * (dt * D + dt * dt * K) +
+                           transverse * transverse_block<dim>(-sign * transverse_scale(K.trace(), D.trace(), dt), n);
         for (int p = 0; p < dim; ++p)
           for (int q = 0; q < dim; ++q) trip.emplace_back(a * dim + p, b * dim + q, B(p, q));
       });
@@ -179,7 +184,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
           const auto& e = net.edge[static_cast<std::size_t>(sp)];
           const int block = (sign < 0 ? 0 : 2) + (i == e[0] ? 0 : 1); // (i,i), (j,j), (i,j), (j,i)
           // T's scale and direction (the same from each of the spring's blocks).
-          m_tscale[static_cast<std::size_t>(sp)] = dt * D.trace() + dt * dt * K.trace();
+          m_tscale[static_cast<std::size_t>(sp)] = transverse_scale(K.trace(), D.trace(), dt);
           m_tdir.col(sp) = direction<dim>(net.rest.col(e[0]), net.rest.col(e[1]));
           for (int p = 0; p < dim; ++p)
             for (int q = 0; q < dim; ++q) {
@@ -325,7 +330,7 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
     for (int s = 0; s < net.num_springs(); ++s) {
       const double b = m_beta[static_cast<std::size_t>(s)];
       if (b == 0) continue;
-      const Mat<dim> T = transverse_of(s);
+      const Mat<dim> T = transverse_block<dim>(m_tscale[static_cast<std::size_t>(s)], m_tdir.col(s));
       for (int k = m_tptr[static_cast<std::size_t>(s)]; k < m_tptr[static_cast<std::size_t>(s) + 1]; ++k) {
         const int code = m_tcode[static_cast<std::size_t>(k)];
         const double t = T((code / dim) % dim, code % dim);
@@ -552,7 +557,7 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool
     const double k = net.stiffness[static_cast<std::size_t>(s)], c = net.damping[static_cast<std::size_t>(s)];
     const Mat<dim> B = dt * dashpot_jacobian<dim>(xi, xj, c) +
                        dt * dt * spring_jacobian<dim>(xi, xj, net.rest_length[static_cast<std::size_t>(s)], k, true);
-    m_tscale_next[static_cast<std::size_t>(s)] = dt * c + dt * dt * k; // the transverse blocks of this shape
+    m_tscale_next[static_cast<std::size_t>(s)] = transverse_scale(k, c, dt); // the transverse blocks of this shape
     m_tdir_next.col(s) = direction<dim>(xi, xj);
     for (int e = begin; e < end; ++e) {
       const int code = m_tcode[static_cast<std::size_t>(e)];

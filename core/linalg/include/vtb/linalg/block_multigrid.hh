@@ -132,6 +132,9 @@ private:
   void finish();
   /// m.f from m.val (BlockCsr::f).
   static void round(BlockCsr& m);
+  /// m as a dof-level matrix: every value of every block, zeros included (the setup's products,
+  /// the coarsest factor's pattern).
+  static Eigen::SparseMatrix<double, Eigen::RowMajor> dofs(const BlockCsr& m);
   /// Level l's fine rows [begin, end) of the Galerkin product: each row i of A P made in the
   /// scratch, then P_i^T (A P)_i added into the coarse matrix, for fine nodes of NB values on W
   /// lanes (coarse: kModes on WC lanes). Returns its block products.

@@ -242,17 +242,13 @@ private:
   /// 2D, per spring (row) at the last rotations(), column by column: d . D and D x d.
   Eigen::Matrix<double, Eigen::Dynamic, 2> m_pq;
   std::vector<double> m_base; ///< H(0)'s stored values
-  /// Spring s's transverse blocks at beta = 1, +-T_s on its diagonal and off-diagonal blocks
-  /// (transverse_of): the values at H's offsets m_toff[k], k in [m_tptr[s], m_tptr[s + 1]).
+  /// Spring s's transverse blocks at beta = 1, +-T_s = +-(dt c + dt^2 k)(I - n n^T) on its
+  /// diagonal and off-diagonal blocks: the values at H's offsets m_toff[k], k in [m_tptr[s],
+  /// m_tptr[s + 1]).
   std::vector<int> m_tptr, m_toff;
   /// Per spring: T_s's scale dt c + dt^2 k and its direction n in the reference shape.
   std::vector<double> m_tscale;
   Nodal<dim> m_tdir;
-  /// Spring s's transverse block T_s = (dt c + dt^2 k)(I - n n^T) (its diagonal blocks').
-  Mat<dim> transverse_of(int s) const {
-    const Vec<dim> n = m_tdir.col(s);
-    return m_tscale[static_cast<std::size_t>(s)] * (Mat<dim>::Identity() - n * n.transpose());
-  }
   std::vector<unsigned char>
       m_tcode;                 ///< per stored entry: (block * dim + p) * dim + q, blocks (i,i), (j,j), (i,j), (j,i)
   std::vector<int> m_diag_off; ///< per free dof: its diagonal's offset among H's values
