@@ -100,7 +100,7 @@ public:
       for (int col = 0; col < full.outerSize(); ++col)
         for (SpMat::InnerIterator it(full, col); it; ++it) {
           const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
-          if (r >= 0 && c >= 0) kept.emplace_back(r, c, it.value());
+          if (r >= c && c >= 0) kept.emplace_back(r, c, it.value()); // the lower triangle: all CHOLMOD reads
         }
       m_A.resize(m_size, m_size);
       m_A.setFromTriplets(kept.begin(), kept.end());
@@ -111,7 +111,7 @@ public:
         if (c < 0) continue;
         int next = m_A.outerIndexPtr()[c];
         for (int k = full.outerIndexPtr()[col]; k < full.outerIndexPtr()[col + 1]; ++k)
-          if (m_reduced[static_cast<std::size_t>(full.innerIndexPtr()[k])] >= 0)
+          if (m_reduced[static_cast<std::size_t>(full.innerIndexPtr()[k])] >= c)
             m_place[static_cast<std::size_t>(k)] = next++;
       }
       m_llt.analyzePattern(m_A);
@@ -127,18 +127,33 @@ public:
       throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
                        "pinned (is the mesh in one piece?)");
   }
+  /// b <- K^-1 b, kSolveColumns columns at a time (CHOLMOD's supernodal solve of a block): the
+  /// temporaries stay a few columns wide, where a solve of the whole block took three copies of
+  /// it (21 MB of the 10k-node slab's fit; docs/fidelity.md).
+  void solve_in_place(MatrixXd& b) const {
+    for (Eigen::Index c0 = 0; c0 < b.cols(); c0 += kSolveColumns) {
+      const Eigen::Index w = std::min<Eigen::Index>(kSolveColumns, b.cols() - c0);
+      MatrixXd reduced(m_size, w);
+      for (Eigen::Index d = 0; d < b.rows(); ++d)
+        if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) reduced.row(r) = b.row(d).segment(c0, w);
+      const MatrixXd x = m_llt.solve(reduced);
+      for (Eigen::Index d = 0; d < b.rows(); ++d) {
+        const int r = m_reduced[static_cast<std::size_t>(d)];
+        if (r >= 0)
+          b.row(d).segment(c0, w) = x.row(r);
+        else
+          b.row(d).segment(c0, w).setZero();
+      }
+    }
+  }
   MatrixXd solve(const MatrixXd& rhs) const {
-    MatrixXd reduced(m_size, rhs.cols());
-    for (Eigen::Index d = 0; d < rhs.rows(); ++d)
-      if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) reduced.row(r) = rhs.row(d);
-    const MatrixXd x = m_llt.solve(reduced); // all columns at once (CHOLMOD's supernodal solve)
-    MatrixXd out = MatrixXd::Zero(rhs.rows(), rhs.cols());
-    for (Eigen::Index d = 0; d < rhs.rows(); ++d)
-      if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) out.row(d) = x.row(r);
-    return out;
+    MatrixXd x = rhs;
+    solve_in_place(x);
+    return x;
   }
 
 private:
+  static constexpr Eigen::Index kSolveColumns = 16;
   std::vector<int> m_reduced;
   int m_size = 0;
   /// CHOLMOD's supernodal Cholesky (its ordering: AMD or METIS, whichever fills less). On a
@@ -147,7 +162,7 @@ private:
   /// 0.2 s (docs/fidelity.md).
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> m_llt;
   bool m_analysed = false;
-  SpMat m_A;                ///< the reduced matrix, its pattern made once
+  SpMat m_A;                ///< the reduced matrix's lower triangle, its pattern made once
   std::vector<int> m_outer; ///< the full pattern's column starts, to hold later matrices to it
   std::vector<int> m_place; ///< per full value: its place in m_A's values, or -1 (pinned)
 };
@@ -216,44 +231,60 @@ struct Training {
   bool supported = false;
 };
 
-/// The fit's state at one x: the network's answers U to the training loads, the residual
+/// What the fits of one mesh share: the network whose stiffness each evaluation sets and its
+/// stiffness matrix (one pattern). One fit is evaluated at a time, as the solver holds one factor.
+template <int dim> struct FitSpace {
+  explicit FitSpace(const SpringNetwork<dim>& n)
+      : net(n), rest(Nodal<dim>::Zero(dim, n.num_nodes())), every(every_node(n.num_nodes())),
+        ks(free_block_pattern(net, every, n.num_nodes())) {}
+  SpringNetwork<dim> net;
+  const Nodal<dim> rest;        ///< zero displacement
+  const std::vector<int> every; ///< every node free: the whole network's stiffness (the solver pins)
+  SpMat ks;
+};
+
+/// The fit's state at one x: the residual of the network's answers U to the training loads
 /// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
 template <int dim> class Fit {
 public:
-  /// `net`: the mesh's network (its stiffness is set at each evaluate); `dir`: its springs'
-  /// unit rest directions.
-  Fit(const SpringNetwork<dim>& net, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr,
-      PinnedSolver& solver)
-      : m_net(net), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver),
-        m_rest(Nodal<dim>::Zero(dim, net.num_nodes())), m_every(every_node(net.num_nodes())),
-        m_ks(free_block_pattern(net, m_every, net.num_nodes())) {}
+  /// `dir`: the springs' unit rest directions; `k0`: the prior (x = 0).
+  Fit(FitSpace<dim>& space, const Nodal<dim>& dir, const VectorXd& k0, const Training& tr, PinnedSolver& solver)
+      : m_space(space), m_dir(dir), m_k0(k0), m_Q(tr.Q), m_T(tr.T), m_F(tr.F), m_solver(solver) {}
 
   /// Factorises K_s at x and solves the training loads; returns 1/2 ||residual||^2.
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
-    m_net.stiffness = m_k;
+    m_space.net.stiffness = m_k;
     // sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i) in its pattern: the values setFromTriplets
-    // made of force_jacobians' blocks, to the bit, without the triplets (73 MB for two fits at 10k
-    // nodes; force_jacobian.hh).
-    fill_free_stiffness(m_net, m_rest, m_every, false, m_ks);
-    m_solver.factorize(m_ks);
-    m_U = m_solver.solve(m_F);
-    m_res = project(m_U) - m_T;
-    m_H = gather(m_U);
+    // made of force_jacobians' blocks, to the bit, without the triplets (force_jacobian.hh).
+    fill_free_stiffness(m_space.net, m_space.rest, m_space.every, false, m_space.ks);
+    m_solver.factorize(m_space.ks);
+    m_res = m_F;
+    m_solver.solve_in_place(m_res); // U
+    m_H = gather(m_res);
     for (Eigen::Index m = 0; m < m_H.cols(); ++m) m_H.col(m).array() *= m_k.array();
+    project_in_place(m_res);
+    m_res -= m_T;
     return 0.5 * m_res.squaredNorm();
+  }
+  /// Drops the evaluated state (another fit is kept).
+  void release() {
+    m_res = MatrixXd();
+    m_H = MatrixXd();
   }
   const MatrixXd& residual() const { return m_res; }
   /// ||P K_s^+ Fv - Tv|| / ||Tv|| with the current factor: the held-out loads' relative error.
   double held_out_error(const MatrixXd& Tv, const MatrixXd& Fv) const {
-    return (project(m_solver.solve(Fv)) - Tv).norm() / Tv.norm();
+    MatrixXd U = m_solver.solve(Fv);
+    project_in_place(U);
+    return (U - Tv).norm() / Tv.norm();
   }
 
   /// J v: d residual / dx along v = -P K^+ G diag(h_m) v per mode.
   MatrixXd apply(const VectorXd& v) const {
     MatrixXd W = MatrixXd::Zero(m_F.rows(), m_F.cols());
-    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
-      const auto [i, j] = m_net.edge[s];
+    for (std::size_t s = 0; s < edges().size(); ++s) {
+      const auto [i, j] = edges()[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < W.cols(); ++m) {
         const Vec<dim> g = (m_H(se, m) * v[se]) * m_dir.col(se);
@@ -261,21 +292,38 @@ public:
         W.col(m).template segment<dim>(dim * i) -= g;
       }
     }
-    return -project(m_solver.solve(W));
+    m_solver.solve_in_place(W);
+    project_in_place(W);
+    W *= -1;
+    return W;
   }
-  /// J^T Y = -sum_m h_m .* (G^T K^+ P y_m).
+  /// J^T Y = -sum_m h_m .* (G^T K^+ P y_m), without G^T K^+ P Y (springs x columns) stored.
   VectorXd apply_transpose(const MatrixXd& Y) const {
-    const MatrixXd Z = gather(m_solver.solve(project(Y)));
-    return -(Z.array() * m_H.array()).rowwise().sum();
+    MatrixXd Z = Y;
+    project_in_place(Z);
+    m_solver.solve_in_place(Z);
+    VectorXd out(m_H.rows());
+    for (std::size_t s = 0; s < edges().size(); ++s) {
+      const auto [i, j] = edges()[s];
+      const auto se = static_cast<Eigen::Index>(s);
+      double sum = 0;
+      for (Eigen::Index m = 0; m < Z.cols(); ++m)
+        sum += m_H(se, m) *
+               m_dir.col(se).dot(Z.col(m).template segment<dim>(dim * j) - Z.col(m).template segment<dim>(dim * i));
+      out[se] = -sum;
+    }
+    return out;
   }
 
 private:
-  MatrixXd project(const MatrixXd& U) const { return U - m_Q * (m_Q.transpose() * U); }
+  void project_in_place(MatrixXd& U) const {
+    if (m_Q.cols() > 0) U -= m_Q * (m_Q.transpose() * U);
+  }
   /// G^T U: per spring and column, n_s . (u_j - u_i).
   MatrixXd gather(const MatrixXd& U) const {
-    MatrixXd out(static_cast<Eigen::Index>(m_net.edge.size()), U.cols());
-    for (std::size_t s = 0; s < m_net.edge.size(); ++s) {
-      const auto [i, j] = m_net.edge[s];
+    MatrixXd out(static_cast<Eigen::Index>(edges().size()), U.cols());
+    for (std::size_t s = 0; s < edges().size(); ++s) {
+      const auto [i, j] = edges()[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < U.cols(); ++m)
         out(se, m) =
@@ -284,16 +332,15 @@ private:
     return out;
   }
 
-  SpringNetwork<dim> m_net;
+  const auto& edges() const { return m_space.net.edge; }
+
+  FitSpace<dim>& m_space;
   const Nodal<dim>& m_dir;
   const VectorXd& m_k0;
   const MatrixXd &m_Q, &m_T, &m_F;
   PinnedSolver& m_solver;
-  const Nodal<dim> m_rest;  ///< zero displacement
-  std::vector<int> m_every; ///< every node free: the whole network's stiffness (the solver pins)
   VectorXd m_k;
-  SpMat m_ks;
-  MatrixXd m_U, m_res, m_H;
+  MatrixXd m_res, m_H;
 };
 
 /// Conjugate gradients on (J^T J + shift I) d = b, from d = 0, to a relative residual of 1e-2
@@ -504,16 +551,19 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const bool guarded = tr.Tv.cols() > 0;
   rep.validation_lloyd = rep.validation_van_gelder = rep.validation_fitted = nan;
-  Fit<dim> with_vg(net, dir, vg, tr, solver);
+  FitSpace<dim> space(net);
+  Fit<dim> with_vg(space, dir, vg, tr, solver);
   const double vg_residual = std::sqrt(2 * with_vg.evaluate(zero) / modes);
   if (guarded) rep.validation_van_gelder = with_vg.held_out_error(tr.Tv, tr.Fv);
-  Fit<dim> with_lloyd(net, dir, lloyd, tr, solver); // evaluated last: the solver holds its factor
+  with_vg.release();                                  // evaluated again below where it wins
+  Fit<dim> with_lloyd(space, dir, lloyd, tr, solver); // evaluated last: the solver holds its factor
   rep.lloyd_residual = std::sqrt(2 * with_lloyd.evaluate(zero) / modes);
   if (guarded) rep.validation_lloyd = with_lloyd.held_out_error(tr.Tv, tr.Fv);
   const bool from_vg = vg_residual < rep.lloyd_residual;
   const VectorXd& prior = from_vg ? vg : lloyd;
   rep.prior = from_vg ? "van-gelder" : "lloyd";
   Fit<dim>& fit = from_vg ? with_vg : with_lloyd;
+  if (from_vg) with_lloyd.release();
   VectorXd x = zero;
   if (options.start.size() == ns)
     x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
