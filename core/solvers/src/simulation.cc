@@ -162,6 +162,7 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
     rep.extra.emplace_back("tensor_relinearizations", static_cast<double>(f->relinearizations()));
     rep.extra.emplace_back("tensor_refactorizations", static_cast<double>(f->refactorizations()));
     rep.extra.emplace_back("tensor_refreshes_at_once", static_cast<double>(f->refreshes_at_once()));
+    rep.extra.emplace_back("tensor_extra_corrections", static_cast<double>(f->extra_corrections()));
   }
   if (!rep.filter.empty())
     rep.filter_most_steps =

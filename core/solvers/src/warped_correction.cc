@@ -90,8 +90,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     }
     correction_terms(n, dt, l2, dw, de, net.rest_length.data() + s0, net.stiffness.data() + s0, net.damping.data() + s0,
                      g, m_spring_q.data() + s0, m_spring_at.data() + s0);
-    if (!m_multigrid)
-      for (int s = 0; s < n; ++s) e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
+    for (int s = 0; s < n; ++s) e0 += m_spring_q[s0 + s] * dw[s] * dw[s] + m_spring_at[s0 + s] * ww[s];
     add_by_first_node_runs<-1>(net, s0, n, m_residual, [&](int s) -> Vec<dim> {
       return g[s] * m_spring_d.col(s0 + s) + m_spring_at[s0 + s] * Eigen::Map<const Vec<dim>>(ew + dim * s);
     });
@@ -120,7 +119,62 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   // every step is corrected: its extra mass Delta lags every step alike, and small gains add
   // up (a held-out slab press of 1,500 nodes at dt 1 ms: 1.54x implicit Euler's error with the
   // rest, 1.11x without; docs/method.md).
-  if (!m_multigrid && rz * rz / (zaz * e0) < kCorrectionGain) m_correction_rest = kCorrectionRest;
+  double gain = rz * rz / (zaz * e0);
+  if (!m_multigrid && gain < kCorrectionGain) m_correction_rest = kCorrectionRest;
+  // Under the V-cycle, above kCorrectionStepGain the step is far from implicit Euler's (its
+  // Delta at nu near 1/2): conjugate gradients go on from there, r -= alpha A p, p = z + beta
+  // p, while each step's gain stays above it, kCorrectionSteps in all at most. (A cover's
+  // departure is its transverse damping's lag, which one step takes up: the four-force plate
+  // at 1.0x implicit Euler's error; docs/method.md.)
+  if (!m_multigrid || gain <= kCorrectionStepGain) return;
+  m_search = m_direction;
+  minus_product(couplings, dt); // -A z (z in m_iterate): the sums above made no vector of it
+  double rz_k = rz, alpha_k = alpha;
+  for (int step = 1; step < kCorrectionSteps && gain > kCorrectionStepGain; ++step) {
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      const int i = free[static_cast<std::size_t>(a)];
+      m_residual.col(i) += alpha_k * m_product.col(i);
+    }
+    solve(m_residual, couplings, 1.0, m_direction);
+    double rz_next = 0;
+    for (Eigen::Index a = 0; a < nf; ++a)
+      rz_next += m_residual.col(free[static_cast<std::size_t>(a)]).dot(m_direction.col(a));
+    m_search = m_direction + (rz_next / rz_k) * m_search;
+    for (Eigen::Index a = 0; a < nf; ++a) m_iterate.col(free[static_cast<std::size_t>(a)]) = m_search.col(a);
+    const double pap = minus_product(couplings, dt);
+    alpha_k = rz_next / pap;
+    if (!(pap > 0) || !std::isfinite(alpha_k)) return;
+    dv += alpha_k * m_search;
+    gain = rz_next * rz_next / (pap * e0);
+    rz_k = rz_next;
+    ++m_extra_corrections;
+  }
+}
+
+template <int dim> double WarpedFilter<dim>::minus_product(const CouplingSet<dim>& couplings, double dt) {
+  const auto& net = m_model.net;
+  const auto& free = m_model.free_nodes;
+  const auto* e = net.edge.data();
+  const int ns = net.num_springs();
+  double pap = 0;
+  for (std::size_t a = 0; a < free.size(); ++a) {
+    const int i = free[a];
+    const double m = net.mass[i] * (1.0 + dt * net.mass_damping);
+    m_product.col(i) = -m * m_iterate.col(i);
+    pap += m * m_iterate.col(i).squaredNorm();
+  }
+  pap += couplings.subtract_product(m_iterate, m_product);
+  for (int s0 = 0; s0 < ns; s0 += kChunk) {
+    const int n = std::min(kChunk, ns - s0);
+    add_by_first_node_runs<-1>(net, s0, n, m_product, [&](int s) -> Vec<dim> {
+      const int k = s0 + s;
+      const Vec<dim> w = m_iterate.col(e[k][0]) - m_iterate.col(e[k][1]);
+      const double dws = m_spring_d.col(k).dot(w);
+      pap += m_spring_q[k] * dws * dws + m_spring_at[k] * w.squaredNorm();
+      return -(m_spring_q[k] * dws * m_spring_d.col(k) + m_spring_at[k] * w);
+    });
+  }
+  return pap;
 }
 
 template void WarpedFilter<2>::correct(const Nodal<2>&, const Nodal<2>&, const Nodal<2>&, const CouplingSet<2>&, double,

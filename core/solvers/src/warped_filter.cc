@@ -225,6 +225,8 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   m_residual = Nodal<dim>::Zero(dim, net.num_nodes());
   m_iterate = Nodal<dim>::Zero(dim, net.num_nodes());
   m_direction = Nodal<dim>::Zero(dim, nf);
+  m_search = Nodal<dim>::Zero(dim, nf);
+  m_product = Nodal<dim>::Zero(dim, net.num_nodes());
   m_spring_d.resize(dim, ns);
   m_spring_q.resize(ns);
   m_spring_at.resize(ns);

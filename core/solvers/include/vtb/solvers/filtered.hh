@@ -64,6 +64,8 @@ public:
   /// times its H was refactorised (relinearisations and covers); 0 otherwise.
   long relinearizations() const { return m_tensor ? m_tensor->relinearizations() : 0; }
   long refactorizations() const { return m_tensor ? m_tensor->refactorizations() : 0; }
+  /// The correction's conjugate-gradient steps beyond its first, over the run (WarpedFilter).
+  long extra_corrections() const { return m_tensor ? m_tensor->extra_corrections() : 0; }
   /// Tensor filters: the steps that carried a whole refactorisation (past kHardMismatch)
   /// instead of a part of one.
   long refreshes_at_once() const { return m_tensor ? m_tensor->refreshes_at_once() : 0; }

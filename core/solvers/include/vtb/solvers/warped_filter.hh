@@ -173,6 +173,16 @@ public:
   static constexpr double kCorrectionGain = 0.05;
   /// Steps left uncorrected after a correction below that gain.
   static constexpr int kCorrectionRest = 8;
+  /// correct()'s gain above which its conjugate gradients take another step, and how many
+  /// steps they take at most (docs/method.md). Measured first gains: the 9,864-node slab at nu
+  /// 0.25 under the V-cycle 0.08 (a second step moved its error against CVODE from 0.738 to
+  /// 0.747 %), a 517-node plate pulled to strain 0.88 0.04 (at most 0.30), a 2,415-node tissue
+  /// block at nu 0.49 under the V-cycle 5.2, the next three 2.2, 2.2 and 1.9 (one step 4.0 %,
+  /// three while above 0.1 0.80 %, implicit Euler 0.69 %).
+  static constexpr double kCorrectionStepGain = 0.1;
+  static constexpr int kCorrectionSteps = 3;
+  /// The conjugate-gradient steps correct() took beyond its first, over the run.
+  long extra_corrections() const { return m_extra_corrections; }
   /// The rotation of each node's neighbourhood at displacement u (identity at rest).
   void rotations(const Nodal<dim>& u);
   /// Node i's rotation after rotations() (2D: made from its (cos, sin)).
@@ -190,6 +200,9 @@ public:
   double direction_mismatch(const Nodal<dim>& u) const;
 
 private:
+  /// m_product = -A p for p = m_iterate (correct()'s A at the state of its last residual
+  /// pass: m_spring_d, m_spring_q, m_spring_at); returns p . A p.
+  double minus_product(const CouplingSet<dim>& couplings, double dt);
   /// dv = dt R y, y the solve's vector (m_rhs) after the solve.
   void turn_out(double dt, Nodal<dim>& dv) const;
   /// 2D: each node's rotation from the turns' sums.
@@ -262,7 +275,8 @@ private:
   // correct()'s scratch: the residual and the iterate by nodes (fixed nodes 0), the
   // preconditioned residual by free nodes, and each spring's block of A as q d d^T + a_t I
   // (its vector d, q and a_t).
-  Nodal<dim> m_residual, m_iterate, m_direction, m_spring_d;
+  Nodal<dim> m_residual, m_iterate, m_direction, m_spring_d, m_product, m_search;
+  long m_extra_corrections = 0;
   Eigen::VectorXd m_spring_q, m_spring_at;
   double m_beta_max = 0;     ///< twice the largest mismatch at the last refill
   bool m_multigrid = false;  ///< H solved by the block V-cycle
