@@ -6,12 +6,12 @@
 namespace vtb::detail {
 
 /// Aggregate of each row of A (graph of the off-diagonal entries); returns their count.
-int aggregate(const RowSparse& A0, std::vector<int>& agg) {
+int aggregate(const RowSparse& A0, std::vector<int>& agg, double theta) {
   // Strong couplings only: |a_ij| >= theta sqrt(a_ii a_jj). A node of a 3D tetrahedral mesh
   // has about 14 neighbours, so a Laplacian's couplings are near 1/14 = 0.07 of the diagonal;
-  // theta = 0.04 drops the weakest (measured: the V-cycle's contraction on the 9,864-node
-  // slab is 0.46 with all couplings, 0.42 at 0.04, at 15 % more cost per cycle than 0.02 ..).
-  constexpr double theta = 0.04;
+  // theta = 0.04 (the default) drops the weakest (measured: the V-cycle's contraction on the
+  // 9,864-node slab is 0.46 with all couplings, 0.42 at 0.04, at 15 % more cost per cycle than
+  // 0.02 ..); theta = 0 keeps every coupling (the block cycle's fallback, block_multigrid.hh).
   RowSparse A = A0;
   const Eigen::VectorXd d = A0.diagonal();
   A.prune([&](Eigen::Index i, Eigen::Index j, double v) {

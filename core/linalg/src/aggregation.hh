@@ -12,8 +12,9 @@ namespace vtb::detail {
 
 using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 
-/// Aggregate of each row of A (graph of the strong off-diagonal entries); returns their count.
-int aggregate(const RowSparse& A, std::vector<int>& agg);
+/// Aggregate of each row of A (graph of the off-diagonal entries |a_ij| >= theta sqrt(a_ii
+/// a_jj)); returns their count.
+int aggregate(const RowSparse& A, std::vector<int>& agg, double theta = 0.04);
 
 /// P = (I - w D^-1 A) P0, P0 the aggregates' indicator, w = 4/3 over an estimate of the
 /// spectral radius of D^-1 A.
