@@ -1,18 +1,15 @@
 // The FEM's functions as the rest of vtb calls them (vtb/fem/*.hh): each loads the FEM plugin
 // (plugin.cc: vtb_fem and deal.II) for the call and forwards to it, so that deal.II enters a
-// process only when a FEM runs. The plugin is looked for in ../lib beside the program (or the
-// library) that holds this code, then at the path the build wrote it to (VTB_FEM_PLUGIN).
-// Loaded with RTLD_NODELETE: once in, deal.II stays (its static state outlives a call, and
-// MPI cannot be initialised twice), and a second call only finds it again.
+// process only when a FEM runs (vtb/meshes/module.hh: where it is looked for, and why it stays
+// loaded once in).
 #include "plugin_api.hh"
 #include "vtb/meshes/atomic_file.hh"
+#include "vtb/meshes/module.hh"
 
-#include <dlfcn.h>
 #include <mpi.h>
 
 #include <cstdlib>
 #include <string>
-#include <vector>
 
 namespace vtb::fem {
 namespace {
@@ -20,43 +17,16 @@ namespace {
 /// The plugin, opened for as long as this object lives.
 class Plugin {
 public:
-  Plugin() {
-    std::string tried;
-    for (const std::string& path : candidates()) {
-      m_handle = dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
-      if (m_handle) break;
-      const char* why = dlerror();
-      tried += (tried.empty() ? "" : "; ") + std::string(why ? why : path.c_str());
-    }
-    if (!m_handle) throw IoError("the FEM reference (vtb_fem_plugin.so) could not be loaded: " + tried);
-    const auto entry = reinterpret_cast<plugin::EntryPoint>(dlsym(m_handle, plugin::kEntryPoint));
+  Plugin() : m_module("vtb_fem_plugin.so", VTB_FEM_PLUGIN, "the FEM reference") {
+    const auto entry = reinterpret_cast<plugin::EntryPoint>(m_module.symbol(plugin::kEntryPoint));
     m_api = entry ? entry() : nullptr;
-    if (!m_api || m_api->version != plugin::kApiVersion) {
-      dlclose(m_handle);
+    if (!m_api || m_api->version != plugin::kApiVersion)
       throw IoError("the FEM reference (vtb_fem_plugin.so) is of another build than this program: rebuild vtb");
-    }
   }
-  ~Plugin() { dlclose(m_handle); }
-  Plugin(const Plugin&) = delete;
-  Plugin& operator=(const Plugin&) = delete;
   const plugin::Api& api() const { return *m_api; }
 
 private:
-  /// ../lib/vtb_fem_plugin.so from the folder of the object holding this code, then the build's.
-  static std::vector<std::string> candidates() {
-    std::vector<std::string> paths;
-    Dl_info info{};
-    if (dladdr(reinterpret_cast<const void*>(&mpi_rank), &info) && info.dli_fname) {
-      std::string self = info.dli_fname;
-      const auto slash = self.rfind('/');
-      self = slash == std::string::npos ? "." : self.substr(0, slash);
-      paths.push_back(self + "/../lib/vtb_fem_plugin.so");
-    }
-    paths.emplace_back(VTB_FEM_PLUGIN);
-    return paths;
-  }
-
-  void* m_handle = nullptr;
+  Module m_module;
   const plugin::Api* m_api = nullptr;
 };
 

@@ -9,10 +9,12 @@
 #include <ostream>
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <string>
 
 namespace vtb {
 namespace {
@@ -174,6 +176,37 @@ TEST(MshIo, AFileThatCrashesGmshIsRefusedNotFatal) {
   // The process is intact: a good file still reads.
   write_msh(generate_rectangle({1, 1}, {2, 2}), temp("after_crash.msh"));
   EXPECT_EQ(std::get<Mesh2>(read_msh(temp("after_crash.msh"))).num_nodes(), 9);
+}
+
+/// Whether this process has libgmsh mapped.
+bool gmsh_loaded() {
+  std::ifstream maps("/proc/self/maps");
+  std::string line;
+  while (std::getline(maps, line))
+    if (line.find("libgmsh") != std::string::npos) return true;
+  return false;
+}
+
+TEST(MshIo, OnlyTheReadersChildLoadsGmsh) {
+  // The gmsh API is a module (meshes/src/gmsh_backend.hh): a process that reads a .msh file
+  // gets the mesh without libgmsh (and OpenCASCADE, ~40 MB resident) entering it; a write
+  // loads it in the writing process. A fresh process each (gtest re-executes the binary for a
+  // death test in "threadsafe" style), as an earlier test of this binary may have written.
+  GTEST_FLAG_SET(death_test_style, "threadsafe");
+  const auto file = std::filesystem::path(VTB_SOURCE_DIR) / "meshes" / "data" / "slab_500.msh";
+  EXPECT_EXIT(
+      {
+        const bool before = gmsh_loaded();
+        const int nodes = std::get<Mesh3>(read_msh(file)).num_nodes();
+        std::exit(!before && nodes == 458 && !gmsh_loaded() ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
+  EXPECT_EXIT(
+      {
+        write_msh(generate_rectangle({1, 1}, {2, 2}), temp("written.msh"));
+        std::exit(gmsh_loaded() ? 0 : 1);
+      },
+      ::testing::ExitedWithCode(0), "");
 }
 
 } // namespace
