@@ -3,7 +3,7 @@
 // deal.II, as one table of pointers that the FEM plugin (plugin.cc, a module holding vtb_fem
 // and linking deal.II) hands out and the client (client.cc) calls. deal.II, with the PETSc,
 // Trilinos, HDF5 and OpenCASCADE it links, is 100 MB of a process's memory once loaded, so a
-// process loads it only when a FEM runs (docs/architecture.md, "The FEM plugin").
+// process loads it only when a FEM runs (docs/architecture.md, "Modules loaded on demand").
 #include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 
