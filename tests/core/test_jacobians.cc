@@ -154,6 +154,15 @@ template <int dim> void check_free_stiffness(const Model<dim>& m) {
       blocks +=
           2 * (m.free_index[static_cast<std::size_t>(e[0])] >= 0 && m.free_index[static_cast<std::size_t>(e[1])] >= 0);
     EXPECT_EQ(got.nonZeros(), blocks * dim * dim);
+    // Blocks::lower (the fit's matrix): the same values to the bit where the row node is at or
+    // after the column node, the diagonal blocks whole, nothing else.
+    Eigen::SparseMatrix<double> lower = free_block_pattern(m.net, m.free_index, nf, Blocks::lower);
+    fill_free_stiffness(m.net, s.u, m.free_index, clamp, lower, Blocks::lower);
+    Eigen::MatrixXd want_lower = Eigen::MatrixXd::Zero(want.rows(), want.cols());
+    for (int c = 0; c < want.cols(); ++c)
+      for (int r = dim * (c / dim); r < want.rows(); ++r) want_lower(r, c) = want(r, c);
+    EXPECT_EQ((Eigen::MatrixXd(lower) - want_lower).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(lower.nonZeros(), (blocks + nf) / 2 * dim * dim);
   }
 }
 

@@ -78,72 +78,43 @@ template <int dim> std::vector<int> pinned_dofs(const Mesh<dim>& mesh) {
   return pins;
 }
 
-/// Solves with a symmetric matrix whose pinned dofs are removed (their solution is zero).
+/// Solves with a symmetric matrix whose pinned dofs are held at zero. Their rows and columns
+/// are made the identity's in the matrix itself, which CHOLMOD then reads in place (its lower
+/// triangle): no reduced copy of the matrix, no map into one, no reduced right-hand sides
+/// (on the 10k-node slab's fit 14 MB at its peak; docs/fidelity.md).
 class PinnedSolver {
 public:
-  PinnedSolver(int dofs, const std::vector<int>& pins) : m_reduced(static_cast<std::size_t>(dofs), 0) {
-    for (int d : pins) m_reduced[static_cast<std::size_t>(d)] = -1;
-    for (auto& r : m_reduced)
-      if (r == 0) r = m_size++;
+  PinnedSolver(int dofs, const std::vector<int>& pins) : m_pinned(static_cast<std::size_t>(dofs), false) {
+    for (int d : pins) m_pinned[static_cast<std::size_t>(d)] = true;
   }
-  /// Factorises the matrix (full indices; pinned rows and columns dropped). Every matrix has the
-  /// mesh's pattern (compressed): the first is reduced through triplets, and where each of its
-  /// values lands is kept, so that the others are copied in place (no triplets, one analysis).
-  void factorize(const SpMat& full) {
-    const int* outer = full.outerIndexPtr();
-    if (!full.isCompressed() || (m_analysed && !std::equal(m_outer.begin(), m_outer.end(), outer)))
+  /// Factorises `a` (full, compressed, the mesh's pattern), its pinned rows and columns set to
+  /// the identity's first. Every matrix has the first one's pattern (one analysis).
+  void factorize(SpMat& a) {
+    const int* outer = a.outerIndexPtr();
+    if (!a.isCompressed() || (m_analysed && !std::equal(m_outer.begin(), m_outer.end(), outer)))
       throw std::logic_error("PinnedSolver: a matrix of another pattern than the mesh's");
+    for (int col = 0; col < a.outerSize(); ++col)
+      for (SpMat::InnerIterator it(a, col); it; ++it)
+        if (m_pinned[static_cast<std::size_t>(it.row())] || m_pinned[static_cast<std::size_t>(col)])
+          it.valueRef() = it.row() == col ? 1.0 : 0.0;
     if (!m_analysed) {
-      m_outer.assign(outer, outer + full.outerSize() + 1);
-      Triplets kept;
-      kept.reserve(static_cast<std::size_t>(full.nonZeros()));
-      for (int col = 0; col < full.outerSize(); ++col)
-        for (SpMat::InnerIterator it(full, col); it; ++it) {
-          const int r = m_reduced[static_cast<std::size_t>(it.row())], c = m_reduced[static_cast<std::size_t>(col)];
-          if (r >= c && c >= 0) kept.emplace_back(r, c, it.value()); // the lower triangle: all CHOLMOD reads
-        }
-      m_A.resize(m_size, m_size);
-      m_A.setFromTriplets(kept.begin(), kept.end());
-      // Reduced indices keep their order, so a kept column's entries are its reduced column's, in turn.
-      m_place.assign(static_cast<std::size_t>(full.nonZeros()), -1);
-      for (int col = 0; col < full.outerSize(); ++col) {
-        const int c = m_reduced[static_cast<std::size_t>(col)];
-        if (c < 0) continue;
-        int next = m_A.outerIndexPtr()[c];
-        for (int k = full.outerIndexPtr()[col]; k < full.outerIndexPtr()[col + 1]; ++k)
-          if (m_reduced[static_cast<std::size_t>(full.innerIndexPtr()[k])] >= c)
-            m_place[static_cast<std::size_t>(k)] = next++;
-      }
-      m_llt.analyzePattern(m_A);
+      m_outer.assign(outer, outer + a.outerSize() + 1);
+      m_llt.analyzePattern(a);
       m_analysed = true;
-    } else {
-      const double* v = full.valuePtr();
-      double* a = m_A.valuePtr();
-      for (std::size_t k = 0; k < m_place.size(); ++k)
-        if (m_place[k] >= 0) a[m_place[k]] = v[k];
     }
-    m_llt.factorize(m_A);
+    m_llt.factorize(a);
     if (m_llt.info() != Eigen::Success)
       throw InputError("[solver].springs = \"fitted\": the mesh's stiffness is singular with its rigid motions "
                        "pinned (is the mesh in one piece?)");
   }
-  /// b <- K^-1 b, kSolveColumns columns at a time (CHOLMOD's supernodal solve of a block): the
-  /// temporaries stay a few columns wide, where a solve of the whole block took three copies of
-  /// it (21 MB of the 10k-node slab's fit; docs/fidelity.md).
+  /// b <- K^-1 b (pinned rows zero), kSolveColumns columns at a time (CHOLMOD's supernodal
+  /// solve of a block): its temporaries stay a few columns wide.
   void solve_in_place(MatrixXd& b) const {
+    for (Eigen::Index d = 0; d < b.rows(); ++d)
+      if (m_pinned[static_cast<std::size_t>(d)]) b.row(d).setZero();
     for (Eigen::Index c0 = 0; c0 < b.cols(); c0 += kSolveColumns) {
       const Eigen::Index w = std::min<Eigen::Index>(kSolveColumns, b.cols() - c0);
-      MatrixXd reduced(m_size, w);
-      for (Eigen::Index d = 0; d < b.rows(); ++d)
-        if (const int r = m_reduced[static_cast<std::size_t>(d)]; r >= 0) reduced.row(r) = b.row(d).segment(c0, w);
-      const MatrixXd x = m_llt.solve(reduced);
-      for (Eigen::Index d = 0; d < b.rows(); ++d) {
-        const int r = m_reduced[static_cast<std::size_t>(d)];
-        if (r >= 0)
-          b.row(d).segment(c0, w) = x.row(r);
-        else
-          b.row(d).segment(c0, w).setZero();
-      }
+      b.middleCols(c0, w) = m_llt.solve(b.middleCols(c0, w));
     }
   }
   MatrixXd solve(const MatrixXd& rhs) const {
@@ -154,17 +125,14 @@ public:
 
 private:
   static constexpr Eigen::Index kSolveColumns = 16;
-  std::vector<int> m_reduced;
-  int m_size = 0;
+  std::vector<bool> m_pinned;
   /// CHOLMOD's supernodal Cholesky (its ordering: AMD or METIS, whichever fills less). On a
-  /// 10k-node CGAL slab (29,337 unknowns, 11M entries in L) it factorises in 0.7 s with
-  /// OpenBLAS where Eigen's simplicial LDL^T took 13-16 s, and solves 30 right-hand sides in
-  /// 0.2 s (docs/fidelity.md).
+  /// 10k-node CGAL slab (29,337 unknowns, 8.7M entries in L with METIS) it factorises in 0.7 s
+  /// with OpenBLAS where Eigen's simplicial LDL^T took 13-16 s, and solves 30 right-hand sides
+  /// in 0.2 s (docs/fidelity.md).
   Eigen::CholmodSupernodalLLT<SpMat, Eigen::Lower> m_llt;
   bool m_analysed = false;
-  SpMat m_A;                ///< the reduced matrix's lower triangle, its pattern made once
-  std::vector<int> m_outer; ///< the full pattern's column starts, to hold later matrices to it
-  std::vector<int> m_place; ///< per full value: its place in m_A's values, or -1 (pinned)
+  std::vector<int> m_outer; ///< the first matrix's column starts, to hold later matrices to it
 };
 
 /// How far the subspace iteration converges the modes' eigenvalues (relative change per
@@ -234,13 +202,14 @@ struct Training {
 /// What the fits of one mesh share: the network whose stiffness each evaluation sets and its
 /// stiffness matrix (one pattern). One fit is evaluated at a time, as the solver holds one factor.
 template <int dim> struct FitSpace {
-  explicit FitSpace(const SpringNetwork<dim>& n)
-      : net(n), rest(Nodal<dim>::Zero(dim, n.num_nodes())), every(every_node(n.num_nodes())),
-        ks(free_block_pattern(net, every, n.num_nodes())) {}
+  /// Takes the network (no second copy of it while the fit holds its factor).
+  explicit FitSpace(SpringNetwork<dim>&& n)
+      : net(std::move(n)), rest(Nodal<dim>::Zero(dim, net.num_nodes())), every(every_node(net.num_nodes())),
+        ks(free_block_pattern(net, every, net.num_nodes(), Blocks::lower)) {}
   SpringNetwork<dim> net;
   const Nodal<dim> rest;        ///< zero displacement
   const std::vector<int> every; ///< every node free: the whole network's stiffness (the solver pins)
-  SpMat ks;
+  SpMat ks;                     ///< its lower triangle (blocks), all the factorisation reads
 };
 
 /// The fit's state at one x: the residual of the network's answers U to the training loads
@@ -257,12 +226,12 @@ public:
     m_space.net.stiffness = m_k;
     // sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i) in its pattern: the values setFromTriplets
     // made of force_jacobians' blocks, to the bit, without the triplets (force_jacobian.hh).
-    fill_free_stiffness(m_space.net, m_space.rest, m_space.every, false, m_space.ks);
+    fill_free_stiffness(m_space.net, m_space.rest, m_space.every, false, m_space.ks, Blocks::lower);
+    release(); // the last x's answers are not kept through the factorisation's peak
     m_solver.factorize(m_space.ks);
     m_res = m_F;
     m_solver.solve_in_place(m_res); // U
-    m_H = gather(m_res);
-    for (Eigen::Index m = 0; m < m_H.cols(); ++m) m_H.col(m).array() *= m_k.array();
+    gather_scaled(m_res, m_H);
     project_in_place(m_res);
     m_res -= m_T;
     return 0.5 * m_res.squaredNorm();
@@ -270,7 +239,7 @@ public:
   /// Drops the evaluated state (another fit is kept).
   void release() {
     m_res = MatrixXd();
-    m_H = MatrixXd();
+    m_H = Eigen::MatrixXf();
   }
   const MatrixXd& residual() const { return m_res; }
   /// ||P K_s^+ Fv - Tv|| / ||Tv|| with the current factor: the held-out loads' relative error.
@@ -287,7 +256,7 @@ public:
       const auto [i, j] = edges()[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < W.cols(); ++m) {
-        const Vec<dim> g = (m_H(se, m) * v[se]) * m_dir.col(se);
+        const Vec<dim> g = (double{m_H(se, m)} * v[se]) * m_dir.col(se);
         W.col(m).template segment<dim>(dim * j) += g;
         W.col(m).template segment<dim>(dim * i) -= g;
       }
@@ -297,9 +266,9 @@ public:
     W *= -1;
     return W;
   }
-  /// J^T Y = -sum_m h_m .* (G^T K^+ P y_m), without G^T K^+ P Y (springs x columns) stored.
-  VectorXd apply_transpose(const MatrixXd& Y) const {
-    MatrixXd Z = Y;
+  /// J^T Y = -sum_m h_m .* (G^T K^+ P y_m), without G^T K^+ P Y (springs x columns) stored; Y by
+  /// value, so that J^T J p takes J p's columns without a copy.
+  VectorXd apply_transpose(MatrixXd Z) const {
     project_in_place(Z);
     m_solver.solve_in_place(Z);
     VectorXd out(m_H.rows());
@@ -308,7 +277,7 @@ public:
       const auto se = static_cast<Eigen::Index>(s);
       double sum = 0;
       for (Eigen::Index m = 0; m < Z.cols(); ++m)
-        sum += m_H(se, m) *
+        sum += double{m_H(se, m)} *
                m_dir.col(se).dot(Z.col(m).template segment<dim>(dim * j) - Z.col(m).template segment<dim>(dim * i));
       out[se] = -sum;
     }
@@ -319,17 +288,17 @@ private:
   void project_in_place(MatrixXd& U) const {
     if (m_Q.cols() > 0) U -= m_Q * (m_Q.transpose() * U);
   }
-  /// G^T U: per spring and column, n_s . (u_j - u_i).
-  MatrixXd gather(const MatrixXd& U) const {
-    MatrixXd out(static_cast<Eigen::Index>(edges().size()), U.cols());
+  /// diag(k) G^T U: per spring and column, k_s n_s . (u_j - u_i).
+  void gather_scaled(const MatrixXd& U, Eigen::MatrixXf& out) const {
+    out.resize(static_cast<Eigen::Index>(edges().size()), U.cols());
     for (std::size_t s = 0; s < edges().size(); ++s) {
       const auto [i, j] = edges()[s];
       const auto se = static_cast<Eigen::Index>(s);
       for (Eigen::Index m = 0; m < U.cols(); ++m)
-        out(se, m) =
-            m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i));
+        out(se, m) = static_cast<float>(
+            m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i)) *
+            m_k[se]);
     }
-    return out;
   }
 
   const auto& edges() const { return m_space.net.edge; }
@@ -340,7 +309,11 @@ private:
   const MatrixXd &m_Q, &m_T, &m_F;
   PinnedSolver& m_solver;
   VectorXd m_k;
-  MatrixXd m_res, m_H;
+  MatrixXd m_res;
+  /// The per-spring factors h_{s,m}, in single precision: they enter only J v and J^T y, the
+  /// products of an inexact Gauss-Newton step's conjugate gradients (a relative residual of
+  /// 1e-2), where a relative 6e-8 on each is far below the step's own tolerance.
+  Eigen::MatrixXf m_H;
 };
 
 /// Conjugate gradients on (J^T J + shift I) d = b, from d = 0, to a relative residual of 1e-2
@@ -405,7 +378,10 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
     tr.pins = pinned_dofs(mesh);
   }
   PinnedSolver fem_solver(N, tr.pins);
-  fem_solver.factorize(K);
+  {
+    SpMat held = K; // the solver sets the pins' rows in its matrix; K serves the loads below
+    fem_solver.factorize(held);
+  }
   VectorXd mass(N);
   const VectorXd m_nodes = lumped_masses(mesh, 1.0, thickness);
   for (int v = 0; v < n; ++v) mass.template segment<dim>(dim * v).setConstant(m_nodes[v]);
@@ -524,7 +500,7 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   if (options.modes <= 0 && options.target.answers && supports_hold(mesh, options.supports))
     modes = std::clamp(free_dofs / FitOptions::kResolvedModeShare, FitOptions::kMinModes, modes);
   // The network (van Gelder's constants, no dashpots): its edges, and the assembly's input.
-  const SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
+  SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
   const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());
   const int held_dofs = N - free_dofs, need = fit_dofs_needed<dim>(options);
@@ -541,7 +517,7 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
   // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
   // Lloyd's per-element fit can leave near-mechanisms that van Gelder does not.
-  const VectorXd& vg = net.stiffness;
+  const VectorXd vg = net.stiffness;
   const VectorXd lloyd = lloyd_stiffness(mesh, E, nu, thickness).cwiseMax(0.01 * vg);
   const VectorXd zero = VectorXd::Zero(ns);
   FitReport rep;
@@ -551,7 +527,7 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const bool guarded = tr.Tv.cols() > 0;
   rep.validation_lloyd = rep.validation_van_gelder = rep.validation_fitted = nan;
-  FitSpace<dim> space(net);
+  FitSpace<dim> space(std::move(net)); // net is the space's from here
   Fit<dim> with_vg(space, dir, vg, tr, solver);
   const double vg_residual = std::sqrt(2 * with_vg.evaluate(zero) / modes);
   if (guarded) rep.validation_van_gelder = with_vg.held_out_error(tr.Tv, tr.Fv);

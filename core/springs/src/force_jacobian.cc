@@ -32,7 +32,7 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
 
 template <int dim>
 Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, const std::vector<int>& free_index,
-                                               int free_count) {
+                                               int free_count, Blocks blocks) {
   // Each free node's free neighbours, itself included, in one array cut by start[] (counted,
   // then filled), sorted and made unique per node (parallel springs share a block).
   const auto nf = static_cast<std::size_t>(free_count);
@@ -57,8 +57,17 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
     }
   Eigen::VectorXi per_column(dim * free_count);
   for (std::size_t a = 0; a < nf; ++a) {
-    const auto first = near.begin() + start[a], last = near.begin() + start[a + 1];
+    auto first = near.begin() + start[a];
+    const auto last = near.begin() + start[a + 1];
     std::sort(first, last);
+    if (blocks == Blocks::lower) { // the column's blocks from its own node on, moved to its start
+      const auto self = std::lower_bound(first, last, static_cast<int>(a));
+      std::copy(self, last, first);
+      const auto kept = last - self;
+      fill[a] = static_cast<int>(std::unique(first, first + kept) - first);
+      per_column.template segment<dim>(dim * static_cast<Eigen::Index>(a)).setConstant(dim * fill[a]);
+      continue;
+    }
     fill[a] = static_cast<int>(std::unique(first, last) - first); // now: the node's count of blocks
     per_column.template segment<dim>(dim * static_cast<Eigen::Index>(a)).setConstant(dim * fill[a]);
   }
@@ -75,7 +84,7 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
 
 template <int dim>
 void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, const std::vector<int>& free_index,
-                         bool clamp_compression, Eigen::SparseMatrix<double>& A) {
+                         bool clamp_compression, Eigen::SparseMatrix<double>& A, Blocks blocks) {
   const int* outer = A.outerIndexPtr();
   const int* inner = A.innerIndexPtr();
   double* value = A.valuePtr();
@@ -84,7 +93,7 @@ void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
                           [&](int, int i, int j, double sign, const Mat<dim>& K, const Mat<dim>&) {
                             const int a = free_index[static_cast<std::size_t>(i)];
                             const int b = free_index[static_cast<std::size_t>(j)];
-                            if (a < 0 || b < 0) return;
+                            if (a < 0 || b < 0 || (blocks == Blocks::lower && a < b)) return;
                             for (int q = 0; q < dim; ++q) {
                               const int col = dim * b + q;
                               const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
@@ -101,16 +110,18 @@ Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const 
   return A;
 }
 
-template Eigen::SparseMatrix<double> free_block_pattern<2>(const SpringNetwork<2>&, const std::vector<int>&, int);
-template Eigen::SparseMatrix<double> free_block_pattern<3>(const SpringNetwork<3>&, const std::vector<int>&, int);
+template Eigen::SparseMatrix<double> free_block_pattern<2>(const SpringNetwork<2>&, const std::vector<int>&, int,
+                                                           Blocks);
+template Eigen::SparseMatrix<double> free_block_pattern<3>(const SpringNetwork<3>&, const std::vector<int>&, int,
+                                                           Blocks);
 template Eigen::SparseMatrix<double> free_stiffness<2>(const SpringNetwork<2>&, const Nodal<2>&,
                                                        const std::vector<int>&, int, bool);
 template Eigen::SparseMatrix<double> free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&,
                                                        const std::vector<int>&, int, bool);
 template void fill_free_stiffness<2>(const SpringNetwork<2>&, const Nodal<2>&, const std::vector<int>&, bool,
-                                     Eigen::SparseMatrix<double>&);
+                                     Eigen::SparseMatrix<double>&, Blocks);
 template void fill_free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&, const std::vector<int>&, bool,
-                                     Eigen::SparseMatrix<double>&);
+                                     Eigen::SparseMatrix<double>&, Blocks);
 template ForceJacobians<2> force_jacobians<2>(const SpringNetwork<2>&, const Nodal<2>&, bool);
 template ForceJacobians<3> force_jacobians<3>(const SpringNetwork<3>&, const Nodal<3>&, bool);
 

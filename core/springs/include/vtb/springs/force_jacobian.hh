@@ -49,10 +49,14 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
 /// free nodes, in both orders; values 0, compressed, a node's rows consecutive in each column.
 /// Built in place, without triplets (on the 9,864-node slab: 1.2M entries, 15 MB, where the
 /// triplets of force_jacobians' K and D were 73 MB at once). The solvers' systems (implicit
-/// Euler, CVODE's preconditioner) and the load check share it.
+/// Euler, CVODE's preconditioner) and the load check share it. `Blocks::lower` keeps a block
+/// only where its row node is at or after its column node: the lower triangle a Cholesky
+/// factorisation reads (CHOLMOD ignores the diagonal blocks' upper entries), half the memory
+/// (the fit's matrix).
+enum class Blocks { both, lower };
 template <int dim>
 Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, const std::vector<int>& free_index,
-                                               int free_count);
+                                               int free_count, Blocks blocks = Blocks::both);
 
 /// The springs' stiffness -K (clamp_compression as force_jacobians) at displacement u on the
 /// free dofs, on free_block_pattern: the matrix of the load check's static solve.
@@ -60,11 +64,11 @@ template <int dim>
 Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
                                            const std::vector<int>& free_index, int free_count, bool clamp_compression);
 /// free_stiffness's values written into A, a free_block_pattern of the same network and
-/// free_index (the fit's assembly at each of its steps, allocation-free). Each entry sums its
-/// springs' blocks in the springs' order, as setFromTriplets sums force_jacobians' triplets: the
-/// same values to the bit.
+/// free_index and `blocks` (the fit's assembly at each of its steps, allocation-free). Each
+/// entry sums its springs' blocks in the springs' order, as setFromTriplets sums
+/// force_jacobians' triplets: the same values to the bit.
 template <int dim>
 void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, const std::vector<int>& free_index,
-                         bool clamp_compression, Eigen::SparseMatrix<double>& A);
+                         bool clamp_compression, Eigen::SparseMatrix<double>& A, Blocks blocks = Blocks::both);
 
 } // namespace vtb
