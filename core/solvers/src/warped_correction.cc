@@ -43,6 +43,12 @@ VTB_VECTOR_CLONES void correction_terms(int n, double dt, const double* __restri
   }
 }
 
+/// Node i's diagonal in implicit Euler's matrix A: its lumped mass with the mass-proportional
+/// damping's dt term, m_i (1 + dt gamma).
+template <int dim> double mass_diagonal(const SpringNetwork<dim>& net, int i, double dt) {
+  return net.mass[i] * (1.0 + dt * net.mass_damping);
+}
+
 } // namespace
 
 template <int dim>
@@ -58,7 +64,6 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   const auto nf = static_cast<Eigen::Index>(free.size());
   const int ns = net.num_springs();
   const auto* e = net.edge.data();
-  const auto diagonal = [&](int i) { return net.mass[i] * (1.0 + dt * net.mass_damping); };
   // r = b - A x at x = dv: b = dt F' plus the transverse part of dt^2 K v (F' holds its axial
   // part, the filter's dt k term), A x = the mass's, the couplings' c w w^T x and the springs'
   // B (x_i - x_j).
@@ -68,7 +73,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   double e0 = 0;
   for (Eigen::Index a = 0; a < nf; ++a) {
     const int i = free[static_cast<std::size_t>(a)];
-    const double m = diagonal(i);
+    const double m = mass_diagonal(net, i, dt);
     m_iterate.col(i) = dv.col(a);
     m_residual.col(i) -= m * dv.col(a);
     e0 += m * dv.col(a).squaredNorm();
@@ -102,7 +107,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
     const int i = free[static_cast<std::size_t>(a)];
     m_iterate.col(i) = m_direction.col(a);
     rz += m_residual.col(i).dot(m_direction.col(a));
-    zaz += diagonal(i) * m_direction.col(a).squaredNorm();
+    zaz += mass_diagonal(net, i, dt) * m_direction.col(a).squaredNorm();
   }
   zaz += couplings.energy(m_iterate);
   for (int s = 0; s < ns; ++s) {
@@ -159,7 +164,7 @@ template <int dim> double WarpedFilter<dim>::minus_product(const CouplingSet<dim
   double pap = 0;
   for (std::size_t a = 0; a < free.size(); ++a) {
     const int i = free[a];
-    const double m = net.mass[i] * (1.0 + dt * net.mass_damping);
+    const double m = mass_diagonal(net, i, dt);
     m_product.col(i) = -m * m_iterate.col(i);
     pap += m * m_iterate.col(i).squaredNorm();
   }
