@@ -13,7 +13,7 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', 'A', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', 'B', '\n'}; // the version: bump when the fit changes
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
