@@ -130,7 +130,10 @@ SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A
   }
   std::vector<int> agg;
   while (A.rows() > coarsest) {
-    const int nc = detail::aggregate(A, agg);
+    int nc = detail::aggregate(A, agg);
+    // Strong aggregates that coarsen less than kMinCoarsening (nu near 1/2) are made again of
+    // every coupling, as the block cycle's.
+    if (A.rows() < kMinCoarsening * nc) nc = detail::aggregate(A, agg, 0.0);
     if (nc >= A.rows()) break; // nothing to coarsen (no off-diagonal couplings)
     const RowSparse P = detail::smoothed_prolongator(A, agg, nc);
     const RowSparse R = P.transpose();

@@ -29,6 +29,7 @@
 /// matrices (numeric products into the patterns made at setup) and the coarsest factor,
 /// without allocating.
 
+#include "vtb/linalg/multigrid.hh"
 #include "vtb/linalg/nodal.hh"
 #include "vtb/linalg/ordered_ldlt.hh"
 
@@ -45,12 +46,6 @@ public:
   static constexpr int kLanes = dim == 3 ? 4 : dim;
   /// A coarse node's values: the rigid modes.
   static constexpr int kModes = dim * (dim + 1) / 2;
-  /// The least coarsening a level's strong-coupling aggregates must reach (fine nodes per
-  /// coarse node), else the level aggregates by every coupling. Measured at the first level:
-  /// the 9,864-node slab at nu 0.25 16.4x (kept), CGAL tissue blocks at nu 0.49 7.1x (2,236
-  /// free nodes) and 6.0x (6,551), by every coupling 17.3x and 18.6x.
-  static constexpr int kMinCoarsening = 10;
-
   /// A: both triangles stored; its pattern is taken by node blocks (an entry of a block makes
   /// the whole block part of the pattern). x: the nodes' positions (the rigid modes').
   BlockMultigrid(const Eigen::SparseMatrix<double>& A, const Nodal<dim>& x, Eigen::Index coarsest = 64);
