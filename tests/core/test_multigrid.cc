@@ -77,15 +77,20 @@ void expect_symmetric_contraction_below_the_inverse(const Eigen::MatrixXd& B, co
 /// aggregation V(1,1) cycle contracts the error by a factor independent of the mesh, about 0.4
 /// on these meshes (0.42 on the 9,864-node slab; docs/performance.md). 0.6 separates it from a
 /// cycle whose coarse correction is broken (Gauss-Seidel alone contracts the smooth modes by
-/// 1 - O(h^2): above 0.9 here). The coarsest level holds at most 4 rows: these meshes have a
-/// few hundred nodes, and levels that coarsen tenfold (kMinCoarsening) would reach 16 rows in
-/// one, leaving no level between the finest and the direct solve to test.
-void expect_cycle_is_a_contraction_below_the_inverse(const Eigen::SparseMatrix<double>& H, double worst = 0.6) {
-  SymmetricMultigrid<2> mg(H, 4);
+/// 1 - O(h^2): above 0.9 here). Both aggregations; with `tenfold` the coarsest level holds at
+/// most 4 rows: these meshes have a few hundred nodes, and levels that coarsen tenfold would
+/// reach 16 rows in one, leaving no level between the finest and the direct solve to test.
+void expect_one_cycle_is_a_contraction_below_the_inverse(const Eigen::SparseMatrix<double>& H, double worst,
+                                                         Aggregates aggregates) {
+  SymmetricMultigrid<2> mg(H, aggregates == Aggregates::tenfold ? 4 : 16, aggregates);
   const std::vector<Eigen::Index> sizes = mg.level_sizes();
   ASSERT_GE(sizes.size(), 3u) << "a hierarchy of at least three levels";
   for (std::size_t l = 1; l < sizes.size(); ++l) EXPECT_LT(sizes[l], sizes[l - 1]);
   expect_symmetric_contraction_below_the_inverse(dense_cycle(mg, H.rows()), H, worst);
+}
+void expect_cycle_is_a_contraction_below_the_inverse(const Eigen::SparseMatrix<double>& H, double worst = 0.6) {
+  for (const auto aggregates : {Aggregates::strong, Aggregates::tenfold})
+    expect_one_cycle_is_a_contraction_below_the_inverse(H, worst, aggregates);
 }
 
 TEST(MultigridCycle, IsSymmetricAndBetweenZeroAndTheInverseIn2D) {
@@ -213,12 +218,12 @@ TEST(BlockMultigridCycle, CoarsensTenfoldNearIncompressibility) {
 }
 
 TEST(MultigridCycle, CoarsensTenfoldNearIncompressibility) {
-  // The scalar cycle (the `multigrid` filter; implicit Euler's CG preconditioner above 4,000
-  // nodes) on the scalar filter matrix, under the same rule: its strong aggregates coarsened
+  // The scalar cycle as implicit Euler's CG preconditioner (above 4,000 nodes) on the scalar
+  // filter matrix, under the same rule (Aggregates::tenfold): its strong aggregates coarsened
   // the 900-node block's first level 6.0x (780 -> 129 free nodes); a 2,400-node one 6.5x (14.5x
   // at nu 0.25).
   const Model<3> m = tissue_block_nu049();
-  const SymmetricMultigrid<3> mg(filter_system_matrix(m, 1e-3), 16);
+  const SymmetricMultigrid<3> mg(filter_system_matrix(m, 1e-3), 16, Aggregates::tenfold);
   const std::vector<Eigen::Index> sizes = mg.level_sizes();
   ASSERT_GE(sizes.size(), 2u);
   EXPECT_GE(sizes[0], kMinCoarsening * sizes[1]);

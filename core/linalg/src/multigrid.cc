@@ -122,7 +122,8 @@ void prolongate_and_postsmooth_any(const LevelArrays& L, const double* xc, const
 } // namespace
 
 template <int dim>
-SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A0, Eigen::Index coarsest) {
+SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A0, Eigen::Index coarsest,
+                                            Aggregates aggregates) {
   RowSparse A(A0);
   if constexpr (kLanes != dim) {
     m_fine_b = Lanes::Zero(kLanes, A.rows());
@@ -132,8 +133,8 @@ SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A
   while (A.rows() > coarsest) {
     int nc = detail::aggregate(A, agg);
     // Strong aggregates that coarsen less than kMinCoarsening (nu near 1/2) are made again of
-    // every coupling, as the block cycle's.
-    if (A.rows() < kMinCoarsening * nc) nc = detail::aggregate(A, agg, 0.0);
+    // every coupling, as the block cycle's, where asked.
+    if (aggregates == Aggregates::tenfold && A.rows() < kMinCoarsening * nc) nc = detail::aggregate(A, agg, 0.0);
     if (nc >= A.rows()) break; // nothing to coarsen (no off-diagonal couplings)
     const RowSparse P = detail::smoothed_prolongator(A, agg, nc);
     const RowSparse R = P.transpose();

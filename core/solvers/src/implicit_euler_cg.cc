@@ -23,7 +23,7 @@ ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double
   m_inv_diag.assign(static_cast<std::size_t>(n), Mat<dim>::Zero());
   for (auto* v : {&m_force, &m_b, &m_x, &m_r, &m_z, &m_p, &m_ap, &m_prev, &m_prev2}) *v = Nodal<dim>::Zero(dim, n);
   if (multigrid) {
-    m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, dt));
+    m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, dt), 64, Aggregates::tenfold);
     const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
     m_free_r = Nodal<dim>::Zero(dim, nf);
     m_free_z = Nodal<dim>::Zero(dim, nf);
