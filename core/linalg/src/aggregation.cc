@@ -1,5 +1,7 @@
 #include "aggregation.hh"
 
+#include "vtb/linalg/multigrid.hh"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -11,7 +13,7 @@ int aggregate(const RowSparse& A0, std::vector<int>& agg, double theta) {
   // has about 14 neighbours, so a Laplacian's couplings are near 1/14 = 0.07 of the diagonal;
   // theta = 0.04 (the default) drops the weakest (measured: the V-cycle's contraction on the
   // 9,864-node slab is 0.46 with all couplings, 0.42 at 0.04, at 15 % more cost per cycle than
-  // 0.02 ..); theta = 0 keeps every coupling (the block cycle's fallback, block_multigrid.hh).
+  // 0.02 ..); theta = 0 keeps every coupling (aggregate_tenfold's fallback).
   RowSparse A = A0;
   const Eigen::VectorXd d = A0.diagonal();
   A.prune([&](Eigen::Index i, Eigen::Index j, double v) {
@@ -91,6 +93,11 @@ RowSparse smoothed_prolongator(const RowSparse& A, const std::vector<int>& agg, 
   P.setFromTriplets(trip.begin(), trip.end()); // sums duplicates
   P.prune(0.0);
   return P;
+}
+
+int aggregate_tenfold(const RowSparse& A, std::vector<int>& agg) {
+  const int nc = aggregate(A, agg);
+  return A.rows() < kMinCoarsening * nc ? aggregate(A, agg, 0.0) : nc;
 }
 
 } // namespace vtb::detail

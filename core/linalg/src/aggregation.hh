@@ -15,6 +15,9 @@ using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
 /// Aggregate of each row of A (graph of the off-diagonal entries |a_ij| >= theta sqrt(a_ii
 /// a_jj)); returns their count.
 int aggregate(const RowSparse& A, std::vector<int>& agg, double theta = 0.04);
+/// aggregate() by the strong couplings, made again of every coupling (theta = 0) where they
+/// coarsen A's rows less than kMinCoarsening times (multigrid.hh); returns their count.
+int aggregate_tenfold(const RowSparse& A, std::vector<int>& agg);
 
 /// P = (I - w D^-1 A) P0, P0 the aggregates' indicator, w = 4/3 over an estimate of the
 /// spectral radius of D^-1 A.

@@ -248,11 +248,10 @@ BlockMultigrid<dim>::BlockMultigrid(const Eigen::SparseMatrix<double>& A0, const
     RowSparse S(n, n);
     S.setFromTriplets(trip.begin(), trip.end());
     std::vector<int> agg;
-    int nc = detail::aggregate(S, agg);
-    // Aggregates of strong couplings that coarsen less than kMinCoarsening (nu near 1/2, where
-    // the blocks' norms spread: a 6,914-node tissue block at nu 0.49 coarsened 6x, to dense
-    // coarse rows) are made again of every coupling (docs/performance.md, item 21).
-    if (n < kMinCoarsening * nc) nc = detail::aggregate(S, agg, 0.0);
+    // Strong aggregates that coarsen less than kMinCoarsening (nu near 1/2, where the blocks'
+    // norms spread: a 6,914-node tissue block at nu 0.49 coarsened 6x, to dense coarse rows)
+    // are made again of every coupling (docs/performance.md, item 21).
+    const int nc = detail::aggregate_tenfold(S, agg);
     if (nc >= n) break; // nothing to coarsen (no off-diagonal couplings)
 
     // The tentative prolongator: per aggregate, an orthonormal basis of the rigid modes on its

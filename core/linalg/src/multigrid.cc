@@ -131,10 +131,7 @@ SymmetricMultigrid<dim>::SymmetricMultigrid(const Eigen::SparseMatrix<double>& A
   }
   std::vector<int> agg;
   while (A.rows() > coarsest) {
-    int nc = detail::aggregate(A, agg);
-    // Strong aggregates that coarsen less than kMinCoarsening (nu near 1/2) are made again of
-    // every coupling, as the block cycle's, where asked.
-    if (aggregates == Aggregates::tenfold && A.rows() < kMinCoarsening * nc) nc = detail::aggregate(A, agg, 0.0);
+    const int nc = aggregates == Aggregates::tenfold ? detail::aggregate_tenfold(A, agg) : detail::aggregate(A, agg);
     if (nc >= A.rows()) break; // nothing to coarsen (no off-diagonal couplings)
     const RowSparse P = detail::smoothed_prolongator(A, agg, nc);
     const RowSparse R = P.transpose();

@@ -32,10 +32,11 @@ namespace vtb {
 
 /// The least coarsening a level's strong-coupling aggregates must reach (fine rows per coarse
 /// row), else the level aggregates by every coupling: the block cycle's rule, and the scalar
-/// cycle's where it preconditions (Aggregates::tenfold). Measured at the first level of the block cycle: the 9,864-node
-/// slab at nu 0.25 16.4x (kept), CGAL tissue blocks at nu 0.49 7.1x (2,236 free nodes) and 6.0x (6,551), by every
-/// coupling 17.3x and 18.6x; of the scalar cycle on a 2,400-node CGAL block: 14.5x at nu 0.25,
-/// 6.9x at 0.45, 6.5x at 0.49 (docs/performance.md, item 21).
+/// cycle's where it preconditions (Aggregates::tenfold). Measured at the first level of the
+/// block cycle: the 9,864-node slab at nu 0.25 16.4x (kept), CGAL tissue blocks at nu 0.49
+/// 7.1x (2,236 free nodes) and 6.0x (6,551), by every coupling 17.3x and 18.6x; of the scalar
+/// cycle on a 2,400-node CGAL block: 14.5x at nu 0.25, 6.9x at 0.45, 6.5x at 0.49
+/// (docs/performance.md, item 21).
 inline constexpr int kMinCoarsening = 10;
 
 /// How the scalar cycle aggregates. `strong`: by the strong couplings alone, at every level
