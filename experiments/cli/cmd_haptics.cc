@@ -14,8 +14,9 @@ namespace vtb::cli {
 Action add_haptics(CLI::App& app) {
   struct Opts {
     std::string scene, fault, out, replay;
-    bool lockstep = false, lock_memory = false, no_priority = false;
+    bool lockstep = false, lock_memory = false, no_priority = false, no_local_model = false;
     int pin_cpu = -1;
+    double physics_dt = 0;
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -27,12 +28,22 @@ Action add_haptics(CLI::App& app) {
   cmd->add_flag("--lock-memory", o->lock_memory, "mlockall for the session (no page faults in the servo loop)");
   cmd->add_option("--pin-cpu", o->pin_cpu, "Pin the servo thread to this core; the physics runs on the others");
   cmd->add_flag("--no-realtime-priority", o->no_priority, "Do not ask for SCHED_FIFO (to measure what it buys)");
+  CLI::Option* physics_dt = cmd->add_option("--physics-dt", o->physics_dt,
+                  "The physics' step in s (default: the scene's [solver] dt, else the rate the body affords in real "
+                  "time, the servo's period in lockstep)");
+  cmd->add_flag("--no-local-model", o->no_local_model,
+                "The servo couples against the body's free motion alone between physics steps (to measure what the "
+                "local contact model buys)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-haptics)");
-  return [o]() {
+  return [o, physics_dt]() {
     const Scene scene = read_scene(o->scene);
     HapticsOptions ho;
     if (!o->fault.empty()) ho.fault = parse_fault(o->fault, ho.fault_time);
     ho.lockstep = o->lockstep;
+    if (physics_dt->count() > 0 && !(o->physics_dt > 0))
+      throw InputError("--physics-dt " + std::to_string(o->physics_dt) + ": must be > 0");
+    ho.physics_dt = o->physics_dt;
+    ho.local_model = !o->no_local_model;
     ho.lock_memory = o->lock_memory;
     const int cores = static_cast<int>(std::thread::hardware_concurrency());
     if (o->pin_cpu >= cores && cores > 0)
@@ -53,8 +64,10 @@ Action add_haptics(CLI::App& app) {
               << " N, " << r.saturated_samples << " saturated, " << r.nonfinite_samples
               << " non-finite, energy to user " << r.energy_to_user << " J";
     if (r.fault_time >= 0)
-      std::cout << "; fault at " << r.fault_time << " s, force zero at " << r.force_zero_time << " s";
-    std::cout << "; physics step median " << r.physics_step_median_us << " us, " << r.physics_steps_over_budget
+      std::cout << "; fault (" << r.fault_reason << ") at " << r.fault_time << " s, force zero at " << r.force_zero_time
+                << " s";
+    std::cout << "; physics every " << r.physics_dt_us << " us at " << r.physics_time_ratio
+              << "x wall time, step median " << r.physics_step_median_us << " us, " << r.physics_steps_over_budget
               << " of " << r.physics_steps << " steps over its budget of " << r.physics_step_budget_us << " us"
               << (r.physics_filter.empty()
                       ? ""
@@ -66,7 +79,14 @@ Action add_haptics(CLI::App& app) {
       std::cout << "; tool tip " << r.tip_radius * 1e3 << " mm, its force on up to " << footprint << " surface nodes";
     else
       std::cout << "; a point proxy";
+    if (r.local_model != "none")
+      std::cout << "; the servo's local contact model (" << r.local_model << " compliance) predicted the next step's "
+                << "force within " << r.local_model_error_rms << " N rms, " << r.local_model_error_max << " N at most";
     std::cout << "; outputs in " << out.string() << "\n";
+    if (r.physics_time_ratio < 0.95)
+      std::cerr << "vtb haptics: warning: the body ran at " << r.physics_time_ratio
+                << "x wall time: its physics step (median " << r.physics_step_median_us << " us) did not keep pace with "
+                << r.physics_dt_us << " us a step; a coarser mesh or a larger --physics-dt would\n";
     // Timing a user should not miss: late servo cycles mean the force felt was held longer
     // than one period (docs/haptics.md says what lowers them).
     if (r.deadline_misses > 0)

@@ -133,6 +133,7 @@ HeldForce held_press_force(const std::string& solver, double dt) {
                               // fitted one is softer and holds 0.039 N instead of 0.094 N
   solvers::select(solver, "test", s.solver.kind, s.solver.filter);
   s.solver.dt = dt;
+  s.solver.dt_given = true; // the session steps its physics at it
   HapticsOptions o;
   o.lockstep = true;
   HeldForce h;

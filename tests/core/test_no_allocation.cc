@@ -5,6 +5,7 @@
 #include "vtb/haptics/contact2d.hh"
 #include "vtb/haptics/contact3d.hh"
 #include "vtb/haptics/contacts.hh"
+#include "vtb/haptics/local_model.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/solvers/warped_filter.hh"
@@ -240,6 +241,45 @@ TEST(NoAllocation, ServoContactAndShapingAllocateNothing) {
   EXPECT_EQ(g_allocations, 0);
   EXPECT_GT(tree.builds(), builds) << "the squeeze exceeds the margin: full builds were exercised";
   EXPECT_GT(footprint_nodes, 3) << "the tips' footprints covered more than one facet";
+}
+
+TEST(NoAllocation, ServoCycleWithALocalModelAllocatesNothing) {
+  // What a multirate servo cycle adds (local_model.hh): the proxy moved by the model (a shift
+  // into the tip's contact), the coupling solved against the model, the record of the cycle
+  // that the next physics step's force comes from (ForceHistory, applied_force).
+  const Mesh3 box = generate_box({0.02, 0.02, 0.02}, {3, 3, 3});
+  SurfaceTree tree(box);
+  SurfaceContact c3(tree);
+  TipFootprint<3> tip3(tree.facets(), box.points, 0.008, 5e4, 0.3);
+  ContactResult<3> last3;
+  LocalModel<3> model;
+  model.valid = true;
+  model.compliance = 2e-3 * Eigen::Matrix3d::Identity();
+  model.applied = Eigen::Vector3d(0, -0.5, 0);
+  ForceHistory<3> history;
+  Nodal<3> v = Nodal<3>::Constant(3, box.points.cols(), 1e-3);
+  double sum = 0;
+  const auto cycle = [&](int k) {
+    const Eigen::Vector3d h(0.01, 0.025 - 0.001 * (k % 20), 0.01);
+    Eigen::Vector3d shift = model.compliance * model.applied;
+    for (int p = 0; p < last3.footprint.count; ++p)
+      shift += 1e-3 * last3.footprint.weight[static_cast<std::size_t>(p)] *
+               v.col(last3.footprint.node[static_cast<std::size_t>(p)]);
+    auto r = hold_tip(c3, last3, tip3, Eigen::Vector3d(h - shift), box.points);
+    r.proxy += shift;
+    const Eigen::Vector3d f = solve_against_local_model<3>(400.0 * (r.proxy - h), r.proxy - h, 400.0, model);
+    history.sum -= f;
+    history.proxy_sum += r.proxy;
+    ++history.cycles;
+    sum += applied_force<3>(history, r.proxy, 400.0).norm();
+  };
+  cycle(0);
+  g_allocations = 0;
+  g_counting = true;
+  for (int k = 1; k < 60; ++k) cycle(k);
+  g_counting = false;
+  EXPECT_EQ(g_allocations, 0);
+  EXPECT_GT(sum, 0.0) << "the cycles pressed";
 }
 
 } // namespace

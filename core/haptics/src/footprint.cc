@@ -29,6 +29,7 @@ TipFootprint<dim>::TipFootprint(const std::vector<std::array<int, dim>>& facets,
     }
     m_share.push_back(size / dim);
   }
+  m_rest = rest;
   const double edge_count = static_cast<double>(facets.size()) * (dim == 2 ? 1.0 : 3.0);
   m_mean_edge = facets.empty() ? 0.0 : edges / edge_count;
   facet_rings(facets, static_cast<int>(rest.cols()), m_ring_ptr, m_ring);
@@ -115,15 +116,23 @@ template <int dim> void TipFootprint<dim>::place(ContactResult<dim>& c, const Ve
   if (!c.touching || c.facet < 0) return;
   const int start = c.facet;
   const auto& touched = m_facets[static_cast<std::size_t>(start)];
+  // The tip presses a patch of the body's material: the disc about the proxy's material point
+  // on the rest surface. Measured on the deformed surface, the facets under it and their
+  // weights followed the dent the tip itself made, and on a soft block the force flipped
+  // between two levels (50 % apart) every few cycles as facets tilted in and out of the disc.
+  const auto& rest = m_rest;
+  Vec<dim> centre = Vec<dim>::Zero();
+  for (int k = 0; k < dim; ++k)
+    centre += c.weights[static_cast<std::size_t>(k)] * rest.col(touched[static_cast<std::size_t>(k)]);
   // The touched facet's mean edge: the tip resolves the surface where it is at least as wide.
   double edge = 0; // 2D: the edge's length; 3D: the triangle's mean edge
   for (int k = 0; k < dim; ++k)
-    edge +=
-        (x.col(touched[static_cast<std::size_t>(k)]) - x.col(touched[static_cast<std::size_t>((k + 1) % dim)])).norm();
+    edge += (rest.col(touched[static_cast<std::size_t>(k)]) - rest.col(touched[static_cast<std::size_t>((k + 1) % dim)]))
+                .norm();
   edge /= dim;
   fp.resolved = m_radius >= edge;
-  const Vec<dim> n = normal(start, x);
-  c.normal = n;
+  const Vec<dim> n = normal(start, rest);
+  c.normal = normal(start, x);
   // The facets under the tip: from the touched one over facets sharing a node, each taken
   // while some of its samples lie under the tip and it faces the same way.
   ++m_query;
@@ -133,11 +142,10 @@ template <int dim> void TipFootprint<dim>::place(ContactResult<dim>& c, const Ve
   Vec<dim> face = Vec<dim>::Zero(); // the footprint's mean normal, by the facets' pressed samples
   while (m_radius > 0 && head < size) {
     const int f = m_queue[head++];
-    const Vec<dim> nf = normal(f, x);
-    if (f != start && !(nf.dot(n) > 0)) continue;
-    const int pressed = press(f, c.proxy, n, x, fp);
+    if (f != start && !(normal(f, rest).dot(n) > 0)) continue;
+    const int pressed = press(f, centre, n, rest, fp);
     if (pressed == 0) continue;
-    face += pressed * m_share[static_cast<std::size_t>(f)] * nf;
+    face += pressed * m_share[static_cast<std::size_t>(f)] * normal(f, x);
     ++fp.facets;
     const auto b = static_cast<std::size_t>(m_ring_ptr[static_cast<std::size_t>(f)]);
     const auto e = static_cast<std::size_t>(m_ring_ptr[static_cast<std::size_t>(f) + 1]);
@@ -167,17 +175,19 @@ template <int dim> void TipFootprint<dim>::place(ContactResult<dim>& c, const Ve
   c.normal = blend.normalized();
   double sum = 0;
   for (int k = 0; k < fp.count; ++k) sum += fp.weight[static_cast<std::size_t>(k)];
-  Vec<dim> mean = Vec<dim>::Zero();
+  Vec<dim> mean = Vec<dim>::Zero(), rest_mean = Vec<dim>::Zero();
   for (int k = 0; k < fp.count; ++k) {
     fp.weight[static_cast<std::size_t>(k)] /= sum;
     mean += fp.weight[static_cast<std::size_t>(k)] * x.col(fp.node[static_cast<std::size_t>(k)]);
+    rest_mean += fp.weight[static_cast<std::size_t>(k)] * rest.col(fp.node[static_cast<std::size_t>(k)]);
   }
-  // The radius of the uniform load with the weights' second moment across n, and the local
-  // compliance between it and the tip's (the header's formulas).
+  // The radius of the uniform load with the weights' second moment across n (on the rest
+  // surface, as the weights), and the local compliance between it and the tip's (the header's
+  // formulas).
   double moment = 0;
   for (int k = 0; k < fp.count; ++k) {
-    const Vec<dim> d = x.col(fp.node[static_cast<std::size_t>(k)]) - mean;
-    moment += fp.weight[static_cast<std::size_t>(k)] * (d - c.normal * c.normal.dot(d)).squaredNorm();
+    const Vec<dim> d = rest.col(fp.node[static_cast<std::size_t>(k)]) - rest_mean;
+    moment += fp.weight[static_cast<std::size_t>(k)] * (d - n * n.dot(d)).squaredNorm();
   }
   const double spread = std::sqrt((dim == 3 ? 2.0 : 3.0) * moment);
   if (m_soft > 0 && spread > m_radius)

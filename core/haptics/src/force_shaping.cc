@@ -22,6 +22,7 @@ typename BasicForceShaper<n>::Vec BasicForceShaper<n>::shape(const Vec& raw, dou
   if (!m_faulted && (stalled || !physics_finite || !raw.allFinite())) {
     m_faulted = true;
     m_fault_time = t;
+    m_reason = stalled ? "stall" : !physics_finite ? "physics" : "force";
   }
   if (m_faulted) {
     const double scale = std::clamp(1.0 - (t - m_fault_time) / m_p.ramp_out, 0.0, 1.0);

@@ -34,10 +34,17 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["energy_to_user"] = r.energy_to_user;
   j["fault_time"] = r.fault_time;
   j["force_zero_time"] = r.force_zero_time;
+  if (!r.fault_reason.empty()) j["fault_reason"] = r.fault_reason;
   j["physics_steps"] = r.physics_steps;
   j["physics_step_median_us"] = r.physics_step_median_us;
+  j["physics_step_max_us"] = r.physics_step_max_us;
   j["physics_step_budget_us"] = r.physics_step_budget_us;
   j["physics_steps_over_budget"] = r.physics_steps_over_budget;
+  j["physics_dt_us"] = r.physics_dt_us;
+  j["physics_time_ratio"] = r.physics_time_ratio;
+  j["local_model"] = r.local_model;
+  j["local_model_error_rms"] = r.local_model_error_rms;
+  j["local_model_error_max"] = r.local_model_error_max;
   if (!r.physics_filter.empty()) j["physics_filter"] = r.physics_filter;
   if (!r.physics_filter_reason.empty()) j["physics_filter_reason"] = r.physics_filter_reason;
   j["tick_median_us"] = r.tick_median_us;

@@ -3,15 +3,10 @@
 #include "vtb/problem/solver_registry.hh"
 #include "vtb/solvers/filter_pick.hh"
 
+#include "physics_side.hh"
 #include "realtime_thread.hh"
-#include "vtb/haptics/contacts.hh"
-#include "vtb/haptics/coupling.hh"
-#include "vtb/haptics/device.hh"
-#include "vtb/haptics/device_plane.hh"
-#include "vtb/haptics/force_shaping.hh"
-#include "vtb/haptics/triple_buffer.hh"
+#include "servo.hh"
 #include "vtb/problem/output.hh"
-#include "vtb/solvers/integrator.hh"
 #include "vtb/solvers/simulation.hh"
 
 #include <algorithm>
@@ -28,185 +23,6 @@ namespace vtb {
 namespace {
 
 using steady = std::chrono::steady_clock;
-
-template <int dim> using Vec = Eigen::Matrix<double, dim, 1>;
-
-/// What the physics publishes for the servo: the deformed body and when.
-template <int dim> struct Snapshot {
-  double t = 0;
-  bool finite = true;
-  Nodal<dim> x, v;
-};
-
-/// What the servo sends back for one probe: the contact force on the body, where (no nodes:
-/// not touching).
-template <int dim> struct ContactCommand {
-  Footprint footprint;
-  Vec<dim> force_on_body = Vec<dim>::Zero();
-};
-template <int dim> using Commands = std::vector<ContactCommand<dim>>; ///< one per probe, sized once
-
-/// The servo side: devices, proxies, coupling, shaping, log. No allocation in tick().
-template <int dim> class Servo {
-public:
-  Servo(std::vector<std::unique_ptr<HapticDevice>>& devices, const Mesh<dim>& mesh, const MaterialDesc& material,
-        const HapticsDesc& h, const DevicePlane<dim>& plane, long max_samples, TripleBuffer<Snapshot<dim>>& snap,
-        TripleBuffer<Commands<dim>>& cmd)
-      : m_devices(devices), m_contacts(mesh, devices.size(), h.tip_radius_for(dim), material), m_h(h), m_plane(plane),
-        m_snap(snap), m_cmd(cmd), m_x(mesh.points), m_max(max_samples) {
-    m_rep.t.reserve(static_cast<std::size_t>(max_samples));
-    m_rep.probes.resize(devices.size());
-    for (std::size_t i = 0; i < devices.size(); ++i) {
-      m_shapers.emplace_back(
-          typename BasicForceShaper<dim>::Params{std::min(h.max_force, devices[i]->spec().max_force), 0.5, 0.03, 0.01});
-      for (auto* v : {&m_rep.probes[i].hx, &m_rep.probes[i].hy, &m_rep.probes[i].fx, &m_rep.probes[i].fy})
-        v->reserve(static_cast<std::size_t>(max_samples));
-    }
-  }
-
-  /// One servo cycle at servo time t, for every probe.
-  void tick(double t) {
-    const bool fresh = m_snap.fetch();
-    const Snapshot<dim>& s = m_snap.front();
-    // Local linear model of the body between physics updates: nodes move on with their
-    // velocity since the snapshot (refreshed by every physics step).
-    const double age = std::clamp(t - s.t, 0.0, 0.05);
-    m_x = s.x + age * s.v;
-    const bool finite = s.finite && m_x.allFinite();
-    if (fresh && finite) m_contacts.refit(s.x);
-    const bool record = static_cast<long>(m_rep.t.size()) < m_max;
-    if (record) m_rep.t.push_back(t);
-    bool all_zero = true;
-    Commands<dim>& out = m_cmd.back();
-    for (std::size_t i = 0; i < m_devices.size(); ++i) {
-      Eigen::Vector2d pos, vel;
-      m_devices[i]->read(pos, vel);
-      const Vec<dim> handle = m_plane.origin + m_plane.axes * pos;
-      Vec<dim> raw = Vec<dim>::Zero();
-      ContactResult<dim> c;
-      if (finite) c = m_contacts.update(i, handle, m_x);
-      if (c.touching) raw = coupling(c, handle, m_plane.axes * vel, s.v);
-      // The coupling force is shaped whole; a planar device renders its in-plane part (the
-      // rest is taken by its mechanism), the body receives the whole reaction.
-      const Vec<dim> f = m_shapers[i].shape(raw, t, s.t, finite);
-      const Eigen::Vector2d fd = m_plane.axes.transpose() * f;
-      m_devices[i]->command(fd);
-      out[i].footprint = c.touching ? c.footprint : Footprint{};
-      out[i].force_on_body = -f;
-      if (c.touching) count_footprint(m_rep.probes[i], c.footprint);
-      all_zero = all_zero && f.norm() == 0.0;
-      if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, fd);
-      if (m_shapers[i].faulted() && m_rep.fault_time < 0) m_rep.fault_time = m_shapers[i].fault_time();
-    }
-    m_cmd.publish();
-    if (m_rep.fault_time >= 0 && m_rep.force_zero_time < 0 && all_zero) m_rep.force_zero_time = t;
-  }
-
-  HapticsReport& report() { return m_rep; }
-  const TipFootprint<dim>& tip() const { return m_contacts.tip(); }
-
-private:
-  Vec<dim> coupling(const ContactResult<dim>& c, const Vec<dim>& handle, const Vec<dim>& handle_velocity,
-                    const Nodal<dim>& node_velocity) const {
-    return virtual_coupling<dim>(c, handle, handle_velocity, node_velocity, m_h.coupling_stiffness,
-                                 m_h.coupling_damping);
-  }
-
-  /// The tip's footprint over the cycles in contact: its largest node count, the cycles where
-  /// the tip was narrower than the touched facet (not resolved) or covered too many nodes.
-  static void count_footprint(ProbeTrace& p, const Footprint& fp) {
-    ++p.contact_samples;
-    p.footprint_nodes_max = std::max(p.footprint_nodes_max, fp.count);
-    p.unresolved_samples += !fp.resolved;
-    p.truncated_samples += fp.truncated;
-  }
-
-  void log(ProbeTrace& p, const BasicForceShaper<dim>& shaper, const Eigen::Vector2d& pos, const Eigen::Vector2d& vel,
-           const Eigen::Vector2d& f) {
-    const std::size_t n = m_rep.t.size();
-    if (n > 1) p.energy_to_user += f.dot(vel) * (m_rep.t[n - 1] - m_rep.t[n - 2]);
-    p.hx.push_back(pos.x());
-    p.hy.push_back(pos.y());
-    p.fx.push_back(f.x());
-    p.fy.push_back(f.y());
-    if (!f.allFinite()) ++p.nonfinite_samples;
-    if (shaper.last_saturated()) ++p.saturated_samples;
-    p.max_force = std::max(p.max_force, f.norm());
-  }
-
-  std::vector<std::unique_ptr<HapticDevice>>& m_devices;
-  Contacts<dim> m_contacts;
-  const HapticsDesc& m_h;
-  DevicePlane<dim> m_plane;
-  std::vector<BasicForceShaper<dim>> m_shapers;
-  TripleBuffer<Snapshot<dim>>& m_snap;
-  TripleBuffer<Commands<dim>>& m_cmd;
-  Nodal<dim> m_x;
-  HapticsReport m_rep;
-  long m_max = 0;
-};
-
-/// The physics side: one spring-solver step with the probes' contact forces applied, then publish.
-template <int dim> class Physics {
-public:
-  Physics(const Model<dim>& model, const IntegratorOptions& o, TripleBuffer<Snapshot<dim>>& snap,
-          TripleBuffer<Commands<dim>>& cmd, const HapticsDesc& h, const HapticsOptions& faults)
-      : m_model(model), m_integ(make_integrator(model, o)), m_state(initial_state(model)), m_snap(snap), m_cmd(cmd),
-        m_k(h.coupling_stiffness), m_b(h.coupling_damping), m_faults(faults) {
-    m_state.applied = Nodal<dim>::Zero(dim, model.num_nodes());
-    m_state.applied_stiffness = Eigen::VectorXd::Zero(model.num_nodes());
-    m_state.applied_damping = Eigen::VectorXd::Zero(model.num_nodes());
-    m_state.applied_group = Eigen::VectorXi::Constant(model.num_nodes(), -1);
-  }
-
-  double dt() const { return m_integ->dt(); }
-  double time() const { return m_state.t; }
-
-  /// Steps once; false when a stall fault has stopped the physics.
-  bool step() {
-    using F = HapticsOptions::Fault;
-    if (m_faults.fault == F::stall && m_state.t >= m_faults.fault_time) return false;
-    m_cmd.fetch();
-    m_state.applied.setZero();
-    m_state.applied_stiffness.setZero();
-    m_state.applied_damping.setZero();
-    m_state.applied_group.setConstant(-1);
-    // Each probe's force on its footprint's nodes by their weights, and the coupling's
-    // stiffness and damping with it, one group per probe, for the integrators that solve them
-    // implicitly: the proxy is sum_k w_k x_k along the tip's normal, so the coupling's k acts as
-    // k w w^T (coupling_set.hh). Explicitly, a 400 N/m coupling on a node of 0.04 g is beyond
-    // the step's limit at dt = 1 ms (sqrt(m/k) = 0.33 ms).
-    int group = 0;
-    for (const ContactCommand<dim>& c : m_cmd.front()) {
-      if (c.footprint.count > 0) apply_to_body<dim>(c.footprint, c.force_on_body, m_k, m_b, group, m_state);
-      ++group;
-    }
-    const auto a = steady::now();
-    m_integ->step(m_state);
-    m_step_us.push_back(std::chrono::duration<double, std::micro>(steady::now() - a).count());
-    Snapshot<dim>& s = m_snap.back();
-    s.t = m_state.t;
-    s.x = m_model.net.rest + m_state.u;
-    s.v = m_state.v;
-    if (m_faults.fault == F::nan && m_state.t >= m_faults.fault_time)
-      s.x.setConstant(std::numeric_limits<double>::quiet_NaN());
-    s.finite = s.x.allFinite() && s.v.allFinite() && max_strain(m_model.net, m_state.u) < 10.0;
-    m_snap.publish();
-    return true;
-  }
-
-  const std::vector<double>& step_times() const { return m_step_us; }
-
-private:
-  const Model<dim>& m_model;
-  std::unique_ptr<Integrator<dim>> m_integ;
-  State<dim> m_state;
-  TripleBuffer<Snapshot<dim>>& m_snap;
-  TripleBuffer<Commands<dim>>& m_cmd;
-  double m_k, m_b; ///< the virtual coupling's stiffness and damping
-  HapticsOptions m_faults;
-  std::vector<double> m_step_us;
-};
 
 } // namespace
 
@@ -256,6 +72,7 @@ struct LoopTiming {
   std::vector<double> periods, tick_us; ///< each cycle's period and its own work, us
   long misses = 0;                      ///< cycles that started more than half a period late
   std::vector<std::string> setup;       ///< what the real-time servo thread was granted
+  double time_ratio = 1;                ///< simulated time the physics reached over wall time (at most 1)
 };
 
 /// A coupling stiffer than the device renders stably is limited to its maximum, as a device
@@ -270,6 +87,28 @@ HapticsDesc limited_coupling(const Scene& scene, double k_max, std::vector<std::
     h.coupling_stiffness = k_max;
   }
   return h;
+}
+
+/// The physics' solver options for a session. Its dt: --physics-dt; else the scene's `[solver]
+/// dt` where it names one; else, in real time, the rate the body affords (with_physics_rate:
+/// the most accurate filter whose measured step, with headroom, fits a whole number of servo
+/// periods), and in lockstep the servo's period. Its step budget: the scene's, else its dt;
+/// `auto` then picks within it (with_budget_pick) where with_physics_rate has not.
+template <int dim>
+IntegratorOptions physics_options(const Scene& scene, const Model<dim>& model, const HapticsOptions& opt,
+                                  double period) {
+  IntegratorOptions o = integrator_options(scene.solver);
+  if (opt.physics_dt > 0) {
+    o.dt = opt.physics_dt;
+  } else if (!scene.solver.dt_given && !(o.step_budget > 0)) {
+    if (opt.lockstep)
+      o.dt = period;
+    else
+      o = with_physics_rate(model, o, period,
+                            TrialCoupling{scene.haptics->coupling_stiffness, scene.haptics->coupling_damping});
+  }
+  if (!(o.step_budget > 0)) o.step_budget = o.dt;
+  return with_budget_pick(model, o);
 }
 
 /// Simulated time only: servo and physics interleaved, deterministic (tests and replays).
@@ -331,6 +170,8 @@ LoopTiming run_realtime(Servo<dim>& servo, Physics<dim>& physics, long ticks, do
     }
   }
   servo_thread.join();
+  const double wall = std::chrono::duration<double>(steady::now() - start).count();
+  lt.time_ratio = wall > 0 ? std::min(1.0, physics.time() / wall) : 1.0;
   if (opt.lock_memory) munlockall();
   return lt;
 }
@@ -355,8 +196,14 @@ HapticsReport finish_report(HapticsReport rep, LoopTiming lt, const Physics<dim>
   rep.deadline_misses = lt.misses;
   rep.tick_median_us = tick.median;
   rep.tick_p99_us = tick.p99;
+  rep.physics_time_ratio = lt.time_ratio;
+  rep.physics_dt_us = physics.dt() * 1e6;
+  rep.local_model = physics.compliance_source();
   rep.physics_steps = static_cast<long>(physics.step_times().size());
   rep.physics_step_median_us = step_stats(physics.step_times()).median;
+  rep.physics_step_max_us = physics.step_times().empty()
+                                ? 0.0
+                                : *std::max_element(physics.step_times().begin(), physics.step_times().end());
   return rep;
 }
 
@@ -370,21 +217,20 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     throw InputError(scene.file.string() + ": [solver].kind = \"" + scene.solver.kind +
                      "\": a haptics session needs a fixed-step spring solver (" + solvers::list(solvers::is_stepper) +
                      ")");
-  IntegratorOptions o = integrator_options(scene.solver);
-  // The physics steps once per servo cycle: its budget is the cycle's period unless the scene
-  // sets one, and auto picks the most accurate filter that fits it (filter_pick.hh).
-  if (!(o.step_budget > 0)) o.step_budget = 1.0 / h.rate;
-  o = with_budget_pick(model, o);
+  const double period = 1.0 / h.rate;
+  const IntegratorOptions o = physics_options(scene, model, opt, period);
 
   Snapshot<dim> init;
   init.x = model.net.rest;
   init.v = Nodal<dim>::Zero(dim, model.num_nodes());
+  init.models.resize(devices.size());
   TripleBuffer<Snapshot<dim>> snap(init);
   TripleBuffer<Commands<dim>> cmd(Commands<dim>(devices.size()));
-  const double period = 1.0 / h.rate;
   const long ticks = std::lround(scene.duration / period);
-  Servo<dim> servo(devices, model.mesh, scene.material, h, plane, ticks + 2, snap, cmd);
-  Physics<dim> physics(model, o, snap, cmd, h, opt);
+  Servo<dim> servo(devices, model.mesh, scene.material, h, plane, ticks + 2, o.dt, snap, cmd);
+  const double fallback = half_space_tip_compliance(dim, scene.material.young_modulus, scene.material.poisson_ratio,
+                                                    h.tip_radius_for(dim));
+  Physics<dim> physics(model, o, snap, cmd, h, opt, period, fallback);
   const auto advance_devices = [&devices](double dt) {
     for (auto& d : devices) d->advance(dt);
   };
@@ -392,6 +238,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   LoopTiming lt = opt.lockstep ? run_lockstep(servo, physics, ticks, period, advance_devices)
                                : run_realtime(servo, physics, ticks, period, opt, advance_devices);
   HapticsReport rep = finish_report(std::move(servo.report()), std::move(lt), physics, opt.lockstep);
+  rep.local_model_error_rms = servo.prediction_error_rms();
+  rep.local_model_error_max = servo.prediction_error_max();
   rep.coupling_stiffness = h.coupling_stiffness;
   rep.tip_radius = h.tip_radius_for(dim);
   rep.surface_mean_edge = servo_tip_edge;

@@ -204,6 +204,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
       if (e.scene_kind) kinds.emplace_back(e.name);
     s.solver.kind = r.string("kind", solvers::kFiltered, kinds);
     s.solver.dt = r.number("dt", 1e-3, positive);
+    s.solver.dt_given = r.node("dt") != nullptr;
     s.solver.filter =
         r.string("filter", solvers::kFilterAuto, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
     s.solver.momentum_correction = r.boolean("momentum_correction", true);

@@ -27,12 +27,32 @@ template <int dim> std::vector<std::string> candidates(const Model<dim>& model) 
   return c;
 }
 
-/// The median of kTrialSteps steps of `filter` from the model's start (s), after kTrialWarmup.
-template <int dim> double trial_step(const Model<dim>& model, IntegratorOptions o, const std::string& filter) {
+/// The median of kTrialSteps steps of `filter` from the model's start (s), after kTrialWarmup;
+/// with `coupling`, a coupling unit of kTrialCouplingNodes free nodes of that stiffness and
+/// damping in every step (what a haptic contact adds to a step: its solves through Woodbury's
+/// identity, made again as the nodes turn).
+template <int dim>
+double trial_step(const Model<dim>& model, IntegratorOptions o, const std::string& filter,
+                  const TrialCoupling* coupling = nullptr) {
   using clock = std::chrono::steady_clock;
   o.filter = filter;
   auto integ = make_integrator(model, o);
   State<dim> s = initial_state(model);
+  if (coupling) {
+    const auto n = model.num_nodes();
+    s.applied = Nodal<dim>::Zero(dim, n);
+    s.applied_stiffness = Eigen::VectorXd::Zero(n);
+    s.applied_damping = Eigen::VectorXd::Zero(n);
+    s.applied_group = Eigen::VectorXi::Constant(n, -1);
+    const std::size_t count = std::min<std::size_t>(kTrialCouplingNodes, model.free_nodes.size());
+    for (std::size_t p = 0; p < count; ++p) {
+      const int i = model.free_nodes[p * (model.free_nodes.size() / count)];
+      s.applied_stiffness[i] = coupling->stiffness / static_cast<double>(count);
+      s.applied_damping[i] = coupling->damping / static_cast<double>(count);
+      s.applied_group[i] = 0;
+      s.applied.col(i).setConstant(1e-3);
+    }
+  }
   std::vector<double> times;
   times.reserve(kTrialSteps);
   for (int k = 0; k < kTrialWarmup; ++k) { // caches and first factorisations, not timed
@@ -83,6 +103,56 @@ template <int dim> IntegratorOptions with_budget_pick(const Model<dim>& model, c
   return picked;
 }
 
+template <int dim>
+IntegratorOptions with_physics_rate(const Model<dim>& model, const IntegratorOptions& o, double period,
+                                    const TrialCoupling& coupling) {
+  IntegratorOptions picked = o;
+  const bool pick = o.kind == solvers::kFiltered && o.filter == solvers::kFilterAuto;
+  const std::vector<std::string> names = pick ? candidates(model) : std::vector<std::string>{o.filter};
+  IntegratorOptions trial = o;
+  // The physics' dt for a measured step: whole servo periods, kPhysicsHeadroom times the cost.
+  const auto dt_for = [&](double cost) { return period * std::max(1.0, std::ceil(kPhysicsHeadroom * cost / period)); };
+  std::string chosen;
+  double chosen_cost = INFINITY;
+  for (const std::string& f : names) {
+    // A step's cost depends on its dt (a longer step leaves the V-cycle and the tensor filter's
+    // correction more to do: at 20k nodes 2-3x): timed at the servo's period, then again at the
+    // dt that gave, and the dearer of the two is planned on.
+    trial.dt = period;
+    double cost = trial_step(model, trial, f, &coupling);
+    if (dt_for(cost) > period * (1 + 1e-9) && dt_for(cost) <= 2 * kMaxPhysicsPeriod) {
+      trial.dt = dt_for(cost);
+      cost = std::max(cost, trial_step(model, trial, f, &coupling));
+    }
+    const bool fits = dt_for(cost) <= kMaxPhysicsPeriod * (1 + 1e-9);
+    if (fits || cost < chosen_cost) {
+      chosen = f;
+      chosen_cost = cost;
+    }
+    if (fits) break;
+  }
+  picked.dt = std::min(dt_for(chosen_cost), period * std::max(1.0, std::floor(kMaxPhysicsPeriod / period + 1e-9)));
+  if (pick) {
+    picked.filter_requested = o.filter;
+    picked.filter = chosen;
+  }
+  const bool fits = dt_for(chosen_cost) <= picked.dt * (1 + 1e-9);
+  std::ostringstream reason;
+  reason << (pick ? chosen : std::string(o.kind == solvers::kFiltered ? o.filter : o.kind)) << "'s measured step "
+         << microseconds(chosen_cost) << ": the physics steps every " << microseconds(picked.dt) << " ("
+         << std::lround(picked.dt / period) << " servo periods"
+         << (fits ? ", at least " + std::to_string(static_cast<int>(kPhysicsHeadroom)) + "x its cost)"
+                  : "; it cannot keep pace with wall time)")
+         << (pick && chosen != names.front() ? "; the more accurate filters do not fit " + microseconds(kMaxPhysicsPeriod)
+                                             : "");
+  picked.filter_reason = reason.str();
+  return picked;
+}
+
+template IntegratorOptions with_physics_rate<2>(const Model<2>&, const IntegratorOptions&, double,
+                                                const TrialCoupling&);
+template IntegratorOptions with_physics_rate<3>(const Model<3>&, const IntegratorOptions&, double,
+                                                const TrialCoupling&);
 template IntegratorOptions with_budget_pick<2>(const Model<2>&, const IntegratorOptions&);
 template IntegratorOptions with_budget_pick<3>(const Model<3>&, const IntegratorOptions&);
 

@@ -232,6 +232,23 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   finish_step(s);
 }
 
+template <int dim>
+bool FilteredImplicit<dim>::coupling_compliance(int group, Eigen::Matrix<double, dim, dim>& out) const {
+  if (!m_units || m_fallback) return false;
+  const int u = m_units->unit_of_group(group);
+  if (u < 0) return false;
+  const double dt2 = this->dt() * this->dt();
+  if (m_tensor) {
+    out = dt2 * m_tensor->unit_response(u);
+    return true;
+  }
+  if (m_couplings) {
+    out = dt2 * m_couplings->unit_response(u) * Eigen::Matrix<double, dim, dim>::Identity();
+    return true;
+  }
+  return false;
+}
+
 /// The step's end: the time, the supports' prescribed motion, the strain limit.
 template <int dim> void FilteredImplicit<dim>::finish_step(State<dim>& s) {
   s.t += this->dt();

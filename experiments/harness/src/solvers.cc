@@ -109,6 +109,7 @@ Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   if (ov.dt) {
     if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
     scene.solver.dt = *ov.dt;
+    scene.solver.dt_given = true;
   }
   if (ov.duration) {
     if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");

@@ -61,6 +61,7 @@ private:
   int press(int f, const Vec<dim>& centre, const Vec<dim>& n, const Nodal<dim>& x, Footprint& fp) const;
 
   const std::vector<std::array<int, dim>>& m_facets;
+  Nodal<dim> m_rest; ///< the rest positions: the tip's patch is taken on the rest surface
   double m_radius;
   double m_soft = 0; ///< 3D: 16 (1 - nu^2) / (3 pi^2 E); 2D: 2 / (pi E t); 0: no correction
   double m_mean_edge = 0;

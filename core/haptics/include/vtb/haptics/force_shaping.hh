@@ -36,6 +36,9 @@ public:
   Vec shape(const Vec& raw, double t, double physics_time, bool physics_finite);
 
   bool faulted() const { return m_faulted; }
+  /// What tripped the watchdog: "stall", "physics" (non-finite or runaway state), "force"
+  /// (a non-finite coupling force); empty while it has not.
+  const char* fault_reason() const { return m_reason; }
   double fault_time() const { return m_fault_time; }
   bool last_saturated() const { return m_saturated; }
 
@@ -43,6 +46,7 @@ private:
   Params m_p;
   bool m_faulted = false, m_saturated = false;
   double m_fault_time = -1;
+  const char* m_reason = "";
   Vec m_last_good = Vec::Zero(); ///< the last force commanded before a fault
 };
 

@@ -2,7 +2,8 @@
 /// \file
 /// `vtb haptics`: the device servo loop (its own thread, `rate` Hz) coupled through a virtual
 /// coupling and the proxy to a 2D or 3D body simulated by a spring solver (multirate: physics
-/// at its own dt on the main thread), with saturation, ramp-in and a watchdog. One or several
+/// at the dt it affords on the main thread, the servo solving the contact against the local
+/// model each physics step hands it), with saturation, ramp-in and a watchdog. One or several
 /// probes (devices), whose contact forces act on the body in the same physics step.
 
 #include "vtb/problem/scene.hh"
@@ -27,6 +28,11 @@ struct HapticsOptions {
   /// What the model's springs are fitted to and checked against (build_model); null: P1 on
   /// the mesh. `vtb haptics` gives the continuum, as `vtb run` does.
   const Yardstick* yardstick = nullptr;
+  /// s: the physics' step (> 0), overriding the scene's and the rate the body affords (0: not set).
+  double physics_dt = 0;
+  /// A physics stepping slower than the servo hands it a local contact model (local_model.hh);
+  /// false: the servo couples against the free motion alone (to measure what the model buys).
+  bool local_model = true;
 };
 
 /// One probe's record: handle position and the force sent to its device, per servo sample
@@ -55,8 +61,21 @@ struct HapticsReport {
   long saturated_samples = 0, nonfinite_samples = 0;
   double energy_to_user = 0;
   double fault_time = -1, force_zero_time = -1; ///< when the watchdog tripped, when every |F| first hit 0 after it
+  std::string fault_reason;                     ///< what tripped it (BasicForceShaper::fault_reason)
   long physics_steps = 0;
-  double physics_step_median_us = 0;
+  double physics_step_median_us = 0, physics_step_max_us = 0;
+  /// The physics' step (us): the scene's dt, or the rate the body affords in real time
+  /// (filter_pick.hh: with_physics_rate); and the simulated time it reached over wall time (1:
+  /// it kept pace; 1 in lockstep).
+  double physics_dt_us = 0, physics_time_ratio = 1;
+  /// Where the servo's local contact models took their compliance (local_model.hh): "solver"
+  /// (the physics' own system), "half-space" (the tip's, where the solver has none) or "none"
+  /// (a physics stepping every servo period: no model between steps).
+  std::string local_model;
+  /// The local model's error: the coupling force's change at a publish in contact, what it
+  /// predicted against what the new physics step gives (N; one servo period of the hand's
+  /// motion included).
+  double local_model_error_rms = 0, local_model_error_max = 0;
   /// The physics' step budget: [solver].step_budget, or the servo period when the scene sets
   /// none (one physics step per servo cycle); the steps over it; the filter auto picked within
   /// it and why (filter_pick.hh; empty for other solvers or a named filter).

@@ -73,6 +73,9 @@ struct MeshDesc {
 struct SolverDesc {
   std::string kind = solvers::kFiltered; ///< explicit | filtered | implicit-euler | cvode | fem
   double dt = 1e-3;
+  /// The scene named `dt`: a haptics session then steps its physics at it; without it the
+  /// session picks its physics' step from the body's measured cost (docs/haptics.md).
+  bool dt_given = false;
   /// auto (default: full, or multigrid on large 3D meshes) | full | neighbors (the paper,
   /// conditionally stable) | tensor | multigrid
   std::string filter = solvers::kFilterAuto;

@@ -85,6 +85,12 @@ public:
   long version() const { return m_version; }
 
   int units() const { return m_count; }
+  /// The unit that holds coupling group g (State::applied_group), -1 if none.
+  int unit_of_group(int g) const {
+    for (int u = 0; u < m_count; ++u)
+      if (unit(u).group == g) return u;
+    return -1;
+  }
   int size(int u) const { return unit(u).size; }
   int node(int u, int p) const { return unit(u).node[static_cast<std::size_t>(p)]; }
   int slot(int u, int p) const { return unit(u).slot[static_cast<std::size_t>(p)]; }

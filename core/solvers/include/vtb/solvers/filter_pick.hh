@@ -22,4 +22,29 @@ inline constexpr int kTrialWarmup = 3;
 /// "auto" and filter_reason to what was measured. Unchanged without a budget or for other kinds.
 template <int dim> IntegratorOptions with_budget_pick(const Model<dim>& model, const IntegratorOptions& o);
 
+/// A real-time haptic session's physics runs at the rate it affords: its step costs at most
+/// 1 / kPhysicsHeadroom of its dt, so that it keeps pace with wall time with room for the
+/// contact's solves and another process on the machine (docs/haptics.md).
+inline constexpr double kPhysicsHeadroom = 2.0;
+/// The longest physics step a session plans on (s): a body whose most accurate lag-free filter
+/// needs more runs a cheaper filter instead, and where none fits, the cheapest at this dt.
+inline constexpr double kMaxPhysicsPeriod = 0.1;
+
+/// The contact a haptic session's trial steps carry: a coupling unit of this stiffness (N/m) and
+/// damping (N s/m) spread over kTrialCouplingNodes free nodes, which costs a step what a tool
+/// tip's footprint does (its Woodbury solves: twice the step of a free 10k-node slab).
+struct TrialCoupling {
+  double stiffness = 400, damping = 2;
+};
+inline constexpr int kTrialCouplingNodes = 8;
+
+/// `o` with dt (a whole number of servo periods) and, for `auto`, the filter chosen for a real-time
+/// haptic session: the most accurate candidate (with_budget_pick's order) whose measured step
+/// with `coupling`, times kPhysicsHeadroom and rounded up to whole periods, is at most
+/// kMaxPhysicsPeriod; a named filter or another spring solver keeps its kind and gets its own dt
+/// so. filter_reason says what was measured. With `auto` resolved, filter_requested is "auto".
+template <int dim>
+IntegratorOptions with_physics_rate(const Model<dim>& model, const IntegratorOptions& o, double period,
+                                    const TrialCoupling& coupling);
+
 } // namespace vtb

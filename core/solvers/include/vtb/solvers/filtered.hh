@@ -56,6 +56,8 @@ public:
   FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
+  /// The tensor and full filters, which solve their couplings through Woodbury's identity.
+  bool coupling_compliance(int group, Eigen::Matrix<double, dim, dim>& out) const override;
   const std::string& filter() const { return m_filter; }
   /// Tensor filter: the steps taken by implicit Euler, its safety net for a state whose
   /// distortion is not finite (past WarpedFilter::kTrustedMismatch the filter relinearises).

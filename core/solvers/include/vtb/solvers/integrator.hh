@@ -69,6 +69,13 @@ public:
   virtual void step(State<dim>& s) = 0;
   virtual std::string_view name() const = 0;
   double dt() const { return m_dt; }
+  /// The compliance of coupling group g (State::applied_group) in the last step's system, the
+  /// coupling's own stiffness left out: how far (m) the group's weighted position w . x moves
+  /// over one step per N of extra force spread on it by w, dt^2 w^T H^-1 w (dim x dim, world
+  /// axes). What a haptic servo solves its contact against between physics steps
+  /// (local_model.hh). False where the solver does not solve its couplings in its system
+  /// (they are applied as forces alone) or g took no part in the last step.
+  virtual bool coupling_compliance(int /*group*/, Eigen::Matrix<double, dim, dim>& /*out*/) const { return false; }
 
 private:
   double m_dt;

@@ -51,10 +51,15 @@ public:
     Small S = Small::Zero(count, count);
     for (int a = 0; a < count; ++a)
       for (int q = 0; q < set.size(a); ++q) S.row(a) += set.weight(a, q) * m_z.row(set.slot(a, q)).head(count);
+    for (int a = 0; a < count; ++a) m_utz[static_cast<std::size_t>(a)] = S(a, a);
     for (int a = 0; a < count; ++a) S(a, a) += 1.0 / m_c[static_cast<std::size_t>(a)];
     m_capacitance.compute(S);
     return m_count;
   }
+
+  /// w^T H^-1 w of unit u (the couplings of the other units left out): the unit's weighted
+  /// position moves by dt^2 times it per N of force on it in the next step, on every axis.
+  double unit_response(int u) const { return u >= 0 && u < m_count ? m_utz[static_cast<std::size_t>(u)] : 0.0; }
 
   /// x <- H'^-1 b from x = H^-1 b, for each of x's dim rows (columns in the factor's order).
   void correct(Nodal<dim>& x) const {
@@ -83,6 +88,7 @@ private:
   long m_version = -1; ///< the units' version Z was made for
   int m_count = 0;
   std::array<double, kMax> m_c{};   ///< the units' coefficients
+  std::array<double, kMax> m_utz{}; ///< the units' w^T H^-1 w
   Eigen::MatrixXd m_z;              ///< rows x kMax: H^-1 U
   Nodal<1> m_unit;                  ///< a solve's scratch
   Eigen::LDLT<Small> m_capacitance; ///< C^-1 + U^T Z

@@ -154,6 +154,12 @@ public:
   /// including the couplings' forces and their -dt k v term), H' = H_t + U C U^T, the
   /// coupling units' c w w^T (coupling_set.hh; none: an empty set).
   void solve(const Nodal<dim>& force, const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv);
+  /// Unit u's block of U^T H^-1 U (world axes; the other units left out): its weighted position
+  /// moves by dt^2 times it per N of force on it in the next step. Zero for a unit not coupled.
+  Eigen::Matrix<double, dim, dim> unit_response(int u) const {
+    return u >= 0 && u < m_coupled ? m_unit_response[static_cast<std::size_t>(u)]
+                                   : Eigen::Matrix<double, dim, dim>::Zero();
+  }
   /// Moves dv (solve()'s) toward implicit Euler's step where the filter's matrix departs from
   /// the warped rest Jacobian (a cover is on: its transverse damping lags; or H is solved by
   /// the V-cycle, whose B^-1 = H + Delta carries extra mass): one step of conjugate gradients on
@@ -298,6 +304,7 @@ private:
   std::array<double, kMaxCoupled> m_coupled_k{}; ///< and their dt^2 k + dt c
   Eigen::MatrixXd m_z;                           ///< m_h's layout x (dim per coupled node): H^-1 U
   Eigen::LDLT<Small> m_capacitance;              ///< C^-1 + U^T Z
+  std::array<Eigen::Matrix<double, dim, dim>, kMaxCoupled> m_unit_response{}; ///< U^T Z's diagonal blocks
   mutable SmallVec m_small;
 };
 
