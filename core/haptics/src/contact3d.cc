@@ -84,15 +84,17 @@ SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
   facet_rings(m_triangles, mesh.num_nodes(), m_ring_ptr, m_ring); // the triangles sharing a vertex
   m_impl->geometry.triangles = &m_triangles;
   m_impl->geometry.x = mesh.points;
-  // Margin: a quarter of the mean surface edge length (a few builds per press of a few mm;
-  // wider boxes would make every query slower: 7 us against 11 us for inside() at half an edge).
+  // Margin: the mean surface edge length (a build or two per press of a few mm). A build runs in
+  // the servo cycle and costs milliseconds on large bodies (a quarter edge's margin made 57
+  // deadline misses in a 3 s press of a 20k-node slab, one edge's 11); wider boxes make each
+  // query slower (inside() 7 us at a quarter edge, 11 us at half an edge on the 458-node slab).
   double edges = 0;
   for (const auto& t : m_triangles)
     for (int k = 0; k < 3; ++k)
       edges +=
           (mesh.points.col(t[static_cast<std::size_t>(k)]) - mesh.points.col(t[static_cast<std::size_t>((k + 1) % 3)]))
               .norm();
-  m_impl->margin = m_triangles.empty() ? 0.0 : 0.25 * edges / (3.0 * static_cast<double>(m_triangles.size()));
+  m_impl->margin = m_triangles.empty() ? 0.0 : 1.0 * edges / (3.0 * static_cast<double>(m_triangles.size()));
   std::vector<int> ids(m_triangles.size());
   for (std::size_t f = 0; f < ids.size(); ++f) ids[f] = static_cast<int>(f);
   m_impl->tree.insert(ids.cbegin(), ids.cend(), &m_impl->geometry);

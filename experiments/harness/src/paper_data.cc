@@ -280,6 +280,7 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
   paper::stability(dir, out);
   paper::creep_scaling(dir, out);
   paper::haptics(dir, out);
+  paper::multirate(dir, out);
   paper::tip_force(dir, out);
   out.files.emplace_back("numbers.tex", out.macros);
   return out.files;

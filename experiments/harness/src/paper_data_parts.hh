@@ -31,6 +31,7 @@ void stability(const std::filesystem::path& dir, Out& out);     // stab_*.dat, c
 void fig3(const std::filesystem::path& dir, Out& out);          // fig3_*.dat
 void creep_scaling(const std::filesystem::path& dir, Out& out); // creep.dat, scaling_*.dat
 void haptics(const std::filesystem::path& dir, Out& out);       // haptics_hist.dat, haptics_trace.dat
+void multirate(const std::filesystem::path& dir, Out& out);     // multirate_trace.dat
 void tip_force(const std::filesystem::path& dir, Out& out);     // tip_<mesh>_<tip|point>.dat, tip_anchor.dat
 
 } // namespace vtb::harness::paper

@@ -272,6 +272,32 @@ void haptics(const std::filesystem::path& dir, Out& out) {
   out.number_and_raw("vtbDeviceLimit", s.number(0, "device_limit"), 3);
 }
 
+void multirate(const std::filesystem::path& dir, Out& out) {
+  // The force per servo cycle on the 10k slab, lockstep at 1 kHz and real time at the rate the
+  // body affords; the numbers: the body, the physics' step and pace, the held forces and their
+  // cycle-to-cycle steadiness, the servo's cost.
+  const CsvTable tr = CsvTable::read(dir / "multirate_trace.csv");
+  const auto all = [](std::size_t) { return true; };
+  out.files.emplace_back("multirate_trace.dat", series("t lockstep realtime", {column(tr, "t", all),
+                                                                               column(tr, "lockstep", all),
+                                                                               column(tr, "realtime", all)}));
+  const CsvTable s = CsvTable::read(dir / "multirate_summary.csv");
+  const double lock = s.number(0, "held_lockstep"), rt = s.number(0, "held_realtime");
+  out.number("vtbMrNodes", s.number(0, "nodes"), 6);
+  out.number("vtbMrDtMs", 1e-3 * s.number(0, "physics_dt_us"), 3);
+  out.number("vtbMrRatio", s.number(0, "physics_time_ratio"), 3);
+  out.number("vtbMrStepMs", 1e-3 * s.number(0, "physics_step_median_us"), 3);
+  out.number("vtbMrLockStepMs", 1e-3 * s.number(0, "lockstep_step_median_us"), 3);
+  out.number("vtbMrHeldLock", lock, 3);
+  out.number("vtbMrHeldRt", rt, 3);
+  out.number("vtbMrHeldDiff", 100 * std::abs(rt - lock) / lock, 2);
+  out.number("vtbMrChangeLock", 100 * s.number(0, "change_lockstep") / lock, 2);
+  out.number("vtbMrChangeRt", 100 * s.number(0, "change_realtime") / rt, 2);
+  out.number("vtbMrTickMedian", s.number(0, "tick_median_us"), 3);
+  out.number("vtbMrTickPNineNine", s.number(0, "tick_p99_us"), 3);
+  out.number("vtbMrMisses", s.number(0, "deadline_misses"));
+}
+
 void tip_force(const std::filesystem::path& dir, Out& out) {
   // The held force against depth (mm) per mesh, with the tool tip and with a point proxy, and
   // the half-space's line; the numbers: the two meshes' forces at the deepest press and their

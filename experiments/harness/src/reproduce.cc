@@ -342,6 +342,8 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
         "- `haptics_*.csv`: a real-time servo session with a physics stall (periods, force trace, summary).\n"
         "- `tip_force.csv`: the slab press's held force against depth on two meshes, with the 4 mm tool tip and a "
         "point proxy, and the half-space's force.\n"
+        "- `multirate_*.csv`: the slab press on a 10k-node CGAL slab, lockstep at 1 kHz against real time at the rate "
+        "the body affords (the force per servo cycle, the physics' step, the servo's cost).\n"
         "- `meta.csv`: quick or not, the machine.\n\n"
      << "Reading: the paper's frame rates were one step per frame on a 450 MHz Pentium III. The truncated "
         "(`neighbors`) filter is the paper's; at steps beyond a few explicit limits it diverges (docs/method.md), "
@@ -396,6 +398,7 @@ std::string run_reproduce(const ReproduceOptions& options) {
   if (shared && o.progress)
     *o.progress << "warning: two ranks of one node may have shared a core: timing columns may be each other's\n";
   parts::write_haptics(o.out, o.scenes_dir, 1.5, o.progress);
+  parts::write_multirate(o.out, o.scenes_dir, o.progress);
   const std::string md = report_markdown(o, timing, duration);
   write_text(o.out / "report.md", md);
   return md;

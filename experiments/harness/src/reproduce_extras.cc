@@ -2,6 +2,8 @@
 #include "vtb/problem/solver_names.hh"
 
 #include "vtb/haptics/session.hh"
+#include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/msh_io.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/problem/output.hh"
@@ -151,6 +153,61 @@ void write_haptics(const std::filesystem::path& out, const std::filesystem::path
   write_files_atomically(out, {{"haptics_periods.csv", periods.str()},
                                {"haptics_trace.csv", trace.str()},
                                {"haptics_summary.csv", summary.str()}});
+}
+
+namespace {
+
+/// A session's force magnitude while the hand holds still (t in [1.3, 1.8] s): its mean and the
+/// largest change between two consecutive servo cycles.
+std::pair<double, double> held_force(const HapticsReport& r) {
+  const ProbeTrace& p = r.probes.at(0);
+  double sum = 0, largest = 0, last = NAN;
+  int n = 0;
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    if (r.t[k] < 1.3 || r.t[k] > 1.8) continue;
+    const double f = std::hypot(p.fx[k], p.fy[k]);
+    sum += f, ++n;
+    if (std::isfinite(last)) largest = std::max(largest, std::abs(f - last));
+    last = f;
+  }
+  return {n ? sum / n : NAN, largest};
+}
+
+} // namespace
+
+void write_multirate(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log) {
+  if (log) *log << "[multirate] the slab press on " << kMultirateNodes << " nodes: lockstep at 1 kHz, then real time\n";
+  Scene scene = read_scene(scenes_dir / "haptic_slab_press.toml");
+  const std::filesystem::path mesh = out / "multirate_slab.msh";
+  const Mesh3 slab = mesh_solid("slab", kMultirateNodes);
+  write_msh(slab, mesh);
+  scene.mesh.file = mesh;
+  scene.solver.springs = "lloyd"; // the comparison is of the loops on one model: no fit to wait for
+  scene.solver.filter = solvers::kFilterTensorMultigrid; // lag-free in both sessions
+  scene.duration = 2.2;           // the press reaches 5 mm at 1 s, holds to 2 s, and lifts
+  HapticsOptions ho;
+  ho.lockstep = true;
+  const HapticsReport lock = run_haptics(scene, ho);
+  ho.lockstep = false;
+  const HapticsReport rt = run_haptics(scene, ho);
+  std::filesystem::remove(mesh);
+  std::ostringstream trace, summary;
+  trace << std::setprecision(6) << "t,lockstep,realtime\n";
+  const std::size_t n = std::min(lock.t.size(), rt.t.size());
+  const auto force = [](const HapticsReport& r, std::size_t k) { return std::hypot(r.probes[0].fx[k], r.probes[0].fy[k]); };
+  for (std::size_t k = 0; k < n; ++k) trace << lock.t[k] << ',' << force(lock, k) << ',' << force(rt, k) << '\n';
+  const auto [lock_held, lock_change] = held_force(lock);
+  const auto [rt_held, rt_change] = held_force(rt);
+  const auto nodes = slab.num_nodes();
+  summary << std::setprecision(6)
+          << "nodes,physics_dt_us,physics_time_ratio,physics_step_median_us,lockstep_step_median_us,held_lockstep,"
+             "held_realtime,change_lockstep,change_realtime,tick_median_us,tick_p99_us,deadline_misses,fault_time,"
+             "local_model_error_rms\n"
+          << nodes << ',' << rt.physics_dt_us << ',' << rt.physics_time_ratio << ',' << rt.physics_step_median_us << ','
+          << lock.physics_step_median_us << ',' << lock_held << ',' << rt_held << ',' << lock_change << ',' << rt_change
+          << ',' << rt.tick_median_us << ',' << rt.tick_p99_us << ',' << rt.deadline_misses << ',' << rt.fault_time
+          << ',' << rt.local_model_error_rms << '\n';
+  write_files_atomically(out, {{"multirate_trace.csv", trace.str()}, {"multirate_summary.csv", summary.str()}});
 }
 
 } // namespace vtb::harness::parts

@@ -41,6 +41,14 @@ void write_tip_force(const std::filesystem::path& out, const std::filesystem::pa
 void write_haptics(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, double stall_time,
                    std::ostream* log);
 
+/// multirate_trace.csv and multirate_summary.csv: the slab press (`haptic_slab_press`) on a CGAL
+/// slab of about kMultirateNodes nodes (Lloyd's springs, the tensor filter's block V-cycle): the
+/// force sent to the device per servo cycle in lockstep at 1 kHz and in real time at the rate
+/// the body affords (docs/haptics.md), the physics' step and time ratio, the held forces, the
+/// servo cycle's cost. Runs the real-time session: call it with nothing else on the machine.
+inline constexpr int kMultirateNodes = 10000;
+void write_multirate(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
+
 /// scaling.csv: per mesh of a 2D rectangle, a 3D box and a CGAL slab ladder (about 2k and 10k
 /// nodes, and 50k unless quick) and per solver (filtered-full, filtered-multigrid,
 /// implicit-euler): nodes, springs, precompute, median step, the integrator's heap and the
