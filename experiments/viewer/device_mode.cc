@@ -42,14 +42,34 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   if (finite) m_contact.refit(m_x);
   Vec<dim> on_body_sum = Vec<dim>::Zero();
   Footprint footprint;
+  // Several ticks a step: the local model of the last step (its compliance C and force g): the
+  // contact on the body moved by C (f_prev - g), the coupling in series with C.
+  const bool modelled = n > 1 && m_model.valid && m_contact.tip().radius() > 0;
+  ForceHistory<dim> history;
   for (int k = 0; k < n; ++k) {
     Eigen::Vector2d pos, vel;
     device.read(pos, vel);
     const Vec<dim> handle = m_plane.to_world(pos);
+    LocalModel<dim> local = m_model;
+    const Vec<dim> f_prev = m_touching ? m_last_solved : Vec<dim>::Zero();
+    Vec<dim> shift = modelled ? Vec<dim>(local.compliance * (f_prev - local.applied)) : Vec<dim>::Zero();
+    if (n > 1 && m_touching) // the body's free motion at the tip since the step began
+      for (int q = 0; q < m_footprint.count; ++q)
+        shift += (k * h) * m_footprint.weight[static_cast<std::size_t>(q)] *
+                 s.v.col(m_footprint.node[static_cast<std::size_t>(q)]);
+    local.applied = f_prev;
     ContactResult<dim> c;
-    if (finite) c = m_contact.update(0, handle, m_x);
-    Vec<dim> raw = Vec<dim>::Zero();
-    if (c.touching) raw = virtual_coupling<dim>(c, handle, m_plane.axes * vel, s.v, m_k, m_b);
+    if (finite) c = m_contact.update(0, Vec<dim>(handle - shift), m_x);
+    if (c.touching) c.proxy += shift;
+    Vec<dim> raw = Vec<dim>::Zero(), proxy = c.proxy;
+    if (c.touching) {
+      raw = virtual_coupling<dim>(c, handle, m_plane.axes * vel, s.v, m_k, m_b);
+      if (modelled) {
+        raw = solve_against_local_model<dim>(raw, c.proxy - handle, tip_stiffness(m_k, c.footprint), local);
+        proxy += local.compliance * (-raw - local.applied);
+      }
+    }
+    m_last_solved = -raw;
     const Vec<dim> f = m_shaper.shape(raw, m_t, m_t, finite);
     m_force_device = m_plane.axes.transpose() * f;
     m_saturated += m_shaper.last_saturated();
@@ -64,15 +84,36 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     if (c.touching) {
       footprint = c.footprint;
       on_body_sum -= f;
+      history.sum -= f;
+      history.proxy_sum += proxy;
+      ++history.cycles;
     }
     m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force_device.norm());
     m_head = (m_head + 1) % kTrace;
     m_count = std::min(m_count + 1, kTrace);
   }
-  // The step's force on the body: the ticks' mean, on the last footprint's nodes, with the
-  // coupling's stiffness and damping by the same weights in one group for the solvers that take
-  // them implicitly (as vtb haptics does: docs/haptics.md).
-  if (footprint.count > 0) apply_to_body<dim>(footprint, Vec<dim>(on_body_sum / n), m_k, m_b, kDeviceGroup, s);
+  // The step's force on the body: the ticks' mean (a step of several ticks: the spring to the
+  // anchor they held, applied_force), on the last footprint's nodes, with the coupling's
+  // stiffness and damping by the same weights in one group for the solvers that take them
+  // implicitly (as vtb haptics does: docs/haptics.md).
+  m_model.valid = false;
+  if (footprint.count > 0) {
+    Vec<dim> f = on_body_sum / n;
+    if (n > 1 && history.cycles > 0) {
+      Vec<dim> at = Vec<dim>::Zero();
+      for (int q = 0; q < footprint.count; ++q)
+        at += footprint.weight[static_cast<std::size_t>(q)] * m_x.col(footprint.node[static_cast<std::size_t>(q)]);
+      f = applied_force<dim>(history, at, tip_stiffness(m_k, footprint));
+    }
+    apply_to_body<dim>(footprint, f, m_k, m_b, kDeviceGroup, s);
+    m_model.applied = f;
+    m_model.valid = n > 1;
+  }
+}
+
+template <int dim> void DeviceMode<dim>::after_step(const Integrator<dim>& integrator) {
+  // The contact's compliance over the step just taken, for the next step's ticks.
+  if (m_model.valid) m_model.valid = integrator.coupling_compliance(kDeviceGroup, m_model.compliance);
 }
 
 template <int dim> int DeviceMode<dim>::force_trace(float* out) const {

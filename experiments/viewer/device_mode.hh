@@ -6,7 +6,10 @@
 /// deformed surface (the haptics module's contact, one AABB tree), the virtual coupling's force
 /// is shaped whole (saturation, ramp-in, watchdog), the device renders its in-plane part and the
 /// body receives the whole reaction. The servo runs at 1 kHz of simulated time, in lockstep with
-/// the physics steps (each step runs the ticks that fall in it).
+/// the physics steps (each step runs the ticks that fall in it). A physics step of several servo
+/// periods (a large body at the rate it affords) is rendered as `vtb haptics` renders it: its
+/// ticks solve the coupling against the local contact model of the step before
+/// (local_model.hh), and the step takes the spring to the anchor they held.
 
 #include "live_sim.hh"
 
@@ -14,6 +17,7 @@
 #include "vtb/haptics/device.hh"
 #include "vtb/haptics/device_plane.hh"
 #include "vtb/haptics/force_shaping.hh"
+#include "vtb/haptics/local_model.hh"
 
 #include <array>
 #include <optional>
@@ -30,6 +34,7 @@ public:
   DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
   void before_step(const Model<dim>& model, State<dim>& s, double dt) override;
+  void after_step(const Integrator<dim>& integrator) override;
 
   /// Where the user's hand holds the handle: a body point, taken to the device's plane.
   void set_hand(const Vec<dim>& p) { m_hand_device = m_plane.to_device(p); }
@@ -71,6 +76,8 @@ private:
   Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;
+  LocalModel<dim> m_model;          ///< the last step's contact model (valid: it coupled the tip and has a compliance)
+  Vec<dim> m_last_solved = Vec<dim>::Zero(); ///< the last tick's force on the body, as solved
   double m_t = 0;
   std::array<float, kTrace> m_trace{};
   int m_head = 0, m_count = 0;

@@ -143,6 +143,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   const auto a = clock::now();
   m_integ->step(m_state);
   const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();
+  if (m_hook) m_hook->after_step(*m_integ);
   m_step_us[static_cast<std::size_t>(m_step_count % static_cast<int>(m_step_us.size()))] = us;
   if (m_stats.step_budget_us > 0 && us > m_stats.step_budget_us) ++m_stats.steps_over_budget;
   ++m_step_count;
@@ -173,7 +174,13 @@ template <int dim> void LiveSim<dim>::advance(double sim_seconds, double wall_bu
   using clock = std::chrono::steady_clock;
   if (!m_failure.empty()) return;
   const auto start = clock::now();
-  const long count = static_cast<long>(std::floor(sim_seconds / m_controls.dt + 1e-9));
+  long count = static_cast<long>(std::floor(sim_seconds / m_controls.dt + 1e-9));
+  if (count == 0) { // a step longer than the frame: once the frames have asked for it
+    m_owed += sim_seconds;
+    if (m_owed + 1e-9 >= m_controls.dt) count = 1, m_owed -= m_controls.dt;
+  } else {
+    m_owed = 0;
+  }
   long done = 0;
   m_stats.behind = false;
   for (; done < count && m_failure.empty(); ++done) {
@@ -185,7 +192,8 @@ template <int dim> void LiveSim<dim>::advance(double sim_seconds, double wall_bu
   }
   if (done > 0 && m_failure.empty()) check(true);
   const double wall = std::chrono::duration<double>(clock::now() - start).count();
-  m_stats.realtime_factor = wall > 0 ? static_cast<double>(done) * m_controls.dt / wall : 0.0;
+  if (count > 0) // a frame with no step due (a step longer than a frame) keeps the last factor
+    m_stats.realtime_factor = wall > 0 ? static_cast<double>(done) * m_controls.dt / wall : 0.0;
   refresh_stats();
 }
 

@@ -78,6 +78,8 @@ template <int dim> class StepHook {
 public:
   virtual ~StepHook() = default;
   virtual void before_step(const Model<dim>& model, State<dim>& s, double dt) = 0;
+  /// After the step, with the integrator that took it (its coupling compliance: local_model.hh).
+  virtual void after_step(const Integrator<dim>& /*integrator*/) {}
 };
 
 template <int dim> class LiveSim {
@@ -99,7 +101,9 @@ public:
   const std::string& running_filter() const { return m_running_filter; }
 
   /// Advances the simulated time by up to `sim_seconds` in steps of dt, stopping early when
-  /// the steps have taken `wall_budget` seconds of wall time (then stats().behind is set).
+  /// the steps have taken `wall_budget` seconds of wall time (then stats().behind is set). A dt
+  /// longer than the calls' `sim_seconds` (a large body's haptic rate) is stepped once their sum
+  /// reaches it.
   void advance(double sim_seconds, double wall_budget);
   /// Exactly one step (when paused); nothing once unstable.
   void single_step();
@@ -184,6 +188,7 @@ private:
   int m_probe_node = -1;
   double m_courant_dt = 0;
   StepHook<dim>* m_hook = nullptr;
+  double m_owed = 0; ///< s of simulated time asked for and not yet stepped, below one dt
   std::string m_probe_name;
   std::string m_running_filter; ///< what the filtered solver runs (auto resolved)
 };

@@ -5,6 +5,8 @@
 #include "vtb/haptics/device_plane.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/solvers/filter_pick.hh"
+#include "vtb/solvers/simulation.hh"
 #include "vtb/springs/model.hh"
 
 #include <GLFW/glfw3.h>
@@ -94,8 +96,9 @@ int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live,
     glfwPollEvents();
     const double now = glfwGetTime();
     // Scripted: a fixed 1/60 s of simulated time per frame (deterministic pictures).
-    // Interactive: the wall time since the last frame, at most 1/20 s (a stall is not replayed).
-    const double sim_dt = headless ? 1.0 / 60 : std::min(now - last, 0.05);
+    // Interactive: the wall time since the last frame, at most 1/10 s (a stall is not replayed;
+    // a large body's frame, its drawing and a step of tens of ms, still is).
+    const double sim_dt = headless ? 1.0 / 60 : std::min(now - last, 0.1);
     last = now;
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
@@ -156,6 +159,24 @@ template <int dim> void check_drag_start(const Model<dim>& model, const Eigen::V
   }
 }
 
+/// Device mode on a body whose step does not fit half a servo period: the physics steps at the
+/// rate it affords, as `vtb haptics` runs it (with_physics_rate), and the note says so.
+template <int dim> void use_physics_rate(const Scene& scene, LiveSim<dim>& sim, std::string& note) {
+  const HapticsDesc h = scene.haptics ? *scene.haptics : HapticsDesc{};
+  SimControls c = sim.controls();
+  IntegratorOptions io = integrator_options(scene.solver);
+  io.kind = c.solver;
+  io.filter = c.filter;
+  io.dt = c.dt;
+  io = with_physics_rate(sim.model(), io, 1.0 / h.rate, TrialCoupling{h.coupling_stiffness, h.coupling_damping});
+  if (!(io.dt > c.dt * (1 + 1e-9))) return;
+  c.dt = io.dt;
+  if (io.kind == solvers::kFiltered) c.filter = io.filter;
+  sim.configure(c);
+  note += std::string(note.empty() ? "" : "; ") + "device mode steps the body at the rate it affords: " +
+          io.filter_reason;
+}
+
 } // namespace
 
 std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_drag(const std::string& text) {
@@ -193,6 +214,7 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
         auto sim = std::make_unique<LiveSim<dim>>(scene, std::move(m), initial_controls(scene, o, &note), o.yardstick);
         if (o.drag && !o.device) check_drag_start(sim->model(), o.drag->first);
         if (o.device) device_plane(scene, sim->model().mesh); // a plane the scene cannot hold is bad input now
+        if (o.device && !o.dt && !scene.solver.dt_given) use_physics_rate(scene, *sim, note);
         Window win(o, "vtb view: " + scene.name);
         return session<dim>(win, scene, std::move(sim), std::move(note), o);
       },

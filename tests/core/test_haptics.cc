@@ -689,7 +689,7 @@ TEST(Haptics, ATipsHeldForceIsTheMaterialsNotTheMeshs) {
   // 0.61 N on the 1,917-node one, 0.32 N on 8,000 nodes). A 4 mm tip spreads a uniform
   // pressure over the facets under it, and adds in series the local compliance the mesh misses
   // where its facets are wider than the tip (footprint.hh). The held force is then the same on
-  // both meshes within 10 % (measured 0.930 and 0.962 N; 0.941 N on 8,000 nodes), and near the
+  // both meshes within 10 % (measured 0.928 and 0.955 N; 0.903 N on 8,000 nodes), and near the
   // continuum's: the chain grip (2000 N/m), coupling (400 N/m) and layer in series at 5 mm. A
   // half-space under a uniform disc of radius a has the mean compliance 16 (1 - nu^2) / (3
   // pi^2 E a) = 2.53 mm/N here, which gives 0.904 N; a 2 cm layer on a rigid base is stiffer,

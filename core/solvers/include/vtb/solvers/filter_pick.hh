@@ -28,7 +28,7 @@ template <int dim> IntegratorOptions with_budget_pick(const Model<dim>& model, c
 inline constexpr double kPhysicsHeadroom = 2.0;
 /// The longest physics step a session plans on (s): a body whose most accurate lag-free filter
 /// needs more runs a cheaper filter instead, and where none fits, the cheapest at this dt.
-inline constexpr double kMaxPhysicsPeriod = 0.1;
+inline constexpr double kMaxPhysicsPeriod = 0.06;
 
 /// The contact a haptic session's trial steps carry: a coupling unit of this stiffness (N/m) and
 /// damping (N s/m) spread over kTrialCouplingNodes free nodes, which costs a step what a tool
