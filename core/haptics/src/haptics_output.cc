@@ -46,6 +46,7 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["local_model_error_rms"] = r.local_model_error_rms;
   j["local_model_error_max"] = r.local_model_error_max;
   if (!r.physics_filter.empty()) j["physics_filter"] = r.physics_filter;
+  if (!r.springs.empty()) j["springs"] = r.springs;
   if (!r.physics_filter_reason.empty()) j["physics_filter_reason"] = r.physics_filter_reason;
   j["tick_median_us"] = r.tick_median_us;
   j["tick_p99_us"] = r.tick_p99_us;

@@ -265,6 +265,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
                                                 [&](double us) { return us > rep.physics_step_budget_us; });
   if (o.kind == solvers::kFiltered) rep.physics_filter = chosen_filter(model, o.filter);
   rep.physics_filter_reason = o.filter_reason;
+  rep.springs = model.net.calibration;
+  if (!model.net.calibration_note.empty()) notes.push_back(model.net.calibration_note);
   rep.notes = std::move(notes);
   return rep;
 }

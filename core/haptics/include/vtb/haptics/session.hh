@@ -82,6 +82,7 @@ struct HapticsReport {
   double physics_step_budget_us = 0;
   long physics_steps_over_budget = 0;
   std::string physics_filter, physics_filter_reason;
+  std::string springs; ///< the spring constants the body runs ("lloyd", "fitted", ...; auto's note in `notes`)
   double tick_median_us = 0, tick_p99_us = 0; ///< the servo cycle's own work (real time only; 0 in lockstep)
   double coupling_stiffness = 0;              ///< N/m rendered: the scene's, limited to the device's max stiffness
   double tip_radius = 0;                      ///< m: the tool tip's (0: a point proxy)
