@@ -59,10 +59,11 @@ public:
       for (ForceHistory<dim>& h : m_history) h = ForceHistory<dim>{};
     }
     // The body's free motion between physics updates: the contact is found on the published
-    // body, and its proxy moves on with the footprint's velocity from the snapshot's time (the
-    // tip's nodes', not the whole body's: the cycle's cost does not grow with the body), which
-    // a physics stepping every dt publishes up to dt less one servo period ahead of the servo
-    // (a physics stepping every period: never ahead).
+    // body, and its proxy moved with the footprint's velocity back to the cycle's time (the
+    // tip's nodes', not the whole body's: the cycle's cost does not grow with the body). A
+    // physics stepping every dt publishes up to dt less one servo period ahead of the servo; a
+    // late snapshot is held, not extrapolated forward (extrapolated, a soft block's contact
+    // chattered in real time). A physics stepping every period is never ahead.
     const double lead = std::max(0.0, m_physics_dt - 1.0 / m_h.rate);
     const double age = std::clamp(t - s.t, -lead, 0.0);
     const double age_whole = std::clamp(t - s.t, 0.0, 0.05);
