@@ -191,12 +191,15 @@ TEST(Multirate, ABodyTooLargeForTheServoPeriodIsFeltInRealTime) {
   // its lag-free step costs several servo periods here, so a physics stepping once per servo
   // cycle fell behind wall time and the watchdog tripped within tens of milliseconds (0 N felt).
   // A real-time session now steps it at the rate it affords: no watchdog trip, and the held
-  // press renders a force (0.93 N in lockstep). Nothing here asserts a rate (timing is the
-  // benchmarks'); on a shared machine a session may still be descheduled past the watchdog's
-  // limit, so up to three sessions are run to get one without a trip.
+  // press is felt. On Lloyd's springs this slab holds 0.54 N in lockstep at a 30 ms step (t
+  // 1.3-1.8 s) and 0.47-0.55 N in real time, where the step's length follows the machine's
+  // speed and the force is still relaxing through the hold: the bound is half of lockstep's,
+  // what tells a rendered press from the 0 N of a tripped watchdog. Nothing here asserts a
+  // rate (timing is the benchmarks'); on a shared machine a session may still be descheduled
+  // past the watchdog's limit, so up to three sessions are run to get one without a trip.
   Scene s = slab_press();
   s.solver.springs = "lloyd";
-  s.duration = 1.6;
+  s.duration = 1.8;
   s.mesh = MeshDesc{};
   s.mesh.shape = "box";
   s.mesh.size = Eigen::Vector3d(0.2, 0.05, 0.02);
@@ -213,7 +216,7 @@ TEST(Multirate, ABodyTooLargeForTheServoPeriodIsFeltInRealTime) {
     }
     clean = true;
     const Held h = held(r);
-    EXPECT_GT(h.mean, 0.5) << "the press is felt";
+    EXPECT_GT(h.mean, 0.27) << "the press is felt";
     EXPECT_GT(r.physics_steps, 10);
   }
   EXPECT_TRUE(clean) << "three real-time sessions in a row tripped the watchdog";
