@@ -28,9 +28,10 @@ Action add_haptics(CLI::App& app) {
   cmd->add_flag("--lock-memory", o->lock_memory, "mlockall for the session (no page faults in the servo loop)");
   cmd->add_option("--pin-cpu", o->pin_cpu, "Pin the servo thread to this core; the physics runs on the others");
   cmd->add_flag("--no-realtime-priority", o->no_priority, "Do not ask for SCHED_FIFO (to measure what it buys)");
-  CLI::Option* physics_dt = cmd->add_option("--physics-dt", o->physics_dt,
-                  "The physics' step in s (default: the scene's [solver] dt, else the rate the body affords in real "
-                  "time, the servo's period in lockstep)");
+  CLI::Option* physics_dt = cmd->add_option(
+      "--physics-dt", o->physics_dt,
+      "The physics' step in s (default: the scene's [solver] dt, else the rate the body affords in real "
+      "time, the servo's period in lockstep)");
   cmd->add_flag("--no-local-model", o->no_local_model,
                 "The servo couples against the body's free motion alone between physics steps (to measure what the "
                 "local contact model buys)");
@@ -85,8 +86,9 @@ Action add_haptics(CLI::App& app) {
     std::cout << "; outputs in " << out.string() << "\n";
     if (r.physics_time_ratio < 0.95)
       std::cerr << "vtb haptics: warning: the body ran at " << r.physics_time_ratio
-                << "x wall time: its physics step (median " << r.physics_step_median_us << " us) did not keep pace with "
-                << r.physics_dt_us << " us a step; a coarser mesh or a larger --physics-dt would\n";
+                << "x wall time: its physics step (median " << r.physics_step_median_us
+                << " us) did not keep pace with " << r.physics_dt_us
+                << " us a step; a coarser mesh or a larger --physics-dt would\n";
     // Timing a user should not miss: late servo cycles mean the force felt was held longer
     // than one period (docs/haptics.md says what lowers them).
     if (r.deadline_misses > 0)

@@ -76,7 +76,7 @@ private:
   Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;
-  LocalModel<dim> m_model;          ///< the last step's contact model (valid: it coupled the tip and has a compliance)
+  LocalModel<dim> m_model; ///< the last step's contact model (valid: it coupled the tip and has a compliance)
   Vec<dim> m_last_solved = Vec<dim>::Zero(); ///< the last tick's force on the body, as solved
   double m_t = 0;
   std::array<float, kTrace> m_trace{};

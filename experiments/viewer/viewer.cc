@@ -173,8 +173,8 @@ template <int dim> void use_physics_rate(const Scene& scene, LiveSim<dim>& sim, 
   c.dt = io.dt;
   if (io.kind == solvers::kFiltered) c.filter = io.filter;
   sim.configure(c);
-  note += std::string(note.empty() ? "" : "; ") + "device mode steps the body at the rate it affords: " +
-          io.filter_reason;
+  note +=
+      std::string(note.empty() ? "" : "; ") + "device mode steps the body at the rate it affords: " + io.filter_reason;
 }
 
 } // namespace

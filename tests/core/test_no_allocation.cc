@@ -5,8 +5,8 @@
 #include "vtb/haptics/contact2d.hh"
 #include "vtb/haptics/contact3d.hh"
 #include "vtb/haptics/contacts.hh"
-#include "vtb/haptics/local_model.hh"
 #include "vtb/haptics/force_shaping.hh"
+#include "vtb/haptics/local_model.hh"
 #include "vtb/meshes/generate.hh"
 #include "vtb/solvers/warped_filter.hh"
 

@@ -127,8 +127,9 @@ template <int dim> void TipFootprint<dim>::place(ContactResult<dim>& c, const Ve
   // The touched facet's mean edge: the tip resolves the surface where it is at least as wide.
   double edge = 0; // 2D: the edge's length; 3D: the triangle's mean edge
   for (int k = 0; k < dim; ++k)
-    edge += (rest.col(touched[static_cast<std::size_t>(k)]) - rest.col(touched[static_cast<std::size_t>((k + 1) % dim)]))
-                .norm();
+    edge +=
+        (rest.col(touched[static_cast<std::size_t>(k)]) - rest.col(touched[static_cast<std::size_t>((k + 1) % dim)]))
+            .norm();
   edge /= dim;
   fp.resolved = m_radius >= edge;
   const Vec<dim> n = normal(start, rest);

@@ -29,9 +29,8 @@ public:
           TripleBuffer<Commands<dim>>& cmd, const HapticsDesc& h, const HapticsOptions& faults, double period,
           double fallback)
       : m_model(model), m_integ(make_integrator(model, o)), m_state(initial_state(model)), m_snap(snap), m_cmd(cmd),
-        m_k(h.coupling_stiffness), m_b(h.coupling_damping), m_faults(faults),
-        m_slow(o.dt > period * (1 + 1e-9)), m_multirate(m_slow && faults.local_model && h.tip_radius_for(dim) > 0),
-        m_fallback(fallback) {
+        m_k(h.coupling_stiffness), m_b(h.coupling_damping), m_faults(faults), m_slow(o.dt > period * (1 + 1e-9)),
+        m_multirate(m_slow && faults.local_model && h.tip_radius_for(dim) > 0), m_fallback(fallback) {
     m_state.applied = Nodal<dim>::Zero(dim, model.num_nodes());
     m_state.applied_stiffness = Eigen::VectorXd::Zero(model.num_nodes());
     m_state.applied_damping = Eigen::VectorXd::Zero(model.num_nodes());
@@ -65,9 +64,9 @@ public:
     Snapshot<dim>& s = m_snap.back();
     int group = 0;
     for (const ContactCommand<dim>& c : m_cmd.front()) {
-      const Vec<dim> f = m_slow && c.history.cycles > 0
-                             ? applied_force<dim>(c.history, footprint_position(c.footprint), tip_stiffness(m_k, c.footprint))
-                             : Vec<dim>(c.force_on_body);
+      const Vec<dim> f = m_slow && c.history.cycles > 0 ? applied_force<dim>(c.history, footprint_position(c.footprint),
+                                                                             tip_stiffness(m_k, c.footprint))
+                                                        : Vec<dim>(c.force_on_body);
       if (c.footprint.count > 0) apply_to_body<dim>(c.footprint, f, m_k, m_b, group, m_state);
       LocalModel<dim>& model = s.models[static_cast<std::size_t>(group)];
       model.valid = m_multirate && c.footprint.count > 0;
@@ -119,12 +118,12 @@ private:
   TripleBuffer<Commands<dim>>& m_cmd;
   double m_k, m_b; ///< the virtual coupling's stiffness and damping
   HapticsOptions m_faults;
-  bool m_slow;               ///< steps slower than the servo
+  bool m_slow; ///< steps slower than the servo
   /// And local models asked for, with a tool tip: the servo gets them. A point proxy's compliance
   /// is the mesh's (the continuum's is singular under a point load), and on the 2D press's
   /// membrane it made the servo's prediction 20x worse than the free motion at a 40 ms step.
   bool m_multirate;
-  double m_fallback;         ///< m/N: the half-space's compliance under the tip (0: none)
+  double m_fallback; ///< m/N: the half-space's compliance under the tip (0: none)
   bool m_solver_compliance = false;
   std::vector<double> m_step_us;
 };

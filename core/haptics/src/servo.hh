@@ -43,8 +43,8 @@ public:
     m_rep.t.reserve(static_cast<std::size_t>(max_samples));
     m_rep.probes.resize(devices.size());
     for (std::size_t i = 0; i < devices.size(); ++i) {
-      m_shapers.emplace_back(typename BasicForceShaper<dim>::Params{
-          std::min(h.max_force, devices[i]->spec().max_force), 0.5, 0.03, stall_limit(physics_dt)});
+      m_shapers.emplace_back(typename BasicForceShaper<dim>::Params{std::min(h.max_force, devices[i]->spec().max_force),
+                                                                    0.5, 0.03, stall_limit(physics_dt)});
       for (auto* v : {&m_rep.probes[i].hx, &m_rep.probes[i].hy, &m_rep.probes[i].fx, &m_rep.probes[i].fy})
         v->reserve(static_cast<std::size_t>(max_samples));
     }
@@ -99,12 +99,12 @@ public:
       if (finite) c = m_contacts.update(i, Vec(handle - shift), x);
       if (c.touching) c.proxy += shift;
       model.applied = f_prev; // the proxy now answers f_prev: the model goes on from there
-      Vec proxy = c.proxy; // where the local model puts it, with the force solved against it
+      Vec proxy = c.proxy;    // where the local model puts it, with the force solved against it
       if (c.touching) {
         raw = coupling(c, handle, m_plane.axes * vel, s.v);
         if (modelled) {
-          raw = solve_against_local_model<dim>(raw, c.proxy - handle, tip_stiffness(m_h.coupling_stiffness, c.footprint),
-                                               model);
+          raw = solve_against_local_model<dim>(raw, c.proxy - handle,
+                                               tip_stiffness(m_h.coupling_stiffness, c.footprint), model);
           proxy += model.compliance * (-raw - model.applied);
         }
       }
@@ -213,15 +213,15 @@ private:
   HapticsReport m_rep;
   long m_max = 0;
   double m_physics_dt;
-  double m_arrival = 0;         ///< servo time at which the snapshot in use arrived
+  double m_arrival = 0;                     ///< servo time at which the snapshot in use arrived
   std::vector<ForceHistory<dim>> m_history; ///< per probe: the forces on the body since then
-  std::vector<Vec> m_last_raw;  ///< per probe: the last cycle's coupling force
+  std::vector<Vec> m_last_raw;              ///< per probe: the last cycle's coupling force
   std::vector<Vec> m_last_solved; ///< per probe: the last cycle's force on the body, as solved (before blending)
   std::vector<char> m_last_touching;
   std::vector<Footprint> m_last_footprint; ///< per probe: the last cycle's
-  int m_blend_cycles;                ///< servo cycles in a physics step: a publish's change is blended over them
-  std::vector<Vec> m_offset;         ///< per probe: the change at the last publish, blended out
-  std::vector<int> m_offset_left;    ///< per probe: the cycles of it left
+  int m_blend_cycles;                      ///< servo cycles in a physics step: a publish's change is blended over them
+  std::vector<Vec> m_offset;               ///< per probe: the change at the last publish, blended out
+  std::vector<int> m_offset_left;          ///< per probe: the cycles of it left
   long m_predictions = 0;
   double m_prediction_sq = 0, m_prediction_max = 0;
 };

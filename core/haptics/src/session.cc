@@ -201,9 +201,8 @@ HapticsReport finish_report(HapticsReport rep, LoopTiming lt, const Physics<dim>
   rep.local_model = physics.compliance_source();
   rep.physics_steps = static_cast<long>(physics.step_times().size());
   rep.physics_step_median_us = step_stats(physics.step_times()).median;
-  rep.physics_step_max_us = physics.step_times().empty()
-                                ? 0.0
-                                : *std::max_element(physics.step_times().begin(), physics.step_times().end());
+  rep.physics_step_max_us =
+      physics.step_times().empty() ? 0.0 : *std::max_element(physics.step_times().begin(), physics.step_times().end());
   return rep;
 }
 
@@ -228,8 +227,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   TripleBuffer<Commands<dim>> cmd(Commands<dim>(devices.size()));
   const long ticks = std::lround(scene.duration / period);
   Servo<dim> servo(devices, model.mesh, scene.material, h, plane, ticks + 2, o.dt, snap, cmd);
-  const double fallback = half_space_tip_compliance(dim, scene.material.young_modulus, scene.material.poisson_ratio,
-                                                    h.tip_radius_for(dim));
+  const double fallback =
+      half_space_tip_compliance(dim, scene.material.young_modulus, scene.material.poisson_ratio, h.tip_radius_for(dim));
   Physics<dim> physics(model, o, snap, cmd, h, opt, period, fallback);
   const auto advance_devices = [&devices](double dt) {
     for (auto& d : devices) d->advance(dt);

@@ -143,8 +143,9 @@ IntegratorOptions with_physics_rate(const Model<dim>& model, const IntegratorOpt
          << std::lround(picked.dt / period) << " servo periods"
          << (fits ? ", at least " + std::to_string(static_cast<int>(kPhysicsHeadroom)) + "x its cost)"
                   : "; it cannot keep pace with wall time)")
-         << (pick && chosen != names.front() ? "; the more accurate filters do not fit " + microseconds(kMaxPhysicsPeriod)
-                                             : "");
+         << (pick && chosen != names.front()
+                 ? "; the more accurate filters do not fit " + microseconds(kMaxPhysicsPeriod)
+                 : "");
   picked.filter_reason = reason.str();
   return picked;
 }

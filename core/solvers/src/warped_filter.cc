@@ -441,7 +441,8 @@ template <int dim> void WarpedFilter<dim>::couple(const CouplingSet<dim>& set) {
     for (int q = 0; q < set.size(r / dim); ++q)
       for (int axis = 0; axis < dim; ++axis)
         C.row(r) += coupling_entry(r / dim, q, r % dim, axis) * m_z.row(at(r / dim, q, axis)).head(m);
-  for (int u = 0; u < count; ++u) m_unit_response[static_cast<std::size_t>(u)] = C.template block<dim, dim>(u * dim, u * dim);
+  for (int u = 0; u < count; ++u)
+    m_unit_response[static_cast<std::size_t>(u)] = C.template block<dim, dim>(u * dim, u * dim);
   for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
   m_capacitance.compute(C);
 }

@@ -278,9 +278,9 @@ void multirate(const std::filesystem::path& dir, Out& out) {
   // cycle-to-cycle steadiness, the servo's cost.
   const CsvTable tr = CsvTable::read(dir / "multirate_trace.csv");
   const auto all = [](std::size_t) { return true; };
-  out.files.emplace_back("multirate_trace.dat", series("t lockstep realtime", {column(tr, "t", all),
-                                                                               column(tr, "lockstep", all),
-                                                                               column(tr, "realtime", all)}));
+  out.files.emplace_back(
+      "multirate_trace.dat",
+      series("t lockstep realtime", {column(tr, "t", all), column(tr, "lockstep", all), column(tr, "realtime", all)}));
   const CsvTable s = CsvTable::read(dir / "multirate_summary.csv");
   const double lock = s.number(0, "held_lockstep"), rt = s.number(0, "held_realtime");
   out.number("vtbMrNodes", s.number(0, "nodes"), 6);

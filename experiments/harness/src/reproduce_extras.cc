@@ -2,10 +2,10 @@
 #include "vtb/problem/solver_names.hh"
 
 #include "vtb/haptics/session.hh"
-#include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/msh_io.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/msh_io.hh"
 #include "vtb/problem/output.hh"
 #include "vtb/problem/problem.hh"
 
@@ -184,7 +184,7 @@ void write_multirate(const std::filesystem::path& out, const std::filesystem::pa
   scene.mesh.file = mesh;
   scene.solver.springs = "lloyd"; // the comparison is of the loops on one model: no fit to wait for
   scene.solver.filter = solvers::kFilterTensorMultigrid; // lag-free in both sessions
-  scene.duration = 2.2;           // the press reaches 5 mm at 1 s, holds to 2 s, and lifts
+  scene.duration = 2.2;                                  // the press reaches 5 mm at 1 s, holds to 2 s, and lifts
   HapticsOptions ho;
   ho.lockstep = true;
   const HapticsReport lock = run_haptics(scene, ho);
@@ -194,7 +194,9 @@ void write_multirate(const std::filesystem::path& out, const std::filesystem::pa
   std::ostringstream trace, summary;
   trace << std::setprecision(6) << "t,lockstep,realtime\n";
   const std::size_t n = std::min(lock.t.size(), rt.t.size());
-  const auto force = [](const HapticsReport& r, std::size_t k) { return std::hypot(r.probes[0].fx[k], r.probes[0].fy[k]); };
+  const auto force = [](const HapticsReport& r, std::size_t k) {
+    return std::hypot(r.probes[0].fx[k], r.probes[0].fy[k]);
+  };
   for (std::size_t k = 0; k < n; ++k) trace << lock.t[k] << ',' << force(lock, k) << ',' << force(rt, k) << '\n';
   const auto [lock_held, lock_change] = held_force(lock);
   const auto [rt_held, rt_change] = held_force(rt);

@@ -37,9 +37,9 @@ namespace vtb {
 template <int dim> struct LocalModel {
   using Vec = Eigen::Matrix<double, dim, 1>;
   using Mat = Eigen::Matrix<double, dim, dim>;
-  bool valid = false;            ///< the physics coupled this probe in its last step
-  Mat compliance = Mat::Zero();  ///< C, m/N
-  Vec applied = Vec::Zero();     ///< g, N: the force on the body over the published step
+  bool valid = false;           ///< the physics coupled this probe in its last step
+  Mat compliance = Mat::Zero(); ///< C, m/N
+  Vec applied = Vec::Zero();    ///< g, N: the force on the body over the published step
 };
 
 /// The coupling force on the handle solved against the local model: (I + k C) F = F_free - k C g,
