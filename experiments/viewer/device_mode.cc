@@ -40,7 +40,6 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   m_x = model.net.rest + s.u;
   const bool finite = m_x.allFinite() && s.v.allFinite();
   if (finite) m_contact.refit(m_x);
-  Vec<dim> on_body_sum = Vec<dim>::Zero();
   Footprint footprint;
   // Several ticks a step: the local model of the last step (its compliance C and force g): the
   // contact on the body moved by C (f_prev - g), the coupling in series with C.
@@ -54,9 +53,7 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     const Vec<dim> f_prev = m_touching ? m_last_solved : Vec<dim>::Zero();
     Vec<dim> shift = modelled ? Vec<dim>(local.compliance * (f_prev - local.applied)) : Vec<dim>::Zero();
     if (n > 1 && m_touching) // the body's free motion at the tip since the step began
-      for (int q = 0; q < m_footprint.count; ++q)
-        shift += (k * h) * m_footprint.weight[static_cast<std::size_t>(q)] *
-                 s.v.col(m_footprint.node[static_cast<std::size_t>(q)]);
+      shift += (k * h) * footprint_mean<dim>(m_footprint, s.v);
     local.applied = f_prev;
     ContactResult<dim> c;
     if (finite) c = m_contact.update(0, Vec<dim>(handle - shift), m_x);
@@ -83,7 +80,6 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     m_normal = c.normal;
     if (c.touching) {
       footprint = c.footprint;
-      on_body_sum -= f;
       history.sum -= f;
       history.proxy_sum += proxy;
       ++history.cycles;
@@ -98,13 +94,8 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   // implicitly (as vtb haptics does: docs/haptics.md).
   m_model.valid = false;
   if (footprint.count > 0) {
-    Vec<dim> f = on_body_sum / n;
-    if (n > 1 && history.cycles > 0) {
-      Vec<dim> at = Vec<dim>::Zero();
-      for (int q = 0; q < footprint.count; ++q)
-        at += footprint.weight[static_cast<std::size_t>(q)] * m_x.col(footprint.node[static_cast<std::size_t>(q)]);
-      f = applied_force<dim>(history, at, tip_stiffness(m_k, footprint));
-    }
+    Vec<dim> f = history.sum / n; // the ticks' forces on the body, summed over those in contact
+    if (n > 1) f = applied_force<dim>(history, footprint_mean<dim>(footprint, m_x), tip_stiffness(m_k, footprint));
     apply_to_body<dim>(footprint, f, m_k, m_b, kDeviceGroup, s);
     m_model.applied = f;
     m_model.valid = n > 1;

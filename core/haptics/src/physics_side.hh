@@ -1,8 +1,9 @@
 #pragma once
 /// \file
 /// The physics side of a haptics session: one spring-solver step with the probes' contact
-/// forces applied (each the mean of what the servo applied since the last publish), then the
-/// deformed body and each probe's local contact model published for the servo.
+/// forces applied (each the spring to the anchor the servo's cycles held since the last publish:
+/// applied_force), then the deformed body and each probe's local contact model published for
+/// the servo.
 
 #include "exchange.hh"
 #include "vtb/haptics/coupling.hh"
@@ -103,12 +104,7 @@ public:
 private:
   /// w . x of a footprint on the body now.
   Vec<dim> footprint_position(const Footprint& fp) const {
-    Vec<dim> p = Vec<dim>::Zero();
-    for (int q = 0; q < fp.count; ++q) {
-      const auto i = fp.node[static_cast<std::size_t>(q)];
-      p += fp.weight[static_cast<std::size_t>(q)] * (m_model.net.rest.col(i) + m_state.u.col(i));
-    }
-    return p;
+    return footprint_mean<dim>(fp, m_model.net.rest) + footprint_mean<dim>(fp, m_state.u);
   }
 
   const Model<dim>& m_model;

@@ -93,7 +93,7 @@ public:
       const Vec f_prev = m_last_touching[i] ? m_last_solved[i] : Vec::Zero();
       Vec shift = Vec::Zero();
       if (!whole) {
-        if (m_last_touching[i]) shift += age * weighted(m_last_footprint[i], s.v);
+        if (m_last_touching[i]) shift += age * footprint_mean<dim>(m_last_footprint[i], s.v);
         if (modelled) shift += model.compliance * (f_prev - model.applied);
       }
       if (finite) c = m_contacts.update(i, Vec(handle - shift), x);
@@ -165,13 +165,6 @@ private:
                const Nodal<dim>& node_velocity) const {
     return virtual_coupling<dim>(c, handle, handle_velocity, node_velocity, m_h.coupling_stiffness,
                                  m_h.coupling_damping);
-  }
-
-  static Vec weighted(const Footprint& fp, const Nodal<dim>& v) {
-    Vec sum = Vec::Zero();
-    for (int p = 0; p < fp.count; ++p)
-      sum += fp.weight[static_cast<std::size_t>(p)] * v.col(fp.node[static_cast<std::size_t>(p)]);
-    return sum;
   }
 
   void count_prediction(double e) {

@@ -11,6 +11,14 @@
 
 namespace vtb {
 
+/// The footprint's weighted mean of a nodal field, sum_p w_p x_p: the proxy's position (x the
+/// nodes' positions) or its velocity (x their velocities).
+template <int dim> Vec<dim> footprint_mean(const Footprint& fp, const Nodal<dim>& x) {
+  Vec<dim> sum = Vec<dim>::Zero();
+  for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p) sum += fp.weight[p] * x.col(fp.node[p]);
+  return sum;
+}
+
 /// A spring k (in series with the footprint's missing local compliance) between handle and proxy, and a damper b on
 /// their relative velocity (the proxy moves with the surface: the weighted velocities of the footprint's nodes).
 /// Contact pushes and never pulls: a negative normal part (the handle withdrawing faster than the surface follows) is
@@ -20,9 +28,7 @@ template <int dim>
 Vec<dim> virtual_coupling(const ContactResult<dim>& c, const Vec<dim>& handle, const Vec<dim>& handle_velocity,
                           const Nodal<dim>& node_velocity, double k, double b) {
   const Footprint& fp = c.footprint;
-  Vec<dim> proxy_velocity = Vec<dim>::Zero();
-  for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p)
-    proxy_velocity += fp.weight[p] * node_velocity.col(fp.node[p]);
+  const Vec<dim> proxy_velocity = footprint_mean<dim>(fp, node_velocity);
   const Vec<dim> depth = c.proxy - handle;
   Vec<dim> f = tip_stiffness(k, fp) * depth + b * (proxy_velocity - handle_velocity);
   const double d2 = depth.squaredNorm();
