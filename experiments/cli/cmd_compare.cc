@@ -2,6 +2,7 @@
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/compare.hh"
+#include "vtb/harness/solvers.hh"
 
 #include <iostream>
 #include <memory>
@@ -10,7 +11,7 @@ namespace vtb::cli {
 
 Action add_compare(CLI::App& app) {
   struct Opts {
-    std::string scene, reference = solvers::kFem, out;
+    std::string scene, reference = solvers::kFem, out, kinematics;
     std::vector<std::string> solvers;
     double dt = 0;
     bool frames = false;
@@ -23,11 +24,16 @@ Action add_compare(CLI::App& app) {
   cmd->add_option("--reference", o->reference,
                   "fem (default: the continuum, P2 refined until converged), fem-mesh (the scene's own FEM, P1 on the "
                   "mesh by default) or cvode");
+  cmd->add_option("--kinematics", o->kinematics,
+                  "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
+                  "reference for deep presses; docs/fem.md)");
   cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");
   cmd->add_flag("--frames", o->frames, "Also write each solver's frames.pvd and frames/*.vtu in OUT/<solver>/");
   return [o]() {
-    const Scene scene = read_scene(o->scene);
+    harness::RunOverrides ov;
+    if (!o->kinematics.empty()) ov.kinematics = o->kinematics;
+    const Scene scene = harness::with_overrides(read_scene(o->scene), ov);
     if (o->dt < 0) throw InputError("--dt must be > 0");
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-compare") : std::filesystem::path(o->out);

@@ -1,6 +1,7 @@
 #include "commands.hh"
 #include "fit_progress.hh"
 #include "overrides.hh"
+#include "vtb/problem/cell_fields.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/ranks.hh"
@@ -18,7 +19,7 @@ namespace vtb::cli {
 
 Action add_run(CLI::App& app) {
   struct Opts {
-    std::string scene, solver, out;
+    std::string scene, solver, out, kinematics;
     double dt = 0, duration = 0;
     bool frames = false;
   };
@@ -30,6 +31,9 @@ Action add_run(CLI::App& app) {
                   "Override [solver].kind (and filter): " + solvers::list() + " (vtb solvers describes each)");
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
+  cmd->add_option("--kinematics", o->kinematics,
+                  "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
+                  "reference for deep presses; docs/fem.md)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
   cmd->add_flag("--frames", o->frames, "Also write frames.pvd and frames/*.vtu (one per sample) for ParaView");
   return [o]() {
@@ -38,6 +42,7 @@ Action add_run(CLI::App& app) {
     if (!o->solver.empty()) ov.solver = o->solver;
     if (o->dt != 0) ov.dt = o->dt;
     if (o->duration != 0) ov.duration = o->duration;
+    if (!o->kinematics.empty()) ov.kinematics = o->kinematics;
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);
     const Scene run = with_overrides(scene, ov);
@@ -95,6 +100,10 @@ Action add_run(CLI::App& app) {
               << " steps; precompute " << r.precompute_seconds * 1e3 << " ms, step median "
               << r.step_seconds.median * 1e6 << " us, p99 " << r.step_seconds.p99 * 1e6 << " us; max strain "
               << r.max_strain << "; outputs in " << out.string() << "\n";
+    if (run.solver.kind != solvers::kFem || run.solver.kinematics == "linear")
+      if (const std::string note = large_strain_run_note(r.max_rotation, r.max_strain, !load_check.empty());
+          !note.empty())
+        std::cout << "vtb run: " << note << "\n";
     if (!r.stable) {
       std::cerr << "vtb: unstable: " << r.failure << " at t = " << r.failure_time << " s (" << r.solver
                 << ", dt = " << r.dt << " s); summary.json records stable = false\n";

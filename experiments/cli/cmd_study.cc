@@ -1,6 +1,7 @@
 #include "commands.hh"
 #include "vtb/problem/solver_registry.hh"
 
+#include "vtb/harness/solvers.hh"
 #include "vtb/harness/study.hh"
 
 #include <iostream>
@@ -10,7 +11,7 @@ namespace vtb::cli {
 
 Action add_study(CLI::App& app) {
   struct Opts {
-    std::string scene, reference = solvers::kFem, out;
+    std::string scene, reference = solvers::kFem, out, kinematics;
     std::vector<std::string> solvers;
     std::string shard;
     bool quick = false;
@@ -27,12 +28,17 @@ Action add_study(CLI::App& app) {
   cmd->add_option("--reference", o->reference,
                   "fem (the continuum: P2 at the static ladder's level, at dt or the smaller step its measured time "
                   "error needs; default) or cvode (rtol 1e-10)");
+  cmd->add_option("--kinematics", o->kinematics,
+                  "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
+                  "reference for deep presses; docs/fem.md)");
   cmd->add_flag("--quick", o->quick, "Short ladders and at most 1 s of simulated time");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-study)");
   cmd->add_option("--shard", o->shard,
                   "K/N: run only the K-th of N parts (0 <= K < N) of the study, for a job array; vtb merge joins them");
   return [o]() {
-    const Scene scene = read_scene(o->scene);
+    harness::RunOverrides ov;
+    if (!o->kinematics.empty()) ov.kinematics = o->kinematics;
+    const Scene scene = harness::with_overrides(read_scene(o->scene), ov);
     harness::StudyOptions so;
     if (!o->solvers.empty()) so.solvers = o->solvers;
     so.reference = o->reference;

@@ -12,15 +12,18 @@ FemOptions options_from(const SolverDesc& s) {
   o.scheme = s.scheme;
   o.static_solve = s.static_solve;
   o.dt = s.dt;
-  o.nonlinear = s.kinematics == "nonlinear";
+  o.kinematics = s.kinematics == "nonlinear"     ? Kinematics::svk
+                 : s.kinematics == "neo-hookean" ? Kinematics::neo_hookean
+                                                 : Kinematics::linear;
   return o;
 }
 
 void check_options(const FemOptions& options) {
   if (options.degree < 1 || options.degree > 2) throw InputError("[solver].degree must be 1 or 2");
   if (!(options.dt > 0)) throw InputError("[solver].dt must be > 0");
-  if (options.nonlinear && !options.static_solve && options.scheme != "backward-euler")
-    throw InputError("[solver].kinematics = \"nonlinear\" runs with scheme = \"backward-euler\" or static = true, not "
+  if (options.nonlinear() && !options.static_solve && options.scheme != "backward-euler")
+    throw InputError(std::string("[solver].kinematics = \"") +
+                     (options.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") + "\" runs with scheme = \"backward-euler\" or static = true, not "
                      "scheme = \"" +
                      options.scheme + "\"");
 }

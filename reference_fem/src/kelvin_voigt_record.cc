@@ -24,7 +24,7 @@ void KelvinVoigtProblem<dim, Backend>::record(double t, Trajectory<dim>& out, bo
     pu.push_back(Eigen::Map<const Vec<dim>>(field.data() + static_cast<std::size_t>(node) * dim));
   out.probe_u.push_back(pu);
   load_vector(t, m_f);
-  if (m_opt.nonlinear) {
+  if (m_opt.nonlinear()) {
     nonlinear_force(m_u, m_v, m_rhs, 0.0, false);
     if (!m_opt.static_solve) {
       m_tmp = m_a;
@@ -34,7 +34,7 @@ void KelvinVoigtProblem<dim, Backend>::record(double t, Trajectory<dim>& out, bo
   } else {
     m_K.vmult(m_rhs, m_u);
   }
-  if (!m_opt.nonlinear && !m_opt.static_solve) {
+  if (!m_opt.nonlinear() && !m_opt.static_solve) {
     m_C.vmult(m_tmp, m_v);
     m_rhs += m_tmp;
     m_M.vmult(m_tmp, m_a);

@@ -101,7 +101,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::initial
 }
 
 template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step(double t_new) {
-  if (m_opt.nonlinear) return step_nonlinear(t_new);
+  if (m_opt.nonlinear()) return step_nonlinear(t_new);
   load_vector(m_scheme.load_time(t_new), m_rhs);
   m_scheme.add_history(m_M, m_C, m_K, m_u, m_v, m_a, m_da, m_dv, m_tmp, m_rhs);
   m_ubar = m_u;
@@ -141,7 +141,8 @@ void KelvinVoigtProblem<dim, Backend>::nonlinear_force(const Vector& u, const Ve
   f = 0;
   if (tangent) m_T = 0;
   assemble_nonlinear<dim>(m_mapping, m_fe, m_dofs, m_mat, m_opt.degree, m_ghosted, m_ghosted_v, m_constraints,
-                          NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate});
+                          NonlinearTargets<dim, Vector, Matrix>{&f, tangent ? &m_T : nullptr, rate,
+                                                                m_opt.kinematics == Kinematics::neo_hookean});
 }
 
 template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(double load_scale) {
@@ -220,7 +221,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
 
 template <int dim, class Backend>
 void KelvinVoigtProblem<dim, Backend>::fail_nonlinear(const std::string& why, double t) {
-  m_nonlinear_failure = "fem (nonlinear): " + why;
+  m_nonlinear_failure = std::string("fem (") + (m_opt.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") + "): " + why;
   m_failure_time = t;
   m_u = std::numeric_limits<double>::quiet_NaN();
 }

@@ -1,16 +1,14 @@
 #pragma once
-// Internal to reference_fem: `[solver] kinematics = "nonlinear"`, the total-Lagrangian St.
-// Venant-Kirchhoff solid with the Kelvin-Voigt rate term, so that large pokes are checked on the
-// same (geometrically exact) physics as the springs:
-//   F = I + grad u,  E = (F^T F - I) / 2,  Edot = sym(F^T grad v),
-//   S = s(E + tau Edot),  s(A) = lambda tr(A) I + 2 mu A   (lambda the plane-stress one in 2D),
-//   f_int,i = int (F S) : grad N_i dV   (times the thickness in 2D),
-// which is the linear Kelvin-Voigt law for small displacements. The tangent is taken with
-// respect to u with v tied to it as v = (u - u_old) * rate (rate = 1/dt for backward Euler, 0
-// for a static solve): dP = G S + F s(sym(F^T G) + tau sym(G^T grad v + rate F^T G)) for each
-// shape function's gradient G.
+// Internal to reference_fem: the geometrically exact Kelvin-Voigt solid of `[solver] kinematics =
+// "nonlinear"` (St. Venant-Kirchhoff) and `"neo-hookean"`, total Lagrangian, so that large pokes
+// are checked on geometrically exact physics as the springs are. Per quadrature point the law's
+// first Piola-Kirchhoff stress P(F, grad v) and its derivative (stress_laws.hh);
+//   f_int,i = int P : grad N_i dV   (times the thickness in 2D),
+// and the tangent d f_int / du with v tied to u as v = (u - u_old) * rate (rate = 1/dt for
+// backward Euler, 0 for a static solve).
 
 #include "grid.hh"
+#include "stress_laws.hh"
 
 #include <deal.II/base/tensor.h>
 #include <deal.II/fe/fe_system.h>
@@ -24,14 +22,6 @@
 
 namespace vtb::fem {
 
-template <int dim> dealii::Tensor<2, dim> svk_stress(const dealii::Tensor<2, dim>& A, double lambda, double mu) {
-  return lambda * dealii::trace(A) * dealii::unit_symmetric_tensor<dim>() + 2 * mu * A;
-}
-
-template <int dim> dealii::Tensor<2, dim> sym(const dealii::Tensor<2, dim>& A) {
-  return 0.5 * (A + dealii::transpose(A));
-}
-
 /// What assemble_nonlinear adds: the internal force vector f_int(u, v) (no constraints: every
 /// dof, for the reactions) and/or the tangent d f_int / du, with the constrained rows and
 /// columns eliminated (a positive diagonal left, as A0 has).
@@ -39,6 +29,7 @@ template <int dim, class Vector, class Matrix> struct NonlinearTargets {
   Vector* force = nullptr;
   Matrix* tangent = nullptr;
   double rate = 0; ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
+  bool neo_hookean = false; ///< the law (stress_laws.hh): neo-Hookean, else St. Venant-Kirchhoff
 };
 
 /// u and v must see every dof of the locally owned cells (ghosted vectors under MPI).
@@ -63,6 +54,7 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
   std::vector<unsigned int> comp(nd);
   for (unsigned int i = 0; i < nd; ++i) comp[i] = fe.system_to_component_index(i).first;
   const dealii::AffineConstraints<double> none;
+  dealii::Tensor<2, dim> unit_dP[dim][dim];
   for (const auto& cell : dofs.active_cell_iterators()) {
     if (!cell->is_locally_owned()) continue;
     fev.reinit(cell);
@@ -72,23 +64,24 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
     r = 0;
     for (unsigned int q = 0; q < quad.size(); ++q) {
       const double jxw = fev.JxW(q) * thickness;
-      const dealii::Tensor<2, dim> F = dealii::unit_symmetric_tensor<dim>() + grad_u[q];
-      const dealii::Tensor<2, dim> E = 0.5 * (dealii::transpose(F) * F - dealii::unit_symmetric_tensor<dim>());
-      const dealii::Tensor<2, dim> S =
-          svk_stress<dim>(E + tau * sym<dim>(dealii::transpose(F) * grad_v[q]), lambda, mu);
-      const dealii::Tensor<2, dim> P = F * S;
-      for (unsigned int i = 0; i < nd; ++i) {
-        const dealii::Tensor<1, dim> gi = fev.shape_grad(i, q);
-        r[i] += (P * gi)[comp[i]] * jxw;
-        if (!out.tangent) continue;
-        for (unsigned int j = 0; j < nd; ++j) {
-          dealii::Tensor<2, dim> G;
-          G[comp[j]] = fev.shape_grad(j, q);
-          const dealii::Tensor<2, dim> FtG = dealii::transpose(F) * G;
-          const dealii::Tensor<2, dim> dS = svk_stress<dim>(
-              sym<dim>(FtG) + tau * sym<dim>(dealii::transpose(G) * grad_v[q] + out.rate * FtG), lambda, mu);
-          k(i, j) += ((G * S + F * dS) * gi)[comp[i]] * jxw;
+      const StressPoint<dim> sp(dealii::unit_symmetric_tensor<dim>() + grad_u[q], grad_v[q], out.neo_hookean, lambda,
+                                mu, tau, out.rate);
+      const dealii::Tensor<2, dim>& P = sp.P();
+      for (unsigned int i = 0; i < nd; ++i) r[i] += (P * fev.shape_grad(i, q))[comp[i]] * jxw;
+      if (!out.tangent) continue;
+      // dP is linear in G: its values on the dim^2 unit directions e_a e_b^T give it for every
+      // shape function, G_j = e_c grad N_j^T: dP(G_j) = sum_b (grad N_j)_b dP(e_c e_b^T).
+      for (int a = 0; a < dim; ++a)
+        for (int b = 0; b < dim; ++b) {
+          dealii::Tensor<2, dim> E;
+          E[a][b] = 1;
+          unit_dP[a][b] = sp.dP(E);
         }
+      for (unsigned int j = 0; j < nd; ++j) {
+        const dealii::Tensor<1, dim> gj = fev.shape_grad(j, q);
+        dealii::Tensor<2, dim> dPj;
+        for (int b = 0; b < dim; ++b) dPj += gj[b] * unit_dP[comp[j]][b];
+        for (unsigned int i = 0; i < nd; ++i) k(i, j) += (dPj[comp[i]] * fev.shape_grad(i, q)) * jxw;
       }
     }
     cell->get_dof_indices(local);

@@ -187,7 +187,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nsprings = \"hooke\"",
                 "[solver].springs: = \"hooke\": must be one of auto lloyd van-gelder fitted"},
         BadCase{"kind = \"filtered\"", "kind = \"fem\"\nkinematics = \"large\"",
-                "[solver].kinematics: = \"large\": must be one of linear nonlinear"},
+                "[solver].kinematics: = \"large\": must be one of linear nonlinear neo-hookean"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nstrain_limit = -0.1",
                 "[solver].strain_limit: = -0.1: must be >= 0"},
         BadCase{"kind = \"filtered\"", "kind = \"filtered\"\nmomentum_correction = 1",

@@ -116,6 +116,19 @@ std::string small_strain_regime_note(double rotation, double strain) {
   return os.str();
 }
 
+std::string large_strain_run_note(double rotation, double strain, bool load_checked) {
+  if (small_strain_regime_note(rotation, strain).empty()) return "";
+  std::ostringstream os;
+  os << std::setprecision(3) << "the run leaves the small-strain regime (max strain " << strain << ", max rotation "
+     << rotation << " rad; limits 0.01 and 0.1 rad): "
+     << (load_checked ? "its load check above is a linear one (static, small strain), so it does not measure this "
+                        "run; "
+                      : "")
+     << "the reference at these strains is the neo-Hookean FEM (vtb compare SCENE --kinematics neo-hookean, "
+        "docs/fem.md)";
+  return os.str();
+}
+
 template void cell_max_principal_strain<2>(const Mesh<2>&, const Nodal<2>&, std::vector<float>&);
 template void cell_max_principal_strain<3>(const Mesh<3>&, const Nodal<3>&, std::vector<float>&);
 template double max_small_strain<2>(const Mesh<2>&, const Nodal<2>&);

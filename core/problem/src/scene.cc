@@ -220,9 +220,9 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
     s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});
     s.solver.static_solve = r.boolean("static", false);
-    s.solver.kinematics = r.string("kinematics", "linear", {"linear", "nonlinear"});
+    s.solver.kinematics = r.string("kinematics", "linear", {"linear", "nonlinear", "neo-hookean"});
     // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
-    if (s.solver.kinematics == "nonlinear" && !r.node("scheme")) s.solver.scheme = "backward-euler";
+    if (s.solver.kinematics != "linear" && !r.node("scheme")) s.solver.scheme = "backward-euler";
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }
 }

@@ -13,7 +13,7 @@ namespace vtb::harness {
 template <int dim> double bullet_stiffness(const Scene& scene, const Model<dim>& model) {
   fem::FemOptions o = fem::options_from(scene.solver);
   o.static_solve = true;
-  o.nonlinear = false; // the linear springs are fitted to the linear continuum
+  o.kinematics = fem::Kinematics::linear; // the linear springs are fitted to the linear continuum
   Trajectory<dim> fem;
   const RunReport r = fem::simulate<dim>(model, scene.material, o, fem, true);
   if (!r.stable || fem.field.empty()) throw std::runtime_error("bullet: the FEM's static solve failed: " + r.failure);

@@ -116,6 +116,12 @@ Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
     scene.duration = *ov.duration;
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
+  if (ov.kinematics) {
+    if (*ov.kinematics != "linear" && *ov.kinematics != "nonlinear" && *ov.kinematics != "neo-hookean")
+      throw InputError("--kinematics must be linear, nonlinear or neo-hookean, not " + *ov.kinematics);
+    scene.solver.kinematics = *ov.kinematics;
+    if (*ov.kinematics != "linear") scene.solver.scheme = "backward-euler"; // the one it steps with
+  }
   if (scene.solver.dt > scene.duration)
     throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");
   return scene;

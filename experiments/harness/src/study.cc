@@ -95,7 +95,6 @@ ReferenceStep fem_reference_in_time(const Scene& scene, const Problem<dim>& prob
   f.degree = 2;
   f.refinements = refinements;
   f.static_solve = false;
-  f.nonlinear = false;
   const auto run = [&](double dt, Trajectory<dim>& tr, const char* what) {
     f.dt = dt;
     f.progress = progress_printer(log, what);

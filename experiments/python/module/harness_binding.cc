@@ -167,7 +167,7 @@ void bind_harness(py::module_& m) {
       "_run",
       [](const py::object& scene, std::optional<std::string> solver, std::optional<double> dt,
          std::optional<double> duration, const std::filesystem::path& out, bool frames) {
-        harness::RunOverrides ov{solver, dt, duration};
+        harness::RunOverrides ov{solver, dt, duration, std::nullopt};
         const Scene s = harness::with_overrides(to_scene(scene), ov);
         RunTables t;
         {

@@ -15,6 +15,11 @@
 
 namespace vtb::fem {
 
+/// `[solver] kinematics`: the linear law, or a geometrically exact one (total Lagrangian, Newton
+/// per step) with St. Venant-Kirchhoff's ("nonlinear") or the compressible neo-Hookean elastic
+/// law ("neo-hookean"), each with the Kelvin-Voigt rate term (docs/fem.md).
+enum class Kinematics { linear, svk, neo_hookean };
+
 struct FemOptions {
   int degree = 1;      ///< FE_SimplexP degree: 1 or 2
   int refinements = 0; ///< uniform refinements of the scene's mesh
@@ -22,9 +27,9 @@ struct FemOptions {
   /// acceleration, order 2, no damping) | backward-euler (order 1)
   std::string scheme = "generalized-alpha";
   bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
-  /// Geometrically exact (total-Lagrangian St. Venant-Kirchhoff with the Kelvin-Voigt rate
-  /// term, Newton per step) instead of linear; with backward Euler or the static solve only.
-  bool nonlinear = false;
+  /// A geometrically exact law runs with backward Euler or the static solve only.
+  Kinematics kinematics = Kinematics::linear;
+  bool nonlinear() const { return kinematics != Kinematics::linear; }
   double dt = 1e-3;
   std::filesystem::path frames_dir; ///< if set: frames/frame_NNNN.vtu per sample (deal.II DataOut)
   /// If set: called after every step with the share of the duration done (0-1], so that a long

@@ -34,4 +34,9 @@ template <int dim> double max_rotation(const Mesh<dim>& mesh, const Nodal<dim>& 
 /// one line saying what was exceeded and by how much.
 std::string small_strain_regime_note(double rotation, double strain);
 
+/// What `vtb run` says of a run (springs, or the linear FEM) beyond that regime: that it "leaves
+/// the small-strain regime", by how much, that the load check (`load_checked`: the run has one)
+/// is a linear one, and which reference holds there (the neo-Hookean FEM). Empty inside it.
+std::string large_strain_run_note(double rotation, double strain, bool load_checked);
+
 } // namespace vtb

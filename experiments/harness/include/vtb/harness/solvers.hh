@@ -58,10 +58,13 @@ struct RunOverrides {
   std::optional<std::string> solver; ///< any registry name: a kind, or a kind with its filter
   std::optional<double> dt;
   std::optional<double> duration;
+  /// The FEM's law: linear | nonlinear | neo-hookean (a geometrically exact one steps with
+  /// backward Euler when the scene names a scheme it does not take).
+  std::optional<std::string> kinematics;
 };
 
 /// The scene with the overrides applied; InputError for an unknown solver, a non-positive or
-/// non-finite --dt/--duration, or a step longer than the run.
+/// non-finite --dt/--duration, an unknown --kinematics, or a step longer than the run.
 Scene with_overrides(const Scene& scene, const RunOverrides& overrides);
 
 /// Runs the scene with the solver of its [solver].kind. With `out_dir` set, writes probes.csv,
