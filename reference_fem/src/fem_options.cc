@@ -11,6 +11,7 @@ FemOptions options_from(const SolverDesc& s) {
   o.refinements = s.refinements;
   o.scheme = s.scheme;
   o.static_solve = s.static_solve;
+  o.static_path = s.static_path;
   o.dt = s.dt;
   o.kinematics = s.kinematics == "nonlinear"     ? Kinematics::svk
                  : s.kinematics == "neo-hookean" ? Kinematics::neo_hookean

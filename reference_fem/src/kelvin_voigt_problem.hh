@@ -58,7 +58,7 @@ template <int dim, class Backend> class KelvinVoigtProblem {
 
 public:
   KelvinVoigtProblem(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options, MPI_Comm comm)
-      : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt),
+      : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt, options.static_path),
         m_backend(comm), m_tria(Backend::make_tria(comm)), m_fe(dealii::FE_SimplexP<dim>(options.degree), dim),
         m_mapping(dealii::FE_SimplexP<dim>(1)), m_dofs(*m_tria),
         m_timer(m_timer_stream, dealii::TimerOutput::never, dealii::TimerOutput::wall_times) {}
@@ -177,6 +177,7 @@ private:
   double m_max_strain = 0, m_max_rotation = 0;
   std::string m_nonlinear_failure; ///< why a nonlinear run stopped, empty while it runs
   double m_failure_time = -1;
+  double m_static_time = -1; ///< the time of the last static equilibrium (a static path), -1 before the first
   std::ostringstream m_timer_stream;
   dealii::TimerOutput m_timer;
 };

@@ -150,7 +150,10 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
   const double dt = m_opt.dt, rate = dynamic ? 1 / dt : 0.0;
   const double mass_weight = dynamic ? 1 / (dt * dt) + m_mat.mass_damping / dt : 0.0;
   double first = -1;
-  for (int it = 0; it < 25; ++it) {
+  // A static increment that has not converged in 12 iterations is halved (cheaper than more
+  // iterations far from the solution); a residual 1e6 times the first has diverged.
+  const int iterations = dynamic ? 25 : 12;
+  for (int it = 0; it < iterations; ++it) {
     m_dv = m_ubar;
     m_dv -= m_u;
     m_dv *= rate;
@@ -168,6 +171,7 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     const double r = m_rhs.l2_norm();
     if (!std::isfinite(r)) return false;
     if (first < 0) first = std::max(r, load_scale * m_f.l2_norm());
+    if (r > 1e6 * first) return false;
     if (r <= 1e-9 * first) return true;
     m_newton.factor(m_T);
     m_newton.solve(m_delta, m_rhs);
@@ -186,16 +190,37 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
     if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
   m_ubar.compress(dealii::VectorOperation::insert);
   if (m_opt.static_solve) {
-    const Vector target = m_ubar;
-    Vector accepted = m_u;
-    double s = 0, ds = 0.125;
-    while (s < 1) {
+    // The path starts at the last equilibrium (a static path's previous sample) or, the first
+    // time, at no load and no prescribed displacement.
+    const bool continued = m_static_time >= 0;
+    const Vector target = m_ubar, f_new = m_f;
+    Vector accepted = m_u, f_old = m_f;
+    const Vector u_old = m_u;
+    f_old = 0;
+    if (continued) load_vector(m_static_time, f_old);
+    m_static_time = t_new;
+    // From rest the first increment is an eighth of the load; along a path, the whole step to
+    // the next sample (halved until Newton converges, then grown by half each success).
+    double s = 0, ds = continued ? 1.0 : 0.125;
+    // A law that softens to a limit point (St. Venant-Kirchhoff collapses under compression)
+    // makes the increments shrink without end: 40 increments (a smooth path takes 5 to 20) say so.
+    for (int increments = 0; s < 1; ++increments) {
+      if (increments == 40)
+        return fail_nonlinear("the load continuation stalled at load factor " + std::to_string(s) +
+                                  " (a limit point: the law softens to collapse)",
+                              t_new);
       const double s1 = std::min(1.0, s + ds);
       m_ubar = accepted;
       for (const auto d : m_owned)
-        if (m_support_of[d] >= 0) m_ubar[d] = s1 * target[d];
+        if (m_support_of[d] >= 0) m_ubar[d] = continued ? u_old[d] + s1 * (target[d] - u_old[d]) : s1 * target[d];
       m_ubar.compress(dealii::VectorOperation::insert);
-      if (newton(s1)) {
+      if (continued) { // the load between the two samples' (newton takes m_f as the load at factor 1)
+        m_f = f_new;
+        m_f -= f_old;
+        m_f *= s1;
+        m_f += f_old;
+      }
+      if (newton(continued ? 1.0 : s1)) {
         s = s1;
         accepted = m_ubar;
         ds = std::min(0.5, 1.5 * ds);

@@ -13,7 +13,7 @@
 
 namespace vtb::fem {
 
-/// The static solve once at `duration`, or steps of the scheme's dt up to it (ceil(D / dt)
+/// The static solve once at `duration` (or at every sample time after 0, scheme.static_path), or steps of the scheme's dt up to it (ceil(D / dt)
 /// steps), with samples at sample_times(duration, output_interval): each is interpolated
 /// within its step from the states at the step's ends (record(t) appends a sample of the
 /// current state, interpolate(times) replaces the last two by the samples at those times),
@@ -30,7 +30,22 @@ void march(const TimeScheme& scheme, double duration, double output_interval, Ru
     step(t);
     seconds.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - a).count());
   };
-  if (scheme.is_static) {
+  if (scheme.static_path) {
+    record(0.0);
+    const std::vector<double> times = sample_times(duration, output_interval);
+    for (std::size_t k = 1; k < times.size(); ++k) {
+      timed_step(times[k]);
+      ++rep.steps_taken;
+      if (!finite()) {
+        rep.stable = false;
+        rep.failure = "non-finite displacement";
+        rep.failure_time = times[k];
+        break;
+      }
+      record(times[k]);
+    }
+    rep.steps = static_cast<long>(times.size()) - 1;
+  } else if (scheme.is_static) {
     timed_step(duration);
     rep.steps = rep.steps_taken = 1;
     record(duration);

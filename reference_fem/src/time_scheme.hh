@@ -11,9 +11,11 @@ namespace vtb::fem {
 struct TimeScheme {
   double dt = 0;
   bool is_static = false, newmark_family = false;
+  bool static_path = false; ///< static: the equilibrium at every sample time, not once at the end
   double am = 0, af = 0, beta = 0.25, gamma = 0.5; ///< Newmark-family weights
 
-  TimeScheme(const std::string& scheme, bool static_solve, double step) : dt(step), is_static(static_solve) {
+  TimeScheme(const std::string& scheme, bool static_solve, double step, bool path = false)
+      : dt(step), is_static(static_solve), static_path(static_solve && path) {
     newmark_family = !static_solve && scheme != "backward-euler";
     if (scheme == "generalized-alpha") {
       const double rho = 0.0; // spectral radius at infinite frequency: full high-frequency damping

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 
 namespace vtb {
 namespace {
@@ -21,6 +22,11 @@ constexpr double kE = 1000, kNu = 0.3;
 const double kLambda = kE * kNu / ((1 + kNu) * (1 - 2 * kNu)), kMu = kE / (2 * (1 + kNu));
 
 using Mat3 = Eigen::Matrix3d;
+
+struct Case3 {
+  Scene scene;
+  Problem<3> problem;
+};
 
 Mat3 neo_hookean_P(const Mat3& F) {
   const Mat3 FinvT = F.inverse().transpose();
@@ -122,6 +128,65 @@ TEST(NeoHookeanFem, SimpleShearHasTheLinearShearStressAndNoNormalTraction) {
   const FaceForces svk = drive_cube(F, "nonlinear");
   EXPECT_NEAR(svk.y1.y(), svk_P(F)(1, 1), 1e-6 * std::abs(svk_P(F)(1, 1)));
   EXPECT_GT(std::abs(svk.y1.y()), 0.1 * kMu * gamma) << "the SVK law would pass";
+}
+
+} // namespace
+} // namespace vtb
+
+namespace vtb {
+namespace {
+
+/// A block 20 x 20 x 10 mm clamped underneath, a 0.3 N load on a patch of its top ramped over
+/// the run (E 5 kPa, nu 0.45: the patch sinks more than 20 % of the thickness).
+Case3 press(const std::string& solver) {
+  Case3 c;
+  c.scene = parse_scene(R"(
+[scene]
+duration = 1.0
+output_interval = 0.25
+[mesh]
+generate = { shape = "box", size = [0.02, 0.02, 0.01], divisions = [4, 4, 2] }
+[material]
+young_modulus = 5.0e3
+poisson_ratio = 0.45
+density = 1000.0
+[[fix]]
+group = "front"
+[[load]]
+box = [[0.005, 0.005, 0.01], [0.015, 0.015, 0.01]]
+total_force = [0.0, 0.0, -0.3]
+ramp = 1.0
+[[probe]]
+name = "centre"
+point = [0.01, 0.01, 0.01]
+[solver]
+kind = "fem"
+static = true
+kinematics = "neo-hookean"
+)" + solver,
+                        "press.toml", std::filesystem::temp_directory_path());
+  c.problem = build_problem<3>(c.scene, std::get<Mesh3>(load_mesh(c.scene)));
+  return c;
+}
+
+TEST(NeoHookeanFem, AStaticPathPassesThroughEachLoadsEquilibrium) {
+  // `static_path` solves the equilibrium at every sample (0.25, 0.5, 0.75, 1 of the load here),
+  // each continued from the last; the equilibrium of a load does not depend on the path to it,
+  // so each sample is the one static solve of its load (the run's duration set to the sample's
+  // time), to the Newton tolerance (1e-9 of the load): 1e-7 of the displacement.
+  const Case3 path = press("static_path = true\n");
+  Trajectory<3> tr;
+  ASSERT_TRUE(fem::simulate<3>(path.problem, path.scene.material, fem::options_from(path.scene.solver), tr).stable);
+  ASSERT_EQ(tr.t.size(), 5u);
+  std::cout << "path end: " << tr.probe_u.back()[0].z() << " m\n";
+  EXPECT_LT(tr.probe_u.back()[0].z(), -0.002) << "a deep press";
+  for (std::size_t k = 1; k < tr.t.size(); ++k) {
+    Case3 once = press("");
+    once.problem.duration = tr.t[k];
+    Trajectory<3> one;
+    ASSERT_TRUE(fem::simulate<3>(once.problem, once.scene.material, fem::options_from(once.scene.solver), one).stable);
+    EXPECT_LT((tr.probe_u[k][0] - one.probe_u.back()[0]).norm(), 1e-7 * one.probe_u.back()[0].norm()) << tr.t[k];
+  }
 }
 
 } // namespace

@@ -198,7 +198,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     const TableReader r(*t, "[solver]", name,
                         {"kind", "dt", "filter", "momentum_correction", "strain_limit", "step_budget", "springs",
                          "rtol", "atol", "linear_solver", "cg_tolerance", "degree", "refinements", "scheme", "static",
-                         "kinematics"});
+                         "static_path", "kinematics"});
     std::vector<std::string_view> kinds;
     for (const auto& e : solvers::kEntries)
       if (e.scene_kind) kinds.emplace_back(e.name);
@@ -220,6 +220,8 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.refinements = r.integer("refinements", 0, 0, 6);
     s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});
     s.solver.static_solve = r.boolean("static", false);
+    s.solver.static_path = r.boolean("static_path", false);
+    if (s.solver.static_path && !s.solver.static_solve) r.fail("static_path", "needs static = true");
     s.solver.kinematics = r.string("kinematics", "linear", {"linear", "nonlinear", "neo-hookean"});
     // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
     if (s.solver.kinematics != "linear" && !r.node("scheme")) s.solver.scheme = "backward-euler";

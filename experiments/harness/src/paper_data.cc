@@ -282,6 +282,7 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
   paper::haptics(dir, out);
   paper::multirate(dir, out);
   paper::tip_force(dir, out);
+  paper::deep_press(dir, out);
   out.files.emplace_back("numbers.tex", out.macros);
   return out.files;
 }

@@ -22,6 +22,17 @@ struct Out {
   void number_and_raw(const std::string& name, double value, int digits = 3);
 };
 
+/// Column values of the rows where `keep` holds, in file order.
+template <class Keep> std::vector<double> column(const CsvTable& t, const std::string& name, Keep keep) {
+  std::vector<double> v;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (keep(r)) v.push_back(t.number(r, name));
+  return v;
+}
+
+/// A plot's data file: the header line, then one row per index of the columns.
+std::string series(const std::string& header, const std::vector<std::vector<double>>& columns);
+
 void timing(const std::filesystem::path& dir, Out& out);        // timing_rows.tex, calibration_rows.tex
 void fidelity(const std::filesystem::path& dir, Out& out);      // fidelity_rows.tex, vtbLloydWorst, vtbFittedWorst
 void fit_cost(const std::filesystem::path& dir, Out& out);      // vtbFitCost (spring_fit.csv)
@@ -33,5 +44,6 @@ void creep_scaling(const std::filesystem::path& dir, Out& out); // creep.dat, sc
 void haptics(const std::filesystem::path& dir, Out& out);       // haptics_hist.dat, haptics_trace.dat
 void multirate(const std::filesystem::path& dir, Out& out);     // multirate_trace.dat
 void tip_force(const std::filesystem::path& dir, Out& out);     // tip_<mesh>_<tip|point>.dat, tip_anchor.dat
+void deep_press(const std::filesystem::path& dir, Out& out);    // deep_<nu>_<model>.dat, vtbDeep* (gaps to neo-Hookean)
 
 } // namespace vtb::harness::paper

@@ -14,23 +14,6 @@
 #include <sstream>
 
 namespace vtb::harness::paper {
-namespace {
-
-/// Column values of the rows where `keep` holds, in file order.
-template <class Keep> std::vector<double> column(const CsvTable& t, const std::string& name, Keep keep) {
-  std::vector<double> v;
-  for (std::size_t r = 0; r < t.rows(); ++r)
-    if (keep(r)) v.push_back(t.number(r, name));
-  return v;
-}
-
-/// The distinct values of a text column, in order of first appearance.
-std::vector<std::string> distinct(const CsvTable& t, const std::string& name) {
-  std::vector<std::string> v;
-  for (std::size_t r = 0; r < t.rows(); ++r)
-    if (std::find(v.begin(), v.end(), t.text(r, name)) == v.end()) v.push_back(t.text(r, name));
-  return v;
-}
 
 std::string series(const std::string& header, const std::vector<std::vector<double>>& columns) {
   std::ostringstream os;
@@ -41,6 +24,16 @@ std::string series(const std::string& header, const std::vector<std::vector<doub
     os << '\n';
   }
   return os.str();
+}
+
+namespace {
+
+/// The distinct values of a text column, in order of first appearance.
+std::vector<std::string> distinct(const CsvTable& t, const std::string& name) {
+  std::vector<std::string> v;
+  for (std::size_t r = 0; r < t.rows(); ++r)
+    if (std::find(v.begin(), v.end(), t.text(r, name)) == v.end()) v.push_back(t.text(r, name));
+  return v;
 }
 
 double max_relative_deviation(const std::vector<double>& run, const std::vector<double>& ref) {

@@ -344,6 +344,8 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
         "point proxy, and the half-space's force.\n"
         "- `multirate_*.csv`: the slab press on a 10k-node CGAL slab, lockstep at 1 kHz against real time at the rate "
         "the body affords (the force per servo cycle, the physics' step, the servo's cost).\n"
+        "- `deep_press.csv`: a soft layer pressed 40 % deep by a disc: the springs against linear P2, St. "
+        "Venant-Kirchhoff and neo-Hookean (docs/fem.md).\n"
         "- `meta.csv`: quick or not, the machine.\n\n"
      << "Reading: the paper's frame rates were one step per frame on a 450 MHz Pentium III. The truncated "
         "(`neighbors`) filter is the paper's; at steps beyond a few explicit limits it diverges (docs/method.md), "
@@ -381,7 +383,8 @@ std::string run_reproduce(const ReproduceOptions& options) {
       [&] { write_fit_cost(o); },
       [&] { parts::write_creep(o.out, o.scenes_dir, o.progress); },
       [&] { parts::write_transient(o.out, o.scenes_dir, o.progress); },
-      [&] { parts::write_tip_force(o.out, o.scenes_dir, o.quick, o.progress); }};
+      [&] { parts::write_tip_force(o.out, o.scenes_dir, o.quick, o.progress); },
+      [&] { parts::write_deep_press(o.out, o.quick, o.progress); }};
   CellQueue queue(static_cast<long>(jobs.size()));
   TimingPart timing;
   if (w.root()) {

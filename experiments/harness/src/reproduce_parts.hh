@@ -49,6 +49,15 @@ void write_haptics(const std::filesystem::path& out, const std::filesystem::path
 inline constexpr int kMultirateNodes = 10000;
 void write_multirate(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
 
+/// deep_press.csv: a soft layer (E kDeepPressE, kDeepPressH thick, 40 x 40 mm, a CGAL mesh of
+/// ~700 nodes quick, ~1,500 full) clamped underneath, a uniform pressure on a disc of radius
+/// kDeepPressRadius at the centre of its top, for nu 0.3 and 0.45: the static depth of the disc's
+/// centre at loads up to twice the one that presses the linear continuum 30 % deep, for the
+/// default springs (implicit Euler to rest), linear P2, St. Venant-Kirchhoff P1 and neo-Hookean
+/// P1 and P2 (docs/fem.md, "Deep presses").
+inline constexpr double kDeepPressE = 5e3, kDeepPressH = 0.01, kDeepPressRadius = 0.004;
+void write_deep_press(const std::filesystem::path& out, bool quick, std::ostream* log);
+
 /// scaling.csv: per mesh of a 2D rectangle, a 3D box and a CGAL slab ladder (about 2k and 10k
 /// nodes, and 50k unless quick) and per solver (filtered-full, filtered-multigrid,
 /// implicit-euler): nodes, springs, precompute, median step, the integrator's heap and the

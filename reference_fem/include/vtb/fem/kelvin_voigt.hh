@@ -27,6 +27,9 @@ struct FemOptions {
   /// acceleration, order 2, no damping) | backward-euler (order 1)
   std::string scheme = "generalized-alpha";
   bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
+  /// With static_solve: the equilibrium at every sample time instead (the loads' and drives'
+  /// ramps as a load path), each continued from the last: a force-depth curve in one run.
+  bool static_path = false;
   /// A geometrically exact law runs with backward Euler or the static solve only.
   Kinematics kinematics = Kinematics::linear;
   bool nonlinear() const { return kinematics != Kinematics::linear; }

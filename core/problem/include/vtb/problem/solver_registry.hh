@@ -62,7 +62,7 @@ inline constexpr Entry kEntries[] = {
      "k fitted to the FEM's static energy (a peer)",
      kBullet, "", "dt", false, true, true, false},
     {kFem, "deal.II Kelvin-Voigt finite elements on the same mesh (the continuum reference)", kFem, "",
-     "dt, degree, refinements, scheme, static, kinematics", true, false, true, false},
+     "dt, degree, refinements, scheme, static, static_path, kinematics", true, false, true, false},
 };
 
 /// Filters for names() and list().

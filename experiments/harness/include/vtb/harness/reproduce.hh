@@ -26,6 +26,7 @@ inline constexpr ReportFigure kReportFigures[] = {
     {"haptics", "The haptic loop: servo periods and a physics stall"},
     {"tip_force", "The held force against depth: the tool tip on two meshes, a point proxy, the half-space"},
     {"multirate", "A 10k-node body felt in real time: the multirate session against lockstep at 1 kHz"},
+    {"deep_press", "A deep press: the springs against the neo-Hookean, linear and St. Venant-Kirchhoff continua"},
 };
 
 struct ReproduceOptions {
