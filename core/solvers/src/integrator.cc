@@ -54,7 +54,10 @@ std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const 
     return std::make_unique<ImplicitEuler<dim>>(model, o.dt);
   }
   if (o.kind == solvers::kCvode || o.kind == solvers::kFem)
-    throw InputError("[solver].kind = \"" + o.kind + "\": this solver is not built yet (see the open issues)");
+    throw InputError("[solver].kind = \"" + o.kind +
+                     "\": not a fixed-step integrator (it runs whole with vtb run, compare and study, not one step at "
+                     "a time as view and haptics need); a stepper is one of " +
+                     solvers::list(solvers::is_stepper));
   throw InputError("[solver].kind = \"" + o.kind + "\": must be " + solvers::list(solvers::is_stepper));
 }
 
