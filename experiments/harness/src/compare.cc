@@ -27,7 +27,7 @@ Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& 
   Scene s = scene;
   if (name != solvers::kFem) {
     note = "the scene's FEM: P" + std::to_string(s.solver.degree) + ", " + std::to_string(s.solver.refinements) +
-           " refinements, on the mesh";
+           " refinements, on the mesh" + (s.solver.kinematics == "linear" ? "" : ", " + s.solver.kinematics);
     return s;
   }
   s.solver.degree = 2;
@@ -36,6 +36,7 @@ Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& 
   note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) +
                       "x (static ladder: " + ladder->how + ")"
                 : "P2 on the mesh (the static ladder's first level is above its budget of dofs)";
+  if (s.solver.kinematics != "linear") note += ", " + s.solver.kinematics;
   return s;
 }
 
@@ -46,6 +47,7 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
   CompareResult res;
   res.scene = scene.name;
   res.reference = reference;
+  res.geometrically_exact_fem = scene.solver.kinematics != "linear";
   res.nodes = model.num_nodes();
   res.duration = model.duration;
   std::vector<std::string> all = solvers;
@@ -174,9 +176,10 @@ std::string format_compare(const CompareResult& r) {
           "reference does not converge there; see the error away from the loads (compare.csv "
           "displacement_error_away_max), or load a patch ([[load]] disc)\n";
   }
-  // The regime, from the reference's run (the linear FEM is the one it concerns).
+  // The regime, from the reference's run (the linear FEM is the one it concerns; a geometrically
+  // exact FEM holds beyond it).
   for (const auto& row : r.rows)
-    if (row.solver == r.reference)
+    if (row.solver == r.reference && !(r.geometrically_exact_fem && r.reference != solvers::kCvode))
       if (const std::string note = small_strain_regime_note(row.report.max_rotation, row.report.max_strain);
           !note.empty())
         os << "note: " << note << "\n";
