@@ -24,7 +24,8 @@ void check_options(const FemOptions& options) {
   if (!(options.dt > 0)) throw InputError("[solver].dt must be > 0");
   if (options.nonlinear() && !options.static_solve && options.scheme != "backward-euler")
     throw InputError(std::string("[solver].kinematics = \"") +
-                     (options.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") + "\" runs with scheme = \"backward-euler\" or static = true, not "
+                     (options.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") +
+                     "\" runs with scheme = \"backward-euler\" or static = true, not "
                      "scheme = \"" +
                      options.scheme + "\"");
 }

@@ -58,8 +58,9 @@ template <int dim, class Backend> class KelvinVoigtProblem {
 
 public:
   KelvinVoigtProblem(const Problem<dim>& model, const MaterialDesc& material, const FemOptions& options, MPI_Comm comm)
-      : m_model(model), m_mat(material), m_opt(options), m_scheme(options.scheme, options.static_solve, options.dt, options.static_path),
-        m_backend(comm), m_tria(Backend::make_tria(comm)), m_fe(dealii::FE_SimplexP<dim>(options.degree), dim),
+      : m_model(model), m_mat(material), m_opt(options),
+        m_scheme(options.scheme, options.static_solve, options.dt, options.static_path), m_backend(comm),
+        m_tria(Backend::make_tria(comm)), m_fe(dealii::FE_SimplexP<dim>(options.degree), dim),
         m_mapping(dealii::FE_SimplexP<dim>(1)), m_dofs(*m_tria),
         m_timer(m_timer_stream, dealii::TimerOutput::never, dealii::TimerOutput::wall_times) {}
 

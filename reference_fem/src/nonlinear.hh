@@ -28,7 +28,7 @@ namespace vtb::fem {
 template <int dim, class Vector, class Matrix> struct NonlinearTargets {
   Vector* force = nullptr;
   Matrix* tangent = nullptr;
-  double rate = 0; ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
+  double rate = 0;          ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
   bool neo_hookean = false; ///< the law (stress_laws.hh): neo-Hookean, else St. Venant-Kirchhoff
 };
 

@@ -37,8 +37,8 @@ template <int dim> dealii::Tensor<2, dim> sym(const dealii::Tensor<2, dim>& A) {
 /// The stress at one quadrature point and its derivative along any G, for one law.
 template <int dim> class StressPoint {
 public:
-  StressPoint(const dealii::Tensor<2, dim>& F, const dealii::Tensor<2, dim>& grad_v, bool neo_hookean,
-              double lambda, double mu, double tau, double rate)
+  StressPoint(const dealii::Tensor<2, dim>& F, const dealii::Tensor<2, dim>& grad_v, bool neo_hookean, double lambda,
+              double mu, double tau, double rate)
       : m_F(F), m_grad_v(grad_v), m_neo_hookean(neo_hookean), m_lambda(lambda), m_mu(mu), m_tau(tau), m_rate(rate) {
     const dealii::Tensor<2, dim> I = dealii::unit_symmetric_tensor<dim>();
     const auto Ft = dealii::transpose(F);
@@ -64,8 +64,7 @@ public:
   /// dP along a displacement-gradient direction G (grad v moving by rate G).
   dealii::Tensor<2, dim> dP(const dealii::Tensor<2, dim>& G) const {
     const auto FtG = dealii::transpose(m_F) * G;
-    const auto dSv =
-        m_tau * svk_stress<dim>(sym<dim>(dealii::transpose(G) * m_grad_v + m_rate * FtG), m_lambda, m_mu);
+    const auto dSv = m_tau * svk_stress<dim>(sym<dim>(dealii::transpose(G) * m_grad_v + m_rate * FtG), m_lambda, m_mu);
     dealii::Tensor<2, dim> d = G * m_Sv + m_F * dSv;
     if (m_neo_hookean) {
       d += m_mu * G + (m_mu - m_lambda * m_log_J) * (m_F_inv_T * dealii::transpose(G) * m_F_inv_T) +

@@ -13,8 +13,8 @@
 
 namespace vtb::fem {
 
-/// The static solve once at `duration` (or at every sample time after 0, scheme.static_path), or steps of the scheme's dt up to it (ceil(D / dt)
-/// steps), with samples at sample_times(duration, output_interval): each is interpolated
+/// The static solve once at `duration` (or at every sample time after 0, scheme.static_path), or steps of the scheme's
+/// dt up to it (ceil(D / dt) steps), with samples at sample_times(duration, output_interval): each is interpolated
 /// within its step from the states at the step's ends (record(t) appends a sample of the
 /// current state, interpolate(times) replaces the last two by the samples at those times),
 /// stopping at the first step whose displacement is not finite (rep.stable = false, with the

@@ -94,7 +94,8 @@ kinematics = ")" + kinematics + "\"\n",
 /// mu (t^2 - 1) + lambda ln(l t^2) = 0 (Newton on t, monotone in t).
 double uniaxial_lateral_stretch(double l) {
   double t = 1;
-  for (int it = 0; it < 50; ++it) t -= (kMu * (t * t - 1) + kLambda * std::log(l * t * t)) / (2 * kMu * t + 2 * kLambda / t);
+  for (int it = 0; it < 50; ++it)
+    t -= (kMu * (t * t - 1) + kLambda * std::log(l * t * t)) / (2 * kMu * t + 2 * kLambda / t);
   return t;
 }
 

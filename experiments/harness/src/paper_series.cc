@@ -364,7 +364,8 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     }
     // The gaps: a model's force at a depth against the neo-Hookean continuum's, in per cent.
     const auto gap = [&](const char* model, double d) {
-      const double f = force_at_depth(column(t, "depth_ratio", rows(nu, model)), column(t, "force", rows(nu, model)), d);
+      const double f =
+          force_at_depth(column(t, "depth_ratio", rows(nu, model)), column(t, "force", rows(nu, model)), d);
       return 100 * (f / force_at_depth(nh_depth, nh_force, d) - 1);
     };
     const std::string T = tag;
@@ -373,12 +374,14 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     out.number("vtbDeepSpringsThirty" + T, gap("springs", 0.3), 2);
     out.number("vtbDeepLinearThirty" + T, gap("linear-p2", 0.3), 2);
     out.number("vtbDeepPOneThirty" + T, gap("neo-hookean-p1", 0.3), 2); // the discretisation's share
-    std::vector<double> svk = column(t, "depth_ratio", rows(nu, "svk-p1")), levels = column(t, "level", rows(nu, "svk-p1"));
+    std::vector<double> svk = column(t, "depth_ratio", rows(nu, "svk-p1")),
+                        levels = column(t, "level", rows(nu, "svk-p1"));
     double svk_last = 0;
     for (std::size_t k = 0; k < svk.size(); ++k)
       if (std::isfinite(svk[k])) svk_last = levels[k];
     out.number("vtbDeepSvkLast" + T, svk_last, 3);
-    const std::vector<double> lf = column(t, "force", rows(nu, "linear-p2")), ld = column(t, "depth_ratio", rows(nu, "linear-p2"));
+    const std::vector<double> lf = column(t, "force", rows(nu, "linear-p2")),
+                              ld = column(t, "depth_ratio", rows(nu, "linear-p2"));
     out.number("vtbDeepFThirty" + T, lf.empty() ? std::nan("") : 1e3 * lf[0] * 0.3 / ld[0], 3); // linear: F30
   }
   out.number("vtbDeepNodes", column(t, "nodes", [](std::size_t) { return true; }).front(), 6);

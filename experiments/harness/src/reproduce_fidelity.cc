@@ -19,12 +19,12 @@
 
 #include <chrono>
 #include <cmath>
-#include <tuple>
 #include <fstream>
 #include <iomanip>
 #include <limits>
 #include <ostream>
 #include <sstream>
+#include <tuple>
 
 namespace vtb::harness::parts {
 
@@ -246,8 +246,8 @@ name = "deep-press"
 duration = 1.0
 output_interval = 0.1
 [mesh]
-file = ")" << mesh.string()
-     << R"("
+file = ")"
+     << mesh.string() << R"("
 [material]
 young_modulus = )"
      << kDeepPressE << R"(
@@ -267,7 +267,8 @@ name = "centre"
 point = [0.02, 0.02, )"
      << kDeepPressH << R"(]
 [solver]
-kind = ")" << solvers::kImplicitEuler << R"("
+kind = ")"
+     << solvers::kImplicitEuler << R"("
 dt = 0.02
 )";
   return os.str();
@@ -291,18 +292,19 @@ void write_deep_press(const std::filesystem::path& out, bool quick, std::ostream
   // One CGAL mesh for every model and material: a 40 x 40 mm layer on a clamped base.
   const std::filesystem::path mesh = out / "deep_press_block.msh";
   {
-    const Scene g = parse_scene(R"([scene]
+    const Scene g =
+        parse_scene(R"([scene]
 duration = 1.0
 output_interval = 1.0
 [mesh]
-generate = { shape = "box", size = [0.04, 0.04, )" + std::to_string(kDeepPressH) +
-                                    "], mesher = \"cgal\", nodes = " + std::to_string(nodes) + R"( }
+generate = { shape = "box", size = [0.04, 0.04, )" +
+                        std::to_string(kDeepPressH) + "], mesher = \"cgal\", nodes = " + std::to_string(nodes) + R"( }
 [material]
 young_modulus = 1.0
 poisson_ratio = 0.3
 density = 1.0
 )",
-                                "deep_press.toml", out);
+                    "deep_press.toml", out);
     std::filesystem::create_directories(out);
     write_msh(std::get<Mesh3>(load_mesh(g)), mesh);
   }

@@ -91,8 +91,8 @@ struct SolverDesc {
   int refinements = 0;
   std::string scheme = "generalized-alpha"; ///< fem: generalized-alpha (rho_inf 0) | newmark | backward-euler
   bool static_solve = false;                ///< fem: `static = true` solves K u = f at the final load
-  bool static_path = false; ///< fem: `static_path = true` (with static): the equilibrium at every sample
-  std::string kinematics = "linear";        ///< fem: linear | nonlinear (St. Venant-Kirchhoff) | neo-hookean
+  bool static_path = false;          ///< fem: `static_path = true` (with static): the equilibrium at every sample
+  std::string kinematics = "linear"; ///< fem: linear | nonlinear (St. Venant-Kirchhoff) | neo-hookean
 };
 
 struct HandDesc {

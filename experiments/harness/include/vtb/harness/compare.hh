@@ -26,7 +26,7 @@ struct DecompositionRow {
 
 struct CompareResult {
   std::string scene, reference;
-  std::string reference_note; ///< for fem and fem-mesh: which FEM the reference is
+  std::string reference_note;           ///< for fem and fem-mesh: which FEM the reference is
   bool geometrically_exact_fem = false; ///< the FEM runs a nonlinear law ([solver].kinematics)
   /// Names of the point loads (a force on one node): under them the continuum answer is
   /// singular and the FEM reference does not converge with refinement.
