@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Builds the paper from a reproduction (DESIGN.md §8):
+# Builds the paper from a reproduction (paper/README.md):
 #   scripts/build_paper.sh [REPRODUCE_DIR] [OUT_DIR]     (defaults out/reproduce, out/paper)
 # 1. `vtb paper-data` turns REPRODUCE_DIR's CSV files into OUT_DIR/data (numbers.tex, table
 #    rows, .dat series; every string escaped, every number computed, none typed in the LaTeX);

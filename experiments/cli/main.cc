@@ -1,4 +1,4 @@
-/// vtb: the Voigt deformation testbed command line (DESIGN.md §2).
+/// vtb: the Voigt deformation testbed command line (README.md, docs/scenes.md, docs/harness.md).
 #include "commands.hh"
 
 #include "vtb/fem/kelvin_voigt.hh"

@@ -30,7 +30,7 @@ public:
   /// The coupling group the device's footprint takes in State::applied_group (the drags' are
   /// their pull index, below it).
   static constexpr int kDeviceGroup = 1000;
-  /// The scene's [haptics] settings when it has them, else the defaults of DESIGN.md §2.
+  /// The scene's [haptics] settings when it has them, else the defaults of docs/scenes.md.
   DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
   void before_step(const Model<dim>& model, State<dim>& s, double dt) override;

@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// `vtb view SCENE`: the paper's interactive system (DESIGN.md §7). A GLFW window with an
+/// `vtb view SCENE`: the paper's interactive system (docs/viewer.md). A GLFW window with an
 /// OpenGL 3.3 core view of the body coloured by strain, and a Dear ImGui panel that switches
 /// solver, filter, dt and stiffness live; left drag pulls the body through a virtual coupling.
 /// With `frames` > 0 it renders that many frames at a fixed 1/60 s of simulated time each

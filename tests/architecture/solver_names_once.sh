@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The solver registry is the one place solver names are written (DESIGN.md §1): a quoted
+# The solver registry is the one place solver names are written (docs/architecture.md): a quoted
 # solver name anywhere else in the sources fails this test. Usage: solver_names_once.sh SRC_DIR
 set -u
 cd "$1"

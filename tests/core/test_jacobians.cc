@@ -1,4 +1,4 @@
-// Finite-difference checks of the assembled Jacobians (DESIGN.md §5: every force and
+// Finite-difference checks of the assembled Jacobians (docs/testing.md: every force and
 // Jacobian): the reference assembly force_jacobians against add_internal_forces, CVODE's
 // analytic Jacobian against differences of its right-hand side (with supports, ramped drives
 // and mass damping), and implicit Euler's step against a dense solve of the backward-Euler

@@ -1,4 +1,4 @@
-// Finite-difference checks of the Voigt element kernels (DESIGN.md §5: every force and
+// Finite-difference checks of the Voigt element kernels (docs/testing.md: every force and
 // Jacobian). Central differences have error O(h^2 |f'''|); with h = 1e-6 on O(1) data the
 // truncation error is ~1e-12 and round-off ~eps/h ~ 1e-10, so 1e-7 relative is a safe bound.
 #include "vtb/springs/spring_kernels.hh"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The CLI contract (DESIGN.md §2): --help everywhere, bad input -> one clear line on stderr,
+# The CLI contract (README.md, docs/scenes.md, docs/harness.md): --help everywhere, bad input -> one clear line on stderr,
 # a non-zero exit and no output files; a good scene -> the three files and exit 0.
 set -u
 vtb=$1

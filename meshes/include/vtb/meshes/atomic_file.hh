@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The one way vtb writes a file (DESIGN.md conventions): to FILE.part, then renamed, so a
+/// The one way vtb writes a file (docs/architecture.md, conventions): to FILE.part, then renamed, so a
 /// reader never sees half a file and a failed write leaves nothing. A failure is an IoError
 /// naming the path and the reason (not a bad-input error: the input was fine, the disk or the
 /// folder was not); the CLI exits with its own code for it.

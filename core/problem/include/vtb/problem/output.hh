@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// Output files of `vtb run` (DESIGN.md §2): probes.csv, reactions.csv, summary.json.
+/// Output files of `vtb run` (README.md, docs/scenes.md, docs/harness.md): probes.csv, reactions.csv, summary.json.
 /// Files are written under a temporary name and renamed only when all are complete.
 
 #include "vtb/meshes/atomic_file.hh" // write_files_atomically, IoError

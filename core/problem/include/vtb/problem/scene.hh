@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// Scene files (TOML, SI units): what is simulated, on which mesh, with which solver.
-/// The key names are the contract of DESIGN.md §2. Parsing validates every value; vectors
+/// The key names are the contract of docs/scenes.md. Parsing validates every value; vectors
 /// whose length depends on the mesh dimension are checked when the mesh is known
 /// (see model_builder.hh).
 

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// The paper's approximate implicit scheme (Cai, Dill, Payandeh, Fig. 2), read as in
-/// DESIGN.md §3 and docs/method.md:
+/// docs/method.md:
 ///
 ///   H = M (1 + dt gamma) + dt C_L + dt^2 K_L   on the free nodes (C_L, K_L: graph
 ///        Laplacians with edge weights c_ij, k_ij; edges to constrained nodes add to the

@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// `vtb compare`: run several solvers on one scene and measure each against a reference;
-/// the error decomposition of DESIGN.md §3.
+/// the error decomposition of docs/harness.md.
 
 #include "vtb/harness/metrics.hh"
 

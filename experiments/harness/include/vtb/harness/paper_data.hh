@@ -1,7 +1,7 @@
 #pragma once
 /// \file
 /// `vtb paper-data REPRODUCE_DIR OUT_DIR`: the reproduction's CSV files turned into what the
-/// LaTeX paper reads (DESIGN.md §8): numbers.tex (one macro per number a caption or the text
+/// LaTeX paper reads (paper/README.md): numbers.tex (one macro per number a caption or the text
 /// states), timing_rows.tex and calibration_rows.tex (table rows), and whitespace-separated
 /// .dat series for pgfplots. Every string from the data is escaped (tex_escape), so the paper
 /// runs no TeX code from a CSV; every number is computed here from the CSVs, none typed.
