@@ -6,7 +6,7 @@
 # 2. each paper/figures/NAME.tex is drawn alone by pgfplots (standalone class) into
 #    OUT_DIR/figures/NAME.pdf and REPRODUCE_DIR/figures/NAME.png (report.md shows them);
 # 3. paper/vtb.tex is built into OUT_DIR/vtb.pdf with latexmk (BibTeX for paper/references.bib), shell
-#    escape off.
+#    escape off. LaTeX's by-products (aux, logs, the figures' standalone sources) stay in OUT_DIR/build.
 # Without LaTeX: one line naming what to install, exit 3, the reproduction's data untouched.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
@@ -23,16 +23,17 @@ for tool in latexmk pdflatex pdftoppm; do
 done
 [ -f "$in/timing_table.csv" ] || { echo "build_paper: $in/timing_table.csv: no reproduction there (run vtb reproduce)" >&2; exit 1; }
 
-mkdir -p "$out/figures" "$in/figures"
+mkdir -p "$out/figures" "$out/build" "$in/figures"
 "$vtb" paper-data "$in" "$out/data" >/dev/null
-export TEXINPUTS="$root/paper:" BIBINPUTS="$root/paper:"
+# LaTeX runs in OUT_DIR/build and finds data/ and figures/ in OUT_DIR through TEXINPUTS.
+export TEXINPUTS="$root/paper:$out:" BIBINPUTS="$root/paper:"
 latex=(latexmk -pdf -interaction=nonstopmode -halt-on-error -quiet
   "-pdflatex=pdflatex -no-shell-escape %O %S")
 
-build() { # JOBNAME: runs latexmk in OUT_DIR, prints the log's errors if it fails
-  if ! (cd "$out" && "${latex[@]}" "$1.tex" >"$1.latexmk.log" 2>&1); then
-    echo "build_paper: LaTeX failed on $1; from $out/$1.log:" >&2
-    grep -A6 '^!' "$out/$1.log" >&2 || tail -20 "$out/$1.latexmk.log" >&2
+build() { # JOBNAME: runs latexmk in OUT_DIR/build, prints the log's errors if it fails
+  if ! (cd "$out/build" && "${latex[@]}" "$1.tex" >"$1.latexmk.log" 2>&1); then
+    echo "build_paper: LaTeX failed on $1; from $out/build/$1.log:" >&2
+    grep -A6 '^!' "$out/build/$1.log" >&2 || tail -20 "$out/build/$1.latexmk.log" >&2
     exit 1
   fi
 }
@@ -40,11 +41,12 @@ build() { # JOBNAME: runs latexmk in OUT_DIR, prints the log's errors if it fail
 for src in "$root"/paper/figures/*.tex; do
   name=$(basename "$src" .tex)
   printf '%s\n' '\documentclass[border=4pt]{standalone}' '\input{preamble.tex}' '\begin{document}' \
-    "\\input{figures/$name.tex}" '\end{document}' >"$out/figure_$name.tex"
+    "\\input{figures/$name.tex}" '\end{document}' >"$out/build/figure_$name.tex"
   build "figure_$name"
-  mv "$out/figure_$name.pdf" "$out/figures/$name.pdf"
+  mv "$out/build/figure_$name.pdf" "$out/figures/$name.pdf"
   pdftoppm -png -r 130 -singlefile "$out/figures/$name.pdf" "$in/figures/$name"
 done
-cp "$root/paper/vtb.tex" "$out/vtb.tex"
+cp "$root/paper/vtb.tex" "$out/build/vtb.tex"
 build vtb
+mv "$out/build/vtb.pdf" "$out/vtb.pdf"
 echo "$out/vtb.pdf"

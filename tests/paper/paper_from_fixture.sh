@@ -63,7 +63,10 @@ grep -Eq 'filtered-multigrid† +4\.32 ' "$tmp/vtb.txt" || fail "the changed sla
 [ "$(grep -cE '(^| )(1907|9982) +filtered-[a-z]+†' "$tmp/vtb.txt")" = 2 ] || fail "the slab table does not mark two defaults"
 grep -Eq '1907 +filtered-multigrid†' "$tmp/vtb.txt" || fail "the moved default mark (2k slab, multigrid) is not in the table"
 # pdflatex logs "\write18 enabled" (or "restricted \write18 enabled") whenever shell escape is on.
-grep -q 'write18 enabled' "$tmp/paper/vtb.log" && fail "pdflatex ran with shell escape"
+# LaTeX's by-products are in OUT_DIR/build, not beside vtb.pdf.
+[ -f "$tmp/paper/build/vtb.log" ] || fail "no pdflatex log in OUT_DIR/build"
+[ -z "$(find "$tmp/paper" -maxdepth 1 -type f ! -name vtb.pdf)" ] || fail "OUT_DIR holds more files than vtb.pdf"
+grep -q 'write18 enabled' "$tmp/paper/build/vtb.log" && fail "pdflatex ran with shell escape"
 grep -q 'Quick reproduction' "$tmp/vtb.txt" || fail "a --quick reproduction's paper does not say so"
 # The references: BibTeX ran (a References section listing the works), every citation resolved
 # (an unresolved \cite prints [?]), and the seed paper and the calibrations are among them.
