@@ -24,10 +24,7 @@ Action add_compare(CLI::App& app) {
   cmd->add_option("--reference", o->reference,
                   "fem (default: the continuum, P2 refined until converged), fem-mesh (the scene's own FEM, P1 on the "
                   "mesh by default) or cvode");
-  cmd->add_option(
-      "--kinematics", o->kinematics,
-      "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
-      "reference for deep presses; docs/fem.md)");
+  add_kinematics_option(cmd, o->kinematics);
   cmd->add_option("--dt", o->dt, "Step for every fixed-step solver (default: the scene's)");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-compare)");
   cmd->add_flag("--frames", o->frames, "Also write each solver's frames.pvd and frames/*.vtu in OUT/<solver>/");

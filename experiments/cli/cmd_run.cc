@@ -31,10 +31,7 @@ Action add_run(CLI::App& app) {
                   "Override [solver].kind (and filter): " + solvers::list() + " (vtb solvers describes each)");
   cmd->add_option("--dt", o->dt, "Override [solver].dt (s)");
   cmd->add_option("--duration", o->duration, "Override [scene].duration (s)");
-  cmd->add_option(
-      "--kinematics", o->kinematics,
-      "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
-      "reference for deep presses; docs/fem.md)");
+  add_kinematics_option(cmd, o->kinematics);
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene name>)");
   cmd->add_flag("--frames", o->frames, "Also write frames.pvd and frames/*.vtu (one per sample) for ParaView");
   return [o]() {

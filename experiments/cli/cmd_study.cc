@@ -28,10 +28,7 @@ Action add_study(CLI::App& app) {
   cmd->add_option("--reference", o->reference,
                   "fem (the continuum: P2 at the static ladder's level, at dt or the smaller step its measured time "
                   "error needs; default) or cvode (rtol 1e-10)");
-  cmd->add_option(
-      "--kinematics", o->kinematics,
-      "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or neo-hookean (the "
-      "reference for deep presses; docs/fem.md)");
+  add_kinematics_option(cmd, o->kinematics);
   cmd->add_flag("--quick", o->quick, "Short ladders and at most 1 s of simulated time");
   cmd->add_option("--out", o->out, "Output folder (default: vtb-out/<scene>-study)");
   cmd->add_option("--shard", o->shard,

@@ -29,4 +29,7 @@ Action add_paper_data(CLI::App& app);
 Action add_solvers(CLI::App& app);
 Action add_bench(CLI::App& app);
 
+/// `--kinematics` (run, compare, study): the FEM's law, overriding [solver].kinematics, into `into`.
+void add_kinematics_option(CLI::App* cmd, std::string& into);
+
 } // namespace vtb::cli

@@ -1,4 +1,5 @@
 #include "overrides.hh"
+#include "commands.hh"
 
 #include "vtb/meshes/input_error.hh"
 #include "vtb/problem/solver_registry.hh"
@@ -21,6 +22,12 @@ HapticsOptions::Fault parse_fault(const std::string& spec, double& time) {
     throw InputError("--fault \"" + spec + "\": T must be a time >= 0 in seconds");
   }
   return kind == "stall" ? HapticsOptions::Fault::stall : HapticsOptions::Fault::nan;
+}
+
+void add_kinematics_option(CLI::App* cmd, std::string& into) {
+  cmd->add_option("--kinematics", into,
+                  "The FEM's law, overriding [solver].kinematics: linear, nonlinear (St. Venant-Kirchhoff) or "
+                  "neo-hookean (the reference for deep presses; docs/fem.md)");
 }
 
 } // namespace vtb::cli

@@ -13,18 +13,28 @@ FemOptions options_from(const SolverDesc& s) {
   o.static_solve = s.static_solve;
   o.static_path = s.static_path;
   o.dt = s.dt;
-  o.kinematics = s.kinematics == "nonlinear"     ? Kinematics::svk
-                 : s.kinematics == "neo-hookean" ? Kinematics::neo_hookean
-                                                 : Kinematics::linear;
+  for (const Kinematics k : {Kinematics::linear, Kinematics::svk, Kinematics::neo_hookean})
+    if (s.kinematics == kinematics_name(k)) o.kinematics = k;
   return o;
+}
+
+const char* kinematics_name(Kinematics kinematics) {
+  switch (kinematics) {
+  case Kinematics::svk:
+    return "nonlinear";
+  case Kinematics::neo_hookean:
+    return "neo-hookean";
+  case Kinematics::linear:
+    break;
+  }
+  return "linear";
 }
 
 void check_options(const FemOptions& options) {
   if (options.degree < 1 || options.degree > 2) throw InputError("[solver].degree must be 1 or 2");
   if (!(options.dt > 0)) throw InputError("[solver].dt must be > 0");
   if (options.nonlinear() && !options.static_solve && options.scheme != "backward-euler")
-    throw InputError(std::string("[solver].kinematics = \"") +
-                     (options.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") +
+    throw InputError(std::string("[solver].kinematics = \"") + kinematics_name(options.kinematics) +
                      "\" runs with scheme = \"backward-euler\" or static = true, not "
                      "scheme = \"" +
                      options.scheme + "\"");

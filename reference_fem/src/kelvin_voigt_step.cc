@@ -246,8 +246,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
 
 template <int dim, class Backend>
 void KelvinVoigtProblem<dim, Backend>::fail_nonlinear(const std::string& why, double t) {
-  m_nonlinear_failure =
-      std::string("fem (") + (m_opt.kinematics == Kinematics::svk ? "nonlinear" : "neo-hookean") + "): " + why;
+  m_nonlinear_failure = std::string("fem (") + kinematics_name(m_opt.kinematics) + "): " + why;
   m_failure_time = t;
   m_u = std::numeric_limits<double>::quiet_NaN();
 }

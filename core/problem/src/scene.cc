@@ -222,7 +222,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     s.solver.static_solve = r.boolean("static", false);
     s.solver.static_path = r.boolean("static_path", false);
     if (s.solver.static_path && !s.solver.static_solve) r.fail("static_path", "needs static = true");
-    s.solver.kinematics = r.string("kinematics", "linear", {"linear", "nonlinear", "neo-hookean"});
+    s.solver.kinematics = r.string("kinematics", "linear", {kKinematics.begin(), kKinematics.end()});
     // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
     if (s.solver.kinematics != "linear" && !r.node("scheme")) s.solver.scheme = "backward-euler";
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");

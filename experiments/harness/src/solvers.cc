@@ -117,7 +117,7 @@ Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
   if (ov.kinematics) {
-    if (*ov.kinematics != "linear" && *ov.kinematics != "nonlinear" && *ov.kinematics != "neo-hookean")
+    if (std::find(kKinematics.begin(), kKinematics.end(), *ov.kinematics) == kKinematics.end())
       throw InputError("--kinematics must be linear, nonlinear or neo-hookean, not " + *ov.kinematics);
     scene.solver.kinematics = *ov.kinematics;
     if (*ov.kinematics != "linear") scene.solver.scheme = "backward-euler"; // the one it steps with

@@ -41,6 +41,8 @@ struct FemOptions {
 };
 
 FemOptions options_from(const SolverDesc& solver);
+/// The `[solver] kinematics` value that names a law (kKinematics in scene.hh).
+const char* kinematics_name(Kinematics kinematics);
 /// Throws InputError unless the degree is 1 or 2, dt > 0, and nonlinear kinematics come with
 /// backward Euler or the static solve.
 void check_options(const FemOptions& options);

@@ -9,9 +9,11 @@
 #include "vtb/problem/solver_names.hh"
 
 #include <Eigen/Core>
+#include <array>
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace vtb {
@@ -69,6 +71,9 @@ struct MeshDesc {
   double hole = 0;                   ///< m, radius of a central hole (cgal rectangle); 0: none
   bool generated() const { return !shape.empty(); }
 };
+
+/// The values of `[solver] kinematics` (and `--kinematics`): the FEM's law (docs/fem.md).
+inline constexpr std::array<std::string_view, 3> kKinematics{"linear", "nonlinear", "neo-hookean"};
 
 struct SolverDesc {
   std::string kind = solvers::kFiltered; ///< explicit | filtered | implicit-euler | cvode | fem
