@@ -5,6 +5,7 @@
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/meshes/quality.hh"
+#include "vtb/meshes/surface.hh"
 #include "vtb/meshes/vtu_io.hh"
 
 #include <iostream>
@@ -50,7 +51,38 @@ struct MeshOpts {
   std::vector<int> divisions;
   int nodes = 0;
   double hole = 0;
+  std::string surface;
+  double scale = 1;
+  std::vector<double> refine_near, refine_radius, refine_size;
 };
+
+/// The --refine-near/--refine-radius/--refine-size triples (each option once per refinement).
+std::vector<Refinement> refinements(const MeshOpts& o) {
+  const std::size_t n = o.refine_near.size() / 3;
+  if (o.refine_near.size() % 3 != 0 || o.refine_radius.size() != n || o.refine_size.size() != n)
+    throw InputError("vtb mesh generate " + o.shape +
+                     ": each refinement needs --refine-near X,Y,Z, --refine-radius R and --refine-size h");
+  std::vector<Refinement> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i].center = Eigen::Vector3d(o.refine_near[3 * i], o.refine_near[3 * i + 1], o.refine_near[3 * i + 2]);
+    out[i].radius = o.refine_radius[i];
+    out[i].size = o.refine_size[i];
+    if (const std::string why = refinement_error(out[i]); !why.empty())
+      throw InputError("vtb mesh generate " + o.shape + ": refinement " + std::to_string(i) + ": " + why);
+  }
+  return out;
+}
+
+/// `vtb mesh generate surface FILE`: a closed surface's inside (surface.hh, mesh_surface).
+void generate_surface(const MeshOpts& o, const std::vector<Refinement>& refine) {
+  if (o.surface.empty()) throw InputError("vtb mesh generate surface: the surface FILE is required");
+  if (o.size.size() > 1) throw InputError("vtb mesh generate surface: --size takes one element size (m)");
+  const double h = o.size.empty() ? 0 : o.size[0];
+  if ((o.nodes > 0) == (h > 0))
+    throw InputError("vtb mesh generate surface: give --nodes N or --size H (one of them, > 0)");
+  const std::filesystem::path file(o.surface);
+  write_msh(mesh_surface(read_surface(file, o.scale), o.nodes, h, refine, file.filename().string()), o.out);
+}
 
 /// `vtb mesh convert IN OUT`: a .msh (2.2 or 4.x) to .msh 4.1 or .vtu.
 void convert_mesh(const MeshOpts& o) {
@@ -70,12 +102,20 @@ void convert_mesh(const MeshOpts& o) {
 /// `vtb mesh generate SHAPE ...`: the CGAL plate and solids, an unstructured (CGAL) rectangle
 /// or box with --nodes, or a structured one with --divisions.
 void generate_mesh(const MeshOpts& o) {
+  const std::vector<Refinement> refine = refinements(o);
+  if (!o.surface.empty() && o.shape != "surface")
+    throw InputError("vtb mesh generate " + o.shape + ": a FILE is for shape surface");
+  if (o.scale != 1 && o.shape != "surface") throw InputError("vtb mesh generate " + o.shape + ": --scale is for shape surface");
+  if (!refine.empty() && o.shape != "surface" && o.shape != "slab" && o.shape != "sphere" &&
+      !(o.shape == "box" && o.nodes > 0))
+    throw InputError("vtb mesh generate " + o.shape + ": refinement is for surface, slab, sphere and a CGAL box");
+  if (o.shape == "surface") return generate_surface(o, refine);
   if (o.shape == "plate" || o.shape == "slab" || o.shape == "sphere") {
     if (o.nodes <= 0) throw InputError("vtb mesh generate " + o.shape + ": --nodes N (N > 0) is required");
     if (o.shape == "plate")
       write_msh(mesh_polygon(paper_plate(), o.nodes), o.out);
     else
-      write_msh(mesh_solid(o.shape, o.nodes), o.out);
+      write_msh(mesh_solid(o.shape, o.nodes, refine), o.out);
     return;
   }
   const std::size_t d = o.shape == "rectangle" ? 2 : 3;
@@ -89,7 +129,7 @@ void generate_mesh(const MeshOpts& o) {
     if (d == 2)
       write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes, o.hole), o.out);
     else
-      write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes), o.out);
+      write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes, refine), o.out);
     return;
   }
   if (o.size.size() != d || o.divisions.size() != d)
@@ -114,11 +154,23 @@ Action add_mesh(CLI::App& app) {
   info->add_option("file", o->file, "Mesh file (.msh)")->required();
   CLI::App* gen = cmd->add_subcommand(
       "generate", "Write a mesh as .msh 4.1: structured rectangle/box (--size, --divisions), the paper's plate "
-                  "(CGAL, exact --nodes), or a CGAL Mesh_3 slab/sphere (about --nodes)");
-  gen->add_option("shape", o->shape, "rectangle | box | plate | slab | sphere")
+                  "(CGAL, exact --nodes), a CGAL Mesh_3 slab/sphere (about --nodes), or the inside of a closed "
+                  "surface FILE (.off, .stl, .obj, .ply; --nodes or --size)");
+  gen->add_option("shape", o->shape, "rectangle | box | plate | slab | sphere | surface")
       ->required()
-      ->check(CLI::IsMember({"rectangle", "box", "plate", "slab", "sphere"}));
-  gen->add_option("--size", o->size, "Extent per axis (m), rectangle and box");
+      ->check(CLI::IsMember({"rectangle", "box", "plate", "slab", "sphere", "surface"}));
+  gen->add_option("file", o->surface, "Closed surface (shape surface): .off, .stl, .obj or .ply");
+  gen->add_option("--size", o->size, "Extent per axis (m), rectangle and box; the element size (m), surface");
+  gen->add_option("--scale", o->scale, "Multiplies the surface's coordinates (e.g. 0.001 for a file in mm)");
+  gen->add_option("--refine-near", o->refine_near, "X,Y,Z (m): grade the mesh toward this point (repeatable)")
+      ->delimiter(',')
+      ->expected(3)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  gen->add_option("--refine-radius", o->refine_radius, "R (m): element size --refine-size within R of the point")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  gen->add_option("--refine-size", o->refine_size,
+                  "h (m): the element size near the point; it grows by 0.4 m per m beyond R to the body's")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   gen->add_option("--divisions", o->divisions, "Cells per axis, rectangle and box");
   gen->add_option("--nodes", o->nodes,
                   "Node count: exact for plate and an unstructured rectangle, approximate (15 %) for slab, sphere "

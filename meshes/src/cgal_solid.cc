@@ -2,6 +2,8 @@
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/input_error.hh"
 
+#include "mesh_3.hh"
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Labeled_mesh_domain_3.h>
 #include <CGAL/Mesh_complex_3_in_triangulation_3.h>
@@ -18,14 +20,12 @@
 namespace vtb {
 namespace {
 
-using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Surface = CGAL::Surface_mesh<K::Point_3>;
-namespace params = CGAL::parameters;
+using namespace mesh_3;
 
 /// A closed triangulated box surface with outward normals.
-Surface box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
-  Surface s;
-  std::array<Surface::Vertex_index, 8> v;
+Polyhedron box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  Polyhedron s;
+  std::array<Polyhedron::Vertex_index, 8> v;
   for (int c = 0; c < 8; ++c)
     v[static_cast<std::size_t>(c)] =
         s.add_vertex(K::Point_3(c & 1 ? hi.x() : lo.x(), c & 2 ? hi.y() : lo.y(), c & 4 ? hi.z() : lo.z()));
@@ -55,69 +55,16 @@ Surface box_surface(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
   return s;
 }
 
-/// Copies the cells of a complex into a Mesh3, numbering vertices in geometric order.
-template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
-  using Vh = typename C3t3::Triangulation::Vertex_handle;
-  std::map<Vh, int> id;
-  std::vector<Vh> verts;
-  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
-    for (int i = 0; i < 4; ++i)
-      if (id.emplace(c->vertex(i), 0).second) verts.push_back(c->vertex(i));
-  auto p = [](const Vh& v) {
-    const auto& w = v->point();
-    return Eigen::Vector3d(CGAL::to_double(w.x()), CGAL::to_double(w.y()), CGAL::to_double(w.z()));
-  };
-  std::sort(verts.begin(), verts.end(), [&](const Vh& a, const Vh& b) {
-    const Eigen::Vector3d pa = p(a), pb = p(b);
-    return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
-  });
-  Mesh3 m;
-  m.points.resize(3, static_cast<Eigen::Index>(verts.size()));
-  for (std::size_t i = 0; i < verts.size(); ++i) {
-    id[verts[i]] = static_cast<int>(i);
-    m.points.col(static_cast<Eigen::Index>(i)) = p(verts[i]);
-  }
-  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
-    m.cells.push_back({id[c->vertex(0)], id[c->vertex(1)], id[c->vertex(2)], id[c->vertex(3)]});
-  check_and_orient(m);
-  std::sort(m.cells.begin(), m.cells.end());
-  return m;
-}
-
-/// Groups of boundary facets selected by a predicate on the facet's vertices.
-template <typename Pred> void add_group(Mesh3& m, const std::string& name, Pred on) {
-  MeshGroup<3> g;
-  for (const auto& f : boundary_facets(m))
-    if (on(m.points.col(f[0])) && on(m.points.col(f[1])) && on(m.points.col(f[2]))) {
-      g.facets.push_back(f);
-      g.nodes.insert(g.nodes.end(), f.begin(), f.end());
-    }
-  std::sort(g.nodes.begin(), g.nodes.end());
-  g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
-  m.groups[name] = std::move(g);
-}
-
-template <typename Domain, typename Tr, typename C3t3>
-C3t3 run_mesh_3(const Domain& domain, double size, double feature_size) {
-  using Criteria = CGAL::Mesh_criteria_3<Tr>;
-  const Criteria criteria(params::edge_size = feature_size, params::facet_angle = 25.0, params::facet_size = size,
-                          params::facet_distance = size / 10, params::cell_radius_edge_ratio = 2.0,
-                          params::cell_size = size);
-  // No time limits anywhere: the result must be reproducible.
-  return CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_lloyd(), params::no_odt(),
-                                 params::perturb(params::sliver_bound = 10.0),
-                                 params::exude(params::sliver_bound = 10.0));
-}
-
-Mesh3 mesh_slab(double size, const Eigen::Vector3d& hi = Eigen::Vector3d(0.2, 0.05, 0.02)) {
-  using Domain = CGAL::Polyhedral_mesh_domain_with_features_3<K, Surface>;
+Mesh3 mesh_slab(double size, const std::vector<Refinement>& refine,
+                const Eigen::Vector3d& hi = Eigen::Vector3d(0.2, 0.05, 0.02)) {
+  using Domain = CGAL::Polyhedral_mesh_domain_with_features_3<K, Polyhedron>;
   using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
   using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr, Domain::Corner_index, Domain::Curve_index>;
   const Eigen::Vector3d lo(0, 0, 0);
-  const Surface s = box_surface(lo, hi);
+  const Polyhedron s = box_surface(lo, hi);
   Domain domain(s);
   domain.detect_features();
-  Mesh3 m = to_mesh(run_mesh_3<Domain, Tr, C3t3>(domain, size, size));
+  Mesh3 m = to_mesh(run_mesh_3<Domain, Tr, C3t3>(domain, size, refine));
   const double tol = 1e-9;
   const char* names[3][2] = {{"left", "right"}, {"bottom", "top"}, {"front", "back"}};
   for (int a = 0; a < 3; ++a) {
@@ -127,7 +74,7 @@ Mesh3 mesh_slab(double size, const Eigen::Vector3d& hi = Eigen::Vector3d(0.2, 0.
   return m;
 }
 
-Mesh3 mesh_sphere(double size) {
+Mesh3 mesh_sphere(double size, const std::vector<Refinement>& refine) {
   using Domain = CGAL::Labeled_mesh_domain_3<K>;
   using Tr = CGAL::Mesh_triangulation_3<Domain, CGAL::Default, CGAL::Sequential_tag>::type;
   using C3t3 = CGAL::Mesh_complex_3_in_triangulation_3<Tr>;
@@ -135,48 +82,50 @@ Mesh3 mesh_sphere(double size) {
   auto f = [R](const K::Point_3& p) { return (p.x() * p.x() + p.y() * p.y() + p.z() * p.z()) / (R * R) - 1.0; };
   const Domain domain = Domain::create_implicit_mesh_domain(f, K::Sphere_3(CGAL::ORIGIN, 1.21 * R * R),
                                                             params::relative_error_bound = 1e-8);
-  Mesh3 m = to_mesh(run_mesh_3<Domain, Tr, C3t3>(domain, size, size));
+  Mesh3 m = to_mesh(run_mesh_3<Domain, Tr, C3t3>(domain, size, refine));
   add_group(m, "surface", [](const Eigen::Vector3d&) { return true; });
   return m;
 }
 
 } // namespace
 
+double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refinement>& refine) {
+  double h = body;
+  for (const Refinement& r : refine)
+    h = std::min(h, r.size + kRefineGrowth * std::max(0.0, (x - r.center).norm() - r.radius));
+  return h;
+}
+
+std::string refinement_error(const Refinement& r) {
+  if (!r.center.allFinite()) return "center must be finite";
+  if (!(r.radius >= 0) || !std::isfinite(r.radius)) return "radius must be >= 0";
+  if (!(r.size > 0) || !std::isfinite(r.size)) return "size must be > 0";
+  return {};
+}
+
 namespace {
 
-/// Mesh_3 to about `nodes` nodes: a first guess of the element size from regular tetrahedra,
-/// then the count's s^-3 law to correct it; the closest of at most 8 tries, within 15 %.
-template <class Make> Mesh3 mesh_to_count(const std::string& what, double volume, int nodes, Make&& make) {
-  if (nodes < 50 || nodes > 500'000)
-    throw InputError(what + ": node count " + std::to_string(nodes) + " out of [50, 500000]");
-  double size = std::cbrt(volume * std::sqrt(2.0) / nodes) * 1.6;
-  Mesh3 best;
-  for (int it = 0; it < 8; ++it) {
-    Mesh3 m = make(size);
-    const double ratio = static_cast<double>(m.num_nodes()) / nodes;
-    if (best.num_nodes() == 0 || std::abs(m.num_nodes() - nodes) < std::abs(best.num_nodes() - nodes))
-      best = std::move(m);
-    if (std::abs(ratio - 1.0) <= 0.10) break;
-    size *= std::cbrt(ratio);
-  }
-  if (std::abs(static_cast<double>(best.num_nodes()) / nodes - 1.0) > 0.15)
-    throw InputError(what + ": could not reach about " + std::to_string(nodes) + " nodes (got " +
-                     std::to_string(best.num_nodes()) + ")");
-  best.source = "CGAL " + what + " (" + std::to_string(best.num_nodes()) + " nodes)";
-  return best;
+void check_refinements(const std::string& what, const std::vector<Refinement>& refine) {
+  for (std::size_t i = 0; i < refine.size(); ++i)
+    if (const std::string why = refinement_error(refine[i]); !why.empty())
+      throw InputError(what + ": refinement " + std::to_string(i) + ": " + why);
 }
 
 } // namespace
 
-Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes) {
+Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes, const std::vector<Refinement>& refine) {
   if (!(size.array() > 0).all()) throw InputError("box: the size must be > 0");
-  return mesh_to_count("box", size.prod(), nodes, [&](double h) { return mesh_slab(h, size); });
+  check_refinements("box", refine);
+  return mesh_to_count("box", size.prod(), nodes, [&](double h) { return mesh_slab(h, refine, size); });
 }
 
-Mesh3 mesh_solid(const std::string& shape, int nodes) {
+Mesh3 mesh_solid(const std::string& shape, int nodes, const std::vector<Refinement>& refine) {
   if (shape != "slab" && shape != "sphere") throw InputError("mesh_solid: shape must be slab or sphere, not " + shape);
+  check_refinements(shape, refine);
   const double volume = shape == "slab" ? 0.2 * 0.05 * 0.02 : 4.0 / 3.0 * 3.14159265358979 * 0.05 * 0.05 * 0.05;
-  return mesh_to_count(shape, volume, nodes, [&](double h) { return shape == "slab" ? mesh_slab(h) : mesh_sphere(h); });
+  return mesh_to_count(shape, volume, nodes,
+                       [&](double h) { return shape == "slab" ? mesh_slab(h, refine) : mesh_sphere(h, refine); });
 }
+
 
 } // namespace vtb

@@ -8,6 +8,7 @@
 #include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace vtb {
 
@@ -62,14 +63,48 @@ inline std::string hole_error(double radius, double shorter) {
 /// kMaxHoleRadius x the shorter side is an InputError.
 Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius = 0);
 
+/// Grading toward where a scene acts: the element size is `size` within `radius` of `center`
+/// and grows with distance beyond it at kRefineGrowth (m of size per m of distance) until it
+/// reaches the body's size. Several refinements take the smallest size at each point.
+struct Refinement {
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();
+  double radius = 0; ///< m, >= 0
+  double size = 0;   ///< m, > 0
+};
+
+/// How fast a refinement's size grows with distance beyond its radius (dimensionless): a
+/// neighbour's size differs from a cell's by at most about 40 % of the cell, so the grading
+/// keeps the slab's quality bounds (docs/meshes.md).
+inline constexpr double kRefineGrowth = 0.4;
+
+/// The element size at a point: `body` away from every refinement, graded toward each.
+double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refinement>& refine);
+
+/// Why a refinement is not usable (one phrase), or empty.
+std::string refinement_error(const Refinement& r);
+
 /// An unstructured box [0, size] meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %),
-/// sharp edges protected; groups left/right/bottom/top/front/back. Deterministic.
-Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes);
+/// sharp edges protected; groups left/right/bottom/top/front/back. Deterministic. With
+/// refinements the body's size is what the node count sets, the refinements' sizes are kept.
+Mesh3 mesh_box(const Eigen::Vector3d& size, int nodes, const std::vector<Refinement>& refine = {});
 
 /// 3D solids meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %): shape "slab"
 /// (0.2 x 0.05 x 0.02 box, sharp edges protected; groups left/right/bottom/top/front/back)
 /// or "sphere" (radius 0.05 at the origin; group "surface"). Cells have radius-edge ratio
 /// <= 2 and slivers are exuded (target dihedral >= 10 degrees). Deterministic.
-Mesh3 mesh_solid(const std::string& shape, int nodes);
+Mesh3 mesh_solid(const std::string& shape, int nodes, const std::vector<Refinement>& refine = {});
+
+struct Surface;
+
+/// The angle (degrees) between two faces' normals beyond which their common edge is a sharp
+/// feature that the mesh keeps (CGAL's detect_features).
+inline constexpr double kFeatureAngle = 60.0;
+
+/// The inside of a checked closed surface (surface.hh) meshed by CGAL Mesh_3 with the slab's
+/// criteria, sharp edges (kFeatureAngle) protected: to about `nodes` nodes (within 15 %) when
+/// nodes > 0, else at element size `size` (m). Groups: "surface" (every boundary facet) and
+/// "patch_K" for each patch that the sharp edges bound (K from 1). Deterministic.
+Mesh3 mesh_surface(const Surface& surface, int nodes, double size, const std::vector<Refinement>& refine = {},
+                   const std::string& name = "surface");
 
 } // namespace vtb

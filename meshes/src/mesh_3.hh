@@ -1,0 +1,117 @@
+#pragma once
+// Mesh_3's pipeline shared by the solids (cgal_solid.cc) and a user's surface (cgal_surface.cc):
+// the criteria (with a graded size field), the copy into a Mesh3, boundary groups, and the
+// node-count rule. Internal to vtb_mesh_generators.
+#include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/input_error.hh"
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Mesh_criteria_3.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/make_mesh_3.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+
+namespace vtb::mesh_3 {
+
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Polyhedron = CGAL::Surface_mesh<K::Point_3>;
+namespace params = CGAL::parameters;
+
+/// Copies the cells of a complex into a Mesh3, numbering vertices in geometric order.
+template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
+  using Vh = typename C3t3::Triangulation::Vertex_handle;
+  std::map<Vh, int> id;
+  std::vector<Vh> verts;
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
+    for (int i = 0; i < 4; ++i)
+      if (id.emplace(c->vertex(i), 0).second) verts.push_back(c->vertex(i));
+  auto p = [](const Vh& v) {
+    const auto& w = v->point();
+    return Eigen::Vector3d(CGAL::to_double(w.x()), CGAL::to_double(w.y()), CGAL::to_double(w.z()));
+  };
+  std::sort(verts.begin(), verts.end(), [&](const Vh& a, const Vh& b) {
+    const Eigen::Vector3d pa = p(a), pb = p(b);
+    return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
+  });
+  Mesh3 m;
+  m.points.resize(3, static_cast<Eigen::Index>(verts.size()));
+  for (std::size_t i = 0; i < verts.size(); ++i) {
+    id[verts[i]] = static_cast<int>(i);
+    m.points.col(static_cast<Eigen::Index>(i)) = p(verts[i]);
+  }
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
+    m.cells.push_back({id[c->vertex(0)], id[c->vertex(1)], id[c->vertex(2)], id[c->vertex(3)]});
+  check_and_orient(m);
+  std::sort(m.cells.begin(), m.cells.end());
+  return m;
+}
+
+/// Groups of boundary facets selected by a predicate on the facet's vertices.
+template <typename Pred> void add_group(Mesh3& m, const std::string& name, Pred on) {
+  MeshGroup<3> g;
+  for (const auto& f : boundary_facets(m))
+    if (on(m.points.col(f[0])) && on(m.points.col(f[1])) && on(m.points.col(f[2]))) {
+      g.facets.push_back(f);
+      g.nodes.insert(g.nodes.end(), f.begin(), f.end());
+    }
+  std::sort(g.nodes.begin(), g.nodes.end());
+  g.nodes.erase(std::unique(g.nodes.begin(), g.nodes.end()), g.nodes.end());
+  m.groups[name] = std::move(g);
+}
+
+/// The element size of Mesh_3's criteria as a field: the body's size graded toward the
+/// refinements (Mesh_3's MeshDomainField_3 signature).
+struct SizeField {
+  double body;
+  const std::vector<Refinement>* refine;
+  template <class P, class I> double operator()(const P& p, int, const I&) const {
+    return graded_size(Eigen::Vector3d(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())),
+                       body, *refine);
+  }
+};
+
+template <typename Domain, typename Tr, typename C3t3>
+C3t3 run_mesh_3(const Domain& domain, double size, const std::vector<Refinement>& refine) {
+  using Criteria = CGAL::Mesh_criteria_3<Tr>;
+  auto make = [&](const Criteria& criteria) {
+    // No time limits anywhere: the result must be reproducible.
+    return CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_lloyd(), params::no_odt(),
+                                   params::perturb(params::sliver_bound = 10.0),
+                                   params::exude(params::sliver_bound = 10.0));
+  };
+  if (refine.empty())
+    return make(Criteria(params::edge_size = size, params::facet_angle = 25.0, params::facet_size = size,
+                         params::facet_distance = size / 10, params::cell_radius_edge_ratio = 2.0,
+                         params::cell_size = size));
+  const SizeField field{size, &refine};
+  return make(Criteria(params::edge_size = field, params::facet_angle = 25.0, params::facet_size = field,
+                       params::facet_distance = size / 10, params::cell_radius_edge_ratio = 2.0,
+                       params::cell_size = field));
+}
+
+/// Mesh_3 to about `nodes` nodes: a first guess of the element size from regular tetrahedra,
+/// then the count's s^-3 law to correct it; the closest of at most 8 tries, within 15 %.
+template <class Make> Mesh3 mesh_to_count(const std::string& what, double volume, int nodes, Make&& make) {
+  if (nodes < 50 || nodes > 500'000)
+    throw InputError(what + ": node count " + std::to_string(nodes) + " out of [50, 500000]");
+  double size = std::cbrt(volume * std::sqrt(2.0) / nodes) * 1.6;
+  Mesh3 best;
+  for (int it = 0; it < 8; ++it) {
+    Mesh3 m = make(size);
+    const double ratio = static_cast<double>(m.num_nodes()) / nodes;
+    if (best.num_nodes() == 0 || std::abs(m.num_nodes() - nodes) < std::abs(best.num_nodes() - nodes))
+      best = std::move(m);
+    if (std::abs(ratio - 1.0) <= 0.10) break;
+    size *= std::cbrt(ratio);
+  }
+  if (std::abs(static_cast<double>(best.num_nodes()) / nodes - 1.0) > 0.15)
+    throw InputError(what + ": could not reach about " + std::to_string(nodes) + " nodes (got " +
+                     std::to_string(best.num_nodes()) + ")");
+  best.source = "CGAL " + what + " (" + std::to_string(best.num_nodes()) + " nodes)";
+  return best;
+}
+
+} // namespace vtb::mesh_3
