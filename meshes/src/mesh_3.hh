@@ -5,6 +5,8 @@
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/input_error.hh"
 
+#include <Eigen/LU>
+
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Mesh_criteria_3.h>
 #include <CGAL/Surface_mesh.h>
@@ -20,18 +22,31 @@ using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Polyhedron = CGAL::Surface_mesh<K::Point_3>;
 namespace params = CGAL::parameters;
 
-/// Copies the cells of a complex into a Mesh3, numbering vertices in geometric order.
+/// Copies the cells of a complex into a Mesh3, numbering vertices in geometric order. A cell
+/// of zero volume (four coplanar vertices, which Mesh_3 can leave on a flat face beside a
+/// protected sharp edge where a refinement meets it) is dropped: it holds no material.
 template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
   using Vh = typename C3t3::Triangulation::Vertex_handle;
-  std::map<Vh, int> id;
-  std::vector<Vh> verts;
-  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
-    for (int i = 0; i < 4; ++i)
-      if (id.emplace(c->vertex(i), 0).second) verts.push_back(c->vertex(i));
   auto p = [](const Vh& v) {
     const auto& w = v->point();
     return Eigen::Vector3d(CGAL::to_double(w.x()), CGAL::to_double(w.y()), CGAL::to_double(w.z()));
   };
+  std::vector<std::array<Vh, 4>> cells;
+  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c) {
+    const std::array<Vh, 4> h{c->vertex(0), c->vertex(1), c->vertex(2), c->vertex(3)};
+    Eigen::Matrix3d e;
+    double longest = 0;
+    for (int k = 0; k < 3; ++k) {
+      e.col(k) = p(h[static_cast<std::size_t>(k + 1)]) - p(h[0]);
+      longest = std::max(longest, e.col(k).norm());
+    }
+    if (std::abs(e.determinant()) > 1e-9 * longest * longest * longest) cells.push_back(h);
+  }
+  std::map<Vh, int> id;
+  std::vector<Vh> verts;
+  for (const auto& c : cells)
+    for (const Vh& v : c)
+      if (id.emplace(v, 0).second) verts.push_back(v);
   std::sort(verts.begin(), verts.end(), [&](const Vh& a, const Vh& b) {
     const Eigen::Vector3d pa = p(a), pb = p(b);
     return std::lexicographical_compare(pa.data(), pa.data() + 3, pb.data(), pb.data() + 3);
@@ -42,8 +57,7 @@ template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
     id[verts[i]] = static_cast<int>(i);
     m.points.col(static_cast<Eigen::Index>(i)) = p(verts[i]);
   }
-  for (auto c = c3t3.cells_in_complex_begin(); c != c3t3.cells_in_complex_end(); ++c)
-    m.cells.push_back({id[c->vertex(0)], id[c->vertex(1)], id[c->vertex(2)], id[c->vertex(3)]});
+  for (const auto& c : cells) m.cells.push_back({id[c[0]], id[c[1]], id[c[2]], id[c[3]]});
   check_and_orient(m);
   std::sort(m.cells.begin(), m.cells.end());
   return m;

@@ -232,8 +232,8 @@ Surface parse_surface(std::string_view content, std::string_view format, const s
   prescan_surface(content, format, src);
   std::vector<Point> points;
   Polygons polygons;
-  if (!read_soup(content, format, points, polygons) && polygons.empty())
-    throw InputError(src + ": not a readable " + std::string(format.substr(1)) + " surface");
+  if (!read_soup(content, format, points, polygons))
+    throw InputError(src + ": not a readable " + std::string(format.substr(1)) + " surface (CGAL's reader failed)");
   check_faces(points, polygons, src);
   PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
   check_faces(points, polygons, src); // merging may have made a face degenerate

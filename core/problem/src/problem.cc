@@ -3,6 +3,7 @@
 #include "vtb/meshes/generate.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/surface.hh"
 #endif
 #include "vtb/meshes/msh_io.hh"
 
@@ -91,12 +92,15 @@ AnyMesh load_mesh(const Scene& scene) {
 #ifdef VTB_HAVE_CGAL_MESHERS
     try {
       if (m.shape == "rectangle") return mesh_rectangle(m.size, m.nodes, m.hole);
-      return mesh_box(m.size, m.nodes);
+      if (m.shape == "surface")
+        return mesh_surface(read_surface(m.file, m.scale), m.nodes, m.cell_size, m.refine, m.file.filename().string());
+      return mesh_box(m.size, m.nodes, m.refine);
     } catch (const InputError& e) {
       throw InputError(scene.file.string() + ": [mesh].generate: " + e.what());
     }
 #else
-    throw InputError(scene.file.string() + ": [mesh].generate.mesher = \"cgal\": this build has no CGAL meshers");
+    throw InputError(scene.file.string() + ": [mesh].generate (shape \"" + m.shape +
+                     "\", CGAL): this build has no CGAL meshers");
 #endif
   }
   if (m.shape == "rectangle") return generate_rectangle(m.size, m.divisions);

@@ -81,6 +81,71 @@ void read_scene_table(const TableReader& top, const std::string& name, Scene& s)
   }
 }
 
+/// `refine = { center, radius, size }` or an array of them (cgal_generate.hh, Refinement).
+std::vector<Refinement> read_refine(const TableReader& gr, const std::string& name) {
+  std::vector<const toml::table*> list;
+  if (!gr.has("refine")) return {};
+  if (gr.node("refine")->is_table())
+    list.push_back(gr.table("refine"));
+  else
+    list = gr.tables("refine");
+  if (list.empty()) gr.fail("refine", "must be a table { center, radius, size } or an array of them");
+  std::vector<Refinement> out;
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    const TableReader rr(*list[i], "[mesh].generate.refine[" + std::to_string(i) + "]", name,
+                         {"center", "radius", "size"});
+    Refinement ref;
+    ref.center = rr.vector("center", 3, 3);
+    ref.radius = rr.number("radius", std::nullopt, non_negative);
+    ref.size = rr.number("size", std::nullopt, positive);
+    out.push_back(ref);
+  }
+  return out;
+}
+
+/// shape = "surface": a closed surface file meshed by CGAL (docs/meshes.md).
+void read_surface_generate(const TableReader& gr, const std::filesystem::path& base_dir, MeshDesc& m) {
+  for (const char* key : {"size", "divisions", "hole"})
+    if (gr.has(key)) gr.fail(key, "is not for shape = \"surface\" (give nodes or cell_size)");
+  m.mesher = gr.string("mesher", "cgal", {"cgal"});
+  m.file = base_dir / gr.string("file", std::nullopt);
+  if (gr.has("nodes") == gr.has("cell_size")) gr.fail("", "shape = \"surface\" needs exactly one of nodes, cell_size");
+  if (gr.has("nodes")) m.nodes = gr.integer("nodes", std::nullopt, 50, 500'000);
+  if (gr.has("cell_size")) m.cell_size = gr.number("cell_size", std::nullopt, positive);
+  m.scale = gr.number("scale", 1.0, positive);
+  m.refine = read_refine(gr, gr.file());
+}
+
+/// shape = "rectangle" | "box": structured, or unstructured by CGAL.
+void read_shape_generate(const TableReader& gr, MeshDesc& m) {
+  for (const char* key : {"file", "cell_size", "scale"})
+    if (gr.has(key)) gr.fail(key, "is for shape = \"surface\"");
+  const std::size_t d = m.shape == "rectangle" ? 2 : 3;
+  m.size = gr.vector("size", d, d);
+  if ((m.size.array() <= 0).any()) gr.fail("size", "entries must be > 0");
+  m.mesher = gr.string("mesher", "structured", {"structured", "cgal"});
+  if (gr.has("refine") && !(d == 3 && m.mesher == "cgal"))
+    gr.fail("refine", "is for a CGAL box (mesher = \"cgal\") or a surface");
+  if (m.mesher == "cgal") {
+    if (gr.has("divisions")) gr.fail("divisions", "is for mesher = \"structured\"; a CGAL mesh takes nodes");
+    m.nodes = gr.integer("nodes", std::nullopt, d == 2 ? 4 : 50, 500'000);
+    m.refine = read_refine(gr, gr.file());
+    if (gr.has("hole")) {
+      if (d != 2) gr.fail("hole", "is for shape = \"rectangle\" (a plate with a hole)");
+      m.hole = gr.number("hole", std::nullopt, positive);
+      if (const std::string why = hole_error(m.hole, m.size.minCoeff()); !why.empty()) gr.fail("hole", why);
+    }
+  } else {
+    if (gr.has("hole")) gr.fail("hole", "is for mesher = \"cgal\" (a structured mesh has no hole)");
+    if (gr.has("nodes")) gr.fail("nodes", "is for mesher = \"cgal\"; a structured mesh takes divisions");
+    const Eigen::VectorXd div = gr.vector("divisions", d, d);
+    // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).
+    if ((div.array() != div.array().round()).any() || (div.array() < 1).any() || (div.array() > 2000).any())
+      gr.fail("divisions", "entries must be whole numbers in [1, 2000]");
+    m.divisions = div.cast<int>();
+  }
+}
+
 void read_mesh(const TableReader& top, const std::string& name, const std::filesystem::path& base_dir, Scene& s) {
   const toml::table* t = top.table("mesh");
   if (!t) top.fail("mesh", "missing (required table)");
@@ -91,30 +156,14 @@ void read_mesh(const TableReader& top, const std::string& name, const std::files
       s.mesh.file = base_dir / r.string("file", std::nullopt);
     } else {
       const toml::table* g = r.table("generate");
-      const TableReader gr(*g, "[mesh].generate", name, {"shape", "size", "divisions", "mesher", "nodes", "hole"});
-      s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box"});
-      const std::size_t d = s.mesh.shape == "rectangle" ? 2 : 3;
-      s.mesh.size = gr.vector("size", d, d);
-      if ((s.mesh.size.array() <= 0).any()) gr.fail("size", "entries must be > 0");
-      s.mesh.mesher = gr.string("mesher", "structured", {"structured", "cgal"});
-      if (s.mesh.mesher == "cgal") {
-        if (gr.has("divisions")) gr.fail("divisions", "is for mesher = \"structured\"; a CGAL mesh takes nodes");
-        s.mesh.nodes = gr.integer("nodes", std::nullopt, d == 2 ? 4 : 50, 500'000);
-        if (gr.has("hole")) {
-          if (d != 2) gr.fail("hole", "is for shape = \"rectangle\" (a plate with a hole)");
-          s.mesh.hole = gr.number("hole", std::nullopt, positive);
-          if (const std::string why = hole_error(s.mesh.hole, s.mesh.size.minCoeff()); !why.empty())
-            gr.fail("hole", why);
-        }
-      } else {
-        if (gr.has("hole")) gr.fail("hole", "is for mesher = \"cgal\" (a structured mesh has no hole)");
-        if (gr.has("nodes")) gr.fail("nodes", "is for mesher = \"cgal\"; a structured mesh takes divisions");
-        const Eigen::VectorXd div = gr.vector("divisions", d, d);
-        // Checked before the cast: a double beyond int's range does not convert (found by fuzzing).
-        if ((div.array() != div.array().round()).any() || (div.array() < 1).any() || (div.array() > 2000).any())
-          gr.fail("divisions", "entries must be whole numbers in [1, 2000]");
-        s.mesh.divisions = div.cast<int>();
-      }
+      const TableReader gr(*g, "[mesh].generate", name,
+                           {"shape", "size", "divisions", "mesher", "nodes", "hole", "file", "cell_size", "scale",
+                            "refine"});
+      s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box", "surface"});
+      if (s.mesh.shape == "surface")
+        read_surface_generate(gr, base_dir, s.mesh);
+      else
+        read_shape_generate(gr, s.mesh);
     }
   }
 }

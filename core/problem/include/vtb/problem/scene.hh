@@ -5,6 +5,7 @@
 /// whose length depends on the mesh dimension are checked when the mesh is known
 /// (see model_builder.hh).
 
+#include "vtb/meshes/cgal_generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/problem/solver_names.hh"
 
@@ -62,13 +63,16 @@ struct MaterialDesc {
 };
 
 struct MeshDesc {
-  std::filesystem::path file; ///< resolved against the scene's folder
-  std::string shape;          ///< "rectangle" | "box" when generated
+  std::filesystem::path file; ///< resolved against the scene's folder: a .msh, or the surface (shape "surface")
+  std::string shape;          ///< "rectangle" | "box" | "surface" when generated
   Eigen::VectorXd size;
   Eigen::VectorXi divisions;         ///< structured
   std::string mesher = "structured"; ///< "structured" | "cgal" (unstructured, about `nodes` nodes)
-  int nodes = 0;                     ///< cgal
+  int nodes = 0;                     ///< cgal; 0 for a surface meshed at `cell_size`
   double hole = 0;                   ///< m, radius of a central hole (cgal rectangle); 0: none
+  double cell_size = 0;              ///< m, a surface's element size (when no nodes)
+  double scale = 1;                  ///< multiplies a surface's coordinates
+  std::vector<Refinement> refine;    ///< grading toward points (cgal box, surface)
   bool generated() const { return !shape.empty(); }
 };
 
