@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Bounded fuzzing (libFuzzer, clang, ASan + UBSan) of the .msh reader and the scene parser,
+# Bounded fuzzing (libFuzzer, clang, ASan + UBSan) of the .msh reader, the scene parser and the surface readers,
 # starting from tests/fuzz/corpus. Any crash, leak, sanitizer report or timeout fails it.
 # By default the run is bounded by a fixed number of inputs per target from a fixed seed
 # (about 45 s each here; libFuzzer's corpus evolution still varies slightly between runs,
@@ -10,13 +10,13 @@ set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${VTB_FUZZ_BUILD:-$root/build-fuzz}
 seconds=${FUZZ_SECONDS:-}
-declare -A runs=([msh]=3000000 [scene]=800000)
+declare -A runs=([msh]=3000000 [scene]=800000 [surface]=800000)
 if [ ! -f "$build/CMakeCache.txt" ]; then
   cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
     -DVTB_FUZZ=ON -DVTB_WITH_CGAL=OFF -DVTB_BUILD_TESTS=OFF -DVTB_BUILD_BENCHMARKS=OFF >/dev/null
 fi
-cmake --build "$build" -j "$(nproc)" --target fuzz_msh fuzz_scene
-for target in msh scene; do
+cmake --build "$build" -j "$(nproc)" --target fuzz_msh fuzz_scene fuzz_surface
+for target in msh scene surface; do
   work=$(mktemp -d)
   cp "$root/tests/fuzz/corpus/$target"/* "$work/"
   if [ -n "$seconds" ]; then bound=(-max_total_time="$seconds"); else bound=(-seed=20261122 -runs="${runs[$target]}"); fi

@@ -93,6 +93,10 @@ void prescan_ply(std::string_view s, const std::string& src) {
   const std::size_t end = s.find("end_header");
   if (s.substr(0, 3) != "ply" || end == std::string_view::npos) throw InputError(src + ": not a PLY file (no ply ... end_header)");
   const bool ascii = s.substr(0, end).find("format ascii") != std::string_view::npos;
+  // CGAL's PLY reader takes a property before any element as the last element's (of none).
+  if (const std::size_t prop = s.find("property"), elem = s.find("element ");
+      prop < end && (elem == std::string_view::npos || prop < elem))
+    throw InputError(src + ": PLY header has a property before any element");
   std::size_t pos = 0;
   unsigned long long need = 0;
   while ((pos = s.find("element ", pos)) != std::string_view::npos && pos < end) {
@@ -234,6 +238,18 @@ Surface parse_surface(std::string_view content, std::string_view format, const s
   Polygons polygons;
   if (!read_soup(content, format, points, polygons))
     throw InputError(src + ": not a readable " + std::string(format.substr(1)) + " surface (CGAL's reader failed)");
+  std::vector<Eigen::Vector3d> p;
+  p.reserve(points.size());
+  for (const Point& q : points) p.emplace_back(q.x(), q.y(), q.z());
+  return checked_surface(std::move(p), std::move(polygons), src, scale);
+}
+
+Surface checked_surface(std::vector<Eigen::Vector3d> in_points, std::vector<std::vector<std::size_t>> polygons,
+                        const std::string& src, double scale) {
+  if (!(scale > 0) || !std::isfinite(scale)) throw InputError(src + ": the scale must be > 0");
+  std::vector<Point> points;
+  points.reserve(in_points.size());
+  for (const auto& q : in_points) points.emplace_back(q.x(), q.y(), q.z());
   check_faces(points, polygons, src);
   PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
   check_faces(points, polygons, src); // merging may have made a face degenerate

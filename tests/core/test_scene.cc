@@ -1,9 +1,11 @@
 // Scene files: every bad input is refused with one line naming the file, the key and the problem.
+#include "support/fresh_dir.hh"
 #include "support/small_models.hh"
 #include "vtb/springs/model.hh"
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <ostream>
 
 namespace vtb {
@@ -326,6 +328,64 @@ TEST(Scene, AnUnstructuredRectangleAndBoxComeFromCgal) {
   EXPECT_NEAR(volume, 0.1 * 0.04 * 0.03, 1e-12 * 0.1 * 0.04 * 0.03);
   for (const char* g : {"left", "right", "bottom", "top", "front", "back"})
     EXPECT_GE(box.groups.at(g).nodes.size(), 3u) << g;
+}
+
+/// A scene on the example bean (meshes/data/bean.off) with the given [mesh] generate's extra keys.
+std::string bean_scene(const std::string& keys) {
+  return "[scene]\nduration = 0.01\noutput_interval = 0.01\n[mesh]\n"
+         "generate = { shape = \"surface\", file = \"bean.off\"" +
+         keys +
+         " }\n[material]\nyoung_modulus = 2.0e4\npoisson_ratio = 0.4\ndensity = 1000.0\n"
+         "[[fix]]\nbox = [[-0.04, -0.02, 0.0], [0.04, 0.03, 0.0041]]\n[[load]]\n"
+         "disc = { center = [0.0, 0.008, 0.024], radius = 0.004 }\ntotal_force = [0.0, 0.0, -0.05]\n";
+}
+
+TEST(Scene, ASurfaceIsMeshedFromTheScenesFolderAndGradedWhereAsked) {
+  const std::filesystem::path data = std::filesystem::path(VTB_SOURCE_DIR) / "meshes" / "data";
+  const Scene s = parse_scene(bean_scene(", nodes = 600"), "bean.toml", data);
+  EXPECT_EQ(s.mesh.file, data / "bean.off") << "the file is relative to the scene's folder";
+  const Mesh3 m = std::get<Mesh3>(load_mesh(s));
+  EXPECT_NEAR(m.num_nodes(), 600, 0.15 * 600);
+  EXPECT_GT(m.groups.at("surface").facets.size(), 100u);
+  EXPECT_NO_THROW(build_model<3>(s, m)) << "the fix box and the disc find the flat underside and the top";
+  const Scene g = parse_scene(bean_scene(", cell_size = 0.006, refine = [{ center = [0.0, 0.008, 0.024], "
+                                         "radius = 0.004, size = 0.0015 }]"),
+                              "bean.toml", data);
+  ASSERT_EQ(g.mesh.refine.size(), 1u);
+  EXPECT_EQ(g.mesh.refine[0].size, 0.0015);
+  const Mesh3 graded = std::get<Mesh3>(load_mesh(g));
+  const Mesh3 coarse = std::get<Mesh3>(load_mesh(parse_scene(bean_scene(", cell_size = 0.006"), "bean.toml", data)));
+  EXPECT_GT(graded.num_nodes(), coarse.num_nodes()) << "the refinement adds nodes under the load";
+  const std::vector<std::pair<std::string, std::string>> bad{
+      {", nodes = 600, cell_size = 0.004", "needs exactly one of nodes, cell_size"},
+      {"", "needs exactly one of nodes, cell_size"},
+      {", nodes = 600, size = [0.1, 0.1, 0.1]", "[mesh].generate.size: is not for shape = \"surface\""},
+      {", nodes = 600, mesher = \"structured\"", "must be one of cgal"},
+      {", nodes = 600, scale = 0.0", "[mesh].generate.scale: = 0: must be > 0"},
+      {", nodes = 600, refine = { center = [0.0, 0.0], radius = 0.01, size = 0.001 }", "refine[0].center"},
+      {", nodes = 600, refine = { center = [0.0, 0.0, 0.0], radius = 0.01, size = 0.0 }", "refine[0].size"},
+      {", nodes = 600, refine = { centre = [0.0, 0.0, 0.0], radius = 0.01, size = 0.001 }", "did you mean 'center'"},
+      {", nodes = 600, refine = 3", "[mesh].generate.refine"}};
+  for (const auto& [keys, expect] : bad) {
+    try {
+      load_mesh(parse_scene(bean_scene(keys), "bean.toml", data));
+      ADD_FAILURE() << keys << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(expect), std::string::npos) << keys << ": " << e.what();
+      EXPECT_NE(std::string(e.what()).find("bean.toml"), std::string::npos) << e.what();
+    }
+  }
+  // A broken surface: the scene file, the key and the surface's own one line.
+  const test::FreshDir dir;
+  std::ofstream(dir / "bean.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  try {
+    load_mesh(parse_scene(bean_scene(", nodes = 600"), "bean.toml", dir.path()));
+    ADD_FAILURE() << "an open surface was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("[mesh].generate: " + (dir / "bean.off").string() + ": not closed"),
+              std::string::npos)
+        << e.what();
+  }
 }
 #endif
 

@@ -104,6 +104,23 @@ check "haptics refuses a bad fault" '[ $rc -eq 1 ] && grep -q "stall@T or nan@T"
 "$vtb" mesh generate rectangle --size 0.2 0.05 --divisions 4 2 -o "$work/r.msh" > /dev/null; rc=$?
 check "mesh generate + info" '[ $rc -eq 0 ] && "$vtb" mesh info "$work/r.msh" | grep -q "nodes: 15"'
 
+# A user's surface (docs/meshes.md): a good one meshes and lists its groups; each bad one exits 1
+# with one line naming the file and the fault, and writes nothing.
+"$vtb" mesh generate surface "$src/meshes/data/bean.off" --nodes 600 -o "$work/bean.msh" > /dev/null; rc=$?
+check "mesh generate surface + info lists the surface group" '[ $rc -eq 0 ] && "$vtb" mesh info "$work/bean.msh" | grep -q "^group surface: "'
+cube_v='0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n'
+cube_f='3 0 2 1\n3 1 2 3\n3 4 5 6\n3 5 7 6\n3 0 1 4\n3 1 5 4\n3 2 6 3\n3 3 6 7\n3 0 4 2\n3 2 4 6\n3 1 3 5\n'
+printf "OFF\n8 11 0\n${cube_v}${cube_f}" > "$work/open.off"   # 11 of the cube's 12 faces
+printf "OFF\n16 24 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n.5 .5 .5\n1.5 .5 .5\n.5 1.5 .5\n1.5 1.5 .5\n.5 .5 1.5\n1.5 .5 1.5\n.5 1.5 1.5\n1.5 1.5 1.5\n${cube_f}3 3 7 5\n3 8 10 9\n3 9 10 11\n3 12 13 14\n3 13 15 14\n3 8 9 12\n3 9 13 12\n3 10 14 11\n3 11 14 15\n3 8 12 10\n3 10 12 14\n3 9 11 13\n3 11 15 13\n" > "$work/cross.off"
+printf "OFF\n16 24 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n1 1 0\n2 1 0\n1 2 0\n2 2 0\n1 1 1\n2 1 1\n1 2 1\n2 2 1\n${cube_f}3 3 7 5\n3 8 10 9\n3 9 10 11\n3 12 13 14\n3 13 15 14\n3 8 9 12\n3 9 13 12\n3 10 14 11\n3 11 14 15\n3 8 12 10\n3 10 12 14\n3 9 11 13\n3 11 15 13\n" > "$work/edge.off"
+: > "$work/empty.stl"
+{ head -c 80 /dev/zero; printf '\x64\x00\x00\x00'; head -c 700 /dev/zero; } > "$work/cut.stl"   # 100 triangles declared, 14 present
+for bad in open:not\ closed cross:self-intersecting edge:not\ manifold empty:empty cut:truncated; do
+  name=${bad%%:*}; what=${bad#*:}; file=$(ls "$work/$name".*)
+  "$vtb" mesh generate surface "$file" --nodes 600 -o "$work/bad_$name.msh" > /dev/null 2> "$work/err"; rc=$?
+  check "a surface $what: exit 1, one line naming it, nothing written" '[ $rc -eq 1 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "$file: .*$what" "$work/err" && ! ls "$work" | grep -q "bad_$name"'
+done
+
 "$vtb" view --help >/dev/null; check "vtb view --help" '[ $? -eq 0 ]'
 env -u DISPLAY -u WAYLAND_DISPLAY "$vtb" view "$src/experiments/scenes/plate_step.toml" --frames 2 --screenshot "$work/v.png" 2> "$work/err"; rc=$?
 check "view without a display: exit 3, one line, no picture" '[ $rc -eq 3 ] && [ $(wc -l < "$work/err") -eq 1 ] && grep -q "xvfb-run" "$work/err" && [ ! -e "$work/v.png" ]'

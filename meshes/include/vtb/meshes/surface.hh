@@ -38,6 +38,11 @@ void prescan_surface(std::string_view content, std::string_view format, const st
 /// Coordinates are multiplied by `scale`. Throws InputError "SRC: ..." naming the fault.
 Surface parse_surface(std::string_view content, std::string_view format, const std::string& src, double scale = 1);
 
+/// The checks and orientation of parse_surface on a polygon soup (what a reader gave). Throws
+/// InputError "SRC: ...".
+Surface checked_surface(std::vector<Eigen::Vector3d> points, std::vector<std::vector<std::size_t>> polygons,
+                        const std::string& src, double scale = 1);
+
 /// Reads FILE (by its extension) through parse_surface in an isolated child process (8 s limit);
 /// prints a warning on stderr when faces were reoriented.
 Surface read_surface(const std::filesystem::path& file, double scale = 1);
