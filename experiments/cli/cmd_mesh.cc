@@ -105,7 +105,8 @@ void generate_mesh(const MeshOpts& o) {
   const std::vector<Refinement> refine = refinements(o);
   if (!o.surface.empty() && o.shape != "surface")
     throw InputError("vtb mesh generate " + o.shape + ": a FILE is for shape surface");
-  if (o.scale != 1 && o.shape != "surface") throw InputError("vtb mesh generate " + o.shape + ": --scale is for shape surface");
+  if (o.scale != 1 && o.shape != "surface")
+    throw InputError("vtb mesh generate " + o.shape + ": --scale is for shape surface");
   if (!refine.empty() && o.shape != "surface" && o.shape != "slab" && o.shape != "sphere" &&
       !(o.shape == "box" && o.nodes > 0))
     throw InputError("vtb mesh generate " + o.shape + ": refinement is for surface, slab, sphere and a CGAL box");

@@ -127,5 +127,4 @@ Mesh3 mesh_solid(const std::string& shape, int nodes, const std::vector<Refineme
                        [&](double h) { return shape == "slab" ? mesh_slab(h, refine) : mesh_sphere(h, refine); });
 }
 
-
 } // namespace vtb

@@ -54,7 +54,8 @@ Mesh3 with_patches(const C3t3& c3t3) {
     std::array<int, 3> ids{facet[0], facet[1], facet[2]};
     std::sort(ids.begin(), ids.end());
     const auto it = patch.find(ids);
-    for (const std::string& name : {std::string("surface"), "patch_" + std::to_string(it == patch.end() ? 0 : it->second)}) {
+    for (const std::string& name :
+         {std::string("surface"), "patch_" + std::to_string(it == patch.end() ? 0 : it->second)}) {
       auto& g = groups[name];
       g.facets.push_back(facet);
       g.nodes.insert(g.nodes.end(), facet.begin(), facet.end());

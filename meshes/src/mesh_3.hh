@@ -82,8 +82,8 @@ struct SizeField {
   double body;
   const std::vector<Refinement>* refine;
   template <class P, class I> double operator()(const P& p, int, const I&) const {
-    return graded_size(Eigen::Vector3d(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())),
-                       body, *refine);
+    return graded_size(Eigen::Vector3d(CGAL::to_double(p.x()), CGAL::to_double(p.y()), CGAL::to_double(p.z())), body,
+                       *refine);
   }
 };
 

@@ -10,7 +10,6 @@
 
 #include "gmsh_backend.hh"
 
-
 #include <algorithm>
 #include <chrono>
 #include <fstream>

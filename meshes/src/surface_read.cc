@@ -78,7 +78,8 @@ void check_fits(unsigned long long need, std::size_t size, const std::string& sr
 
 void prescan_off(std::string_view s, const std::string& src) {
   const auto t = header_tokens(s, 4);
-  if (t.empty() || t[0].find("OFF") == std::string_view::npos) throw InputError(src + ": not an OFF file (no OFF header)");
+  if (t.empty() || t[0].find("OFF") == std::string_view::npos)
+    throw InputError(src + ": not an OFF file (no OFF header)");
   if (t.size() < 3) throw InputError(src + ": OFF header without vertex and face counts");
   if (t[1] == "BINARY") throw InputError(src + ": binary OFF is not read (ASCII OFF, STL, OBJ or PLY)");
   const unsigned long long nv = as_count(t[1], src, "the OFF vertex count");
@@ -91,7 +92,8 @@ void prescan_off(std::string_view s, const std::string& src) {
 
 void prescan_ply(std::string_view s, const std::string& src) {
   const std::size_t end = s.find("end_header");
-  if (s.substr(0, 3) != "ply" || end == std::string_view::npos) throw InputError(src + ": not a PLY file (no ply ... end_header)");
+  if (s.substr(0, 3) != "ply" || end == std::string_view::npos)
+    throw InputError(src + ": not a PLY file (no ply ... end_header)");
   const bool ascii = s.substr(0, end).find("format ascii") != std::string_view::npos;
   // CGAL's PLY reader takes a property before any element as the last element's (of none).
   if (const std::size_t prop = s.find("property"), elem = s.find("element ");
@@ -151,8 +153,9 @@ void check_faces(const std::vector<Point>& points, const Polygons& polygons, con
     const std::string face = "face " + std::to_string(f);
     if (poly.size() < 3) throw InputError(src + ": " + face + " has fewer than 3 vertices");
     for (std::size_t v : poly)
-      if (v >= points.size()) throw InputError(src + ": " + face + " names vertex " + std::to_string(v) + " of " +
-                                               std::to_string(points.size()));
+      if (v >= points.size())
+        throw InputError(src + ": " + face + " names vertex " + std::to_string(v) + " of " +
+                         std::to_string(points.size()));
     std::vector<std::size_t> sorted = poly;
     std::sort(sorted.begin(), sorted.end());
     if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
@@ -160,7 +163,8 @@ void check_faces(const std::vector<Point>& points, const Polygons& polygons, con
     // The polygon's area vector (Newell): zero for a collinear face.
     K::Vector_3 area(0, 0, 0);
     for (std::size_t i = 0; i < poly.size(); ++i)
-      area = area + CGAL::cross_product(points[poly[i]] - CGAL::ORIGIN, points[poly[(i + 1) % poly.size()]] - CGAL::ORIGIN);
+      area = area +
+             CGAL::cross_product(points[poly[i]] - CGAL::ORIGIN, points[poly[(i + 1) % poly.size()]] - CGAL::ORIGIN);
     if (area.squared_length() <= 1e-24 * diag2 * diag2)
       throw InputError(src + ": degenerate " + face + " (zero area) at " + where(points[poly[0]]));
   }
@@ -293,7 +297,8 @@ Surface checked_surface(std::vector<Eigen::Vector3d> in_points, std::vector<std:
 Surface read_surface(const std::filesystem::path& file, double scale) {
   const std::string src = file.string();
   std::string ext = file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (std::find(kSurfaceFormats.begin(), kSurfaceFormats.end(), ext) == kSurfaceFormats.end())
     throw InputError(src + ": unknown surface format '" + ext + "' (.off, .stl, .obj or .ply)");
   std::error_code ec;

@@ -467,6 +467,34 @@ TEST(Contact3D, TreeFollowsTheDeformedBody) {
   EXPECT_TRUE(tree.inside({0.029, 0.01, 0.01})) << "a non-finite shape is ignored";
 }
 
+TEST(Contact3D, ThePhysicsBuildsTheTreeTheServoAdopts) {
+  // In real time the physics' thread builds the next tree (prepare) once a node has moved half
+  // the margin, and the servo adopts it at its next refit without a build of its own; while an
+  // offer waits, the physics leaves it alone (the servo may be adopting it).
+  const Mesh3 m = generate_box({0.02, 0.02, 0.02}, {4, 4, 4});
+  SurfaceTree tree(m);
+  Nodal<3> x = m.points;
+  x.row(0).array() += 0.4 * tree.margin();
+  tree.prepare(x);
+  EXPECT_EQ(tree.prepared(), 0) << "under half the margin the tree in use holds";
+  x.row(0).array() += 0.2 * tree.margin();
+  tree.prepare(x);
+  EXPECT_EQ(tree.prepared(), 1);
+  tree.prepare(x + Nodal<3>::Constant(3, x.cols(), tree.margin()));
+  EXPECT_EQ(tree.prepared(), 1) << "an offer not yet adopted is not rebuilt";
+  // The servo moves on by a full margin more: its old tree would need a build, the adopted one
+  // (built at +0.6 margin) holds.
+  x.row(0).array() += 0.9 * tree.margin();
+  tree.rebuild(x);
+  EXPECT_EQ(tree.adopted(), 1);
+  EXPECT_EQ(tree.builds(), 0);
+  const double d = 1.5 * tree.margin();
+  EXPECT_TRUE(tree.inside({0.02 + 0.9 * d, 0.01, 0.01})) << "inside the moved body only";
+  EXPECT_FALSE(tree.inside({0.9 * d, 0.01, 0.01})) << "outside the moved body only";
+  tree.prepare(x);
+  EXPECT_EQ(tree.prepared(), 2) << "adopted: the physics builds the next one";
+}
+
 TEST(Haptics, SlabPressPushesBackOutOfTheSurfaceAndIsDeterministic) {
   // The 3D session: the handle presses 5 mm into the slab's top face and holds (t in [1, 2]).
   // No contact force pulls the handle into the body (a proxy popped through to the base

@@ -114,7 +114,8 @@ double enclosed_volume(const Surface& s) {
 
 double area(const Surface& s) {
   double a = 0;
-  for (const auto& t : s.triangles) a += 0.5 * (s.points[t[1]] - s.points[t[0]]).cross(s.points[t[2]] - s.points[t[0]]).norm();
+  for (const auto& t : s.triangles)
+    a += 0.5 * (s.points[t[1]] - s.points[t[0]]).cross(s.points[t[2]] - s.points[t[0]]).norm();
   return a;
 }
 
@@ -129,9 +130,11 @@ TEST(Surface, EveryFormatReadsTheSameSurface) {
   std::vector<Tri> f;
   torus(v, f);
   const test::FreshDir dir;
-  for (const auto& [name, content] : std::vector<std::pair<std::string, std::string>>{
-           {"t.off", off(v, f)}, {"t.obj", obj(v, f)}, {"t.ply", ply(v, f)}, {"t.stl", stl_binary(v, f)},
-           {"ta.stl", stl_ascii(v, f)}}) {
+  for (const auto& [name, content] : std::vector<std::pair<std::string, std::string>>{{"t.off", off(v, f)},
+                                                                                      {"t.obj", obj(v, f)},
+                                                                                      {"t.ply", ply(v, f)},
+                                                                                      {"t.stl", stl_binary(v, f)},
+                                                                                      {"ta.stl", stl_ascii(v, f)}}) {
     SCOPED_TRACE(name);
     const Surface s = read_surface(write(dir, name, content));
     EXPECT_EQ(s.points.size(), v.size()) << "STL's repeated corners are merged";
@@ -250,8 +253,9 @@ TEST(Surface, BadSurfacesAreRefusedWithOneLine) {
   const std::string stl = stl_binary(v, f);
   expect_refused(write(dir, "cut.stl", stl.substr(0, stl.size() - 30)), "truncated");
   expect_refused(write(dir, "huge.off", "OFF\n1000000000 2000000000 0\n0 0 0\n"), "bytes");
-  expect_refused(write(dir, "huge.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
-                                        "property float x\nend_header\n"),
+  expect_refused(write(dir, "huge.ply",
+                       "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+                       "property float x\nend_header\n"),
                  "bytes");
   auto flat = f;
   flat[0] = {0, 1, 1};

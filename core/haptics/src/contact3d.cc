@@ -6,6 +6,8 @@
 #include <CGAL/Simple_cartesian.h>
 
 #include <algorithm>
+#include <array>
+#include <atomic>
 
 namespace vtb {
 namespace {
@@ -67,27 +69,44 @@ struct FatBbox {
 
 } // namespace
 
-struct SurfaceTree::Impl {
+/// One tree and the shape it reads: the servo queries one slot while the physics may build the
+/// other (prepare), which the servo adopts at its next refit.
+struct TreeSlot {
   Geometry geometry;
   Nodal<3> built; ///< the positions the boxes were built on
-  double margin = 0;
   AabbTree tree;
   /// CGAL's build with the fat boxes (custom_build: AABB_tree's build with its bbox functor swapped).
-  void build() {
+  void build(double margin) {
     tree.custom_build(FatBbox{tree.traits().compute_bbox_object(), margin}, tree.traits().split_primitives_object());
     built = geometry.x;
   }
 };
 
+struct SurfaceTree::Impl {
+  std::array<TreeSlot, 2> slots;
+  double margin = 0;
+  std::atomic<int> in_use{0};  ///< the slot the servo queries (written by the servo)
+  std::atomic<int> offered{0}; ///< the slot the physics last built (written by the physics)
+  Nodal<3> offered_x;          ///< the physics' record of the shape it last offered
+  TreeSlot& current() { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }
+  const TreeSlot& current() const { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }
+};
+
+namespace {
+
+double moved2(const Nodal<3>& x, const Nodal<3>& from) {
+  return (x - from).colwise().squaredNorm().maxCoeff();
+}
+
+} // namespace
+
 SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
   m_triangles = boundary_facets(mesh);
   facet_rings(m_triangles, mesh.num_nodes(), m_ring_ptr, m_ring); // the triangles sharing a vertex
-  m_impl->geometry.triangles = &m_triangles;
-  m_impl->geometry.x = mesh.points;
-  // Margin: the mean surface edge length (a build or two per press of a few mm). A build runs in
-  // the servo cycle and costs milliseconds on large bodies (a quarter edge's margin made 57
-  // deadline misses in a 3 s press of a 20k-node slab, one edge's 11); wider boxes make each
-  // query slower (inside() 7 us at a quarter edge, 11 us at half an edge on the 458-node slab).
+  // Margin: the mean surface edge length (a build or two per press of a few mm). Wider boxes
+  // make each query slower (inside() 7 us at a quarter edge, 11 us at half an edge on the
+  // 458-node slab); a build costs milliseconds on large bodies, so in real time the physics
+  // builds the trees (prepare) and the servo only adopts them.
   double edges = 0;
   for (const auto& t : m_triangles)
     for (int k = 0; k < 3; ++k)
@@ -97,23 +116,49 @@ SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
   m_impl->margin = m_triangles.empty() ? 0.0 : 1.0 * edges / (3.0 * static_cast<double>(m_triangles.size()));
   std::vector<int> ids(m_triangles.size());
   for (std::size_t f = 0; f < ids.size(); ++f) ids[f] = static_cast<int>(f);
-  m_impl->tree.insert(ids.cbegin(), ids.cend(), &m_impl->geometry);
-  // Distance queries without CGAL's KD-tree hint: building that would allocate in the servo.
-  m_impl->tree.do_not_accelerate_distance_queries();
-  m_impl->build();
+  for (TreeSlot& slot : m_impl->slots) {
+    slot.geometry.triangles = &m_triangles;
+    slot.geometry.x = mesh.points;
+    slot.tree.insert(ids.cbegin(), ids.cend(), &slot.geometry);
+    // Distance queries without CGAL's KD-tree hint: building that would allocate in the servo.
+    slot.tree.do_not_accelerate_distance_queries();
+    slot.build(m_impl->margin);
+  }
+  m_impl->offered_x = mesh.points;
 }
 
 SurfaceTree::~SurfaceTree() = default;
 
 void SurfaceTree::rebuild(const Nodal<3>& x) {
   // A non-finite shape would break the ordering the build sorts by.
-  if (x.cols() != m_impl->geometry.x.cols() || !x.allFinite()) return;
-  m_impl->geometry.x = x; // same size: no allocation; the triangles are read from here
-  const double moved2 = (x - m_impl->built).colwise().squaredNorm().maxCoeff();
-  if (moved2 > m_impl->margin * m_impl->margin) {
-    m_impl->build(); // reuses its node storage
+  if (x.cols() != m_impl->slots[0].geometry.x.cols() || !x.allFinite()) return;
+  const int offered = m_impl->offered.load(std::memory_order_acquire);
+  if (offered != m_impl->in_use.load(std::memory_order_relaxed)) {
+    m_impl->in_use.store(offered, std::memory_order_release); // the physics' tree from here on
+    ++m_adopted;
+  }
+  TreeSlot& slot = m_impl->current();
+  slot.geometry.x = x; // same size: no allocation; the triangles are read from here
+  if (moved2(x, slot.built) > m_impl->margin * m_impl->margin) {
+    slot.build(m_impl->margin); // reuses its node storage
     ++m_builds;
   }
+}
+
+void SurfaceTree::prepare(const Nodal<3>& x) {
+  if (x.cols() != m_impl->offered_x.cols() || !x.allFinite()) return;
+  const int in_use = m_impl->in_use.load(std::memory_order_acquire);
+  // The last offer not yet adopted: the servo may adopt it at any moment, so it is not touched.
+  if (m_impl->offered.load(std::memory_order_relaxed) != in_use) return;
+  // Built at half the margin, so that the servo adopts it before its own tree runs out.
+  if (moved2(x, m_impl->offered_x) <= 0.25 * m_impl->margin * m_impl->margin) return;
+  const int spare = 1 - in_use;
+  TreeSlot& slot = m_impl->slots[static_cast<std::size_t>(spare)];
+  slot.geometry.x = x;
+  slot.build(m_impl->margin);
+  m_impl->offered_x = x;
+  m_impl->offered.store(spare, std::memory_order_release);
+  m_prepared.fetch_add(1, std::memory_order_relaxed);
 }
 
 double SurfaceTree::margin() const {
@@ -130,19 +175,19 @@ bool SurfaceTree::inside(const Eigen::Vector3d& p) const {
   int odd = 0;
   for (const auto& d : dirs) {
     const K::Ray_3 ray(point(p), K::Vector_3(d[0], d[1], d[2]));
-    odd += static_cast<int>(m_impl->tree.number_of_intersected_primitives(ray) % 2);
+    odd += static_cast<int>(m_impl->current().tree.number_of_intersected_primitives(ray) % 2);
   }
   return odd >= 2;
 }
 
 int SurfaceTree::crossing(const Eigen::Vector3d& a, const Eigen::Vector3d& b) const {
   if (!a.allFinite() || !b.allFinite() || a == b) return -1;
-  const auto hit = m_impl->tree.any_intersected_primitive(K::Segment_3(point(a), point(b)));
+  const auto hit = m_impl->current().tree.any_intersected_primitive(K::Segment_3(point(a), point(b)));
   return hit ? *hit : -1;
 }
 
 int SurfaceTree::closest(const Eigen::Vector3d& p) const {
-  return m_impl->tree.closest_point_and_primitive(point(p)).second;
+  return m_impl->current().tree.closest_point_and_primitive(point(p)).second;
 }
 
 double SurfaceTree::closest_on(int f, const Eigen::Vector3d& p, const Nodal<3>& x, Eigen::Vector3d& c,

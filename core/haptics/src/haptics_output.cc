@@ -45,6 +45,8 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   j["local_model"] = r.local_model;
   j["local_model_error_rms"] = r.local_model_error_rms;
   j["local_model_error_max"] = r.local_model_error_max;
+  j["contact_tree_builds_physics"] = r.contact_tree_builds_physics;
+  j["contact_tree_builds_servo"] = r.contact_tree_builds_servo;
   if (!r.physics_filter.empty()) j["physics_filter"] = r.physics_filter;
   if (!r.springs.empty()) j["springs"] = r.springs;
   if (!r.physics_filter_reason.empty()) j["physics_filter_reason"] = r.physics_filter_reason;

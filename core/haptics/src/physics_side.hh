@@ -6,6 +6,7 @@
 /// the servo.
 
 #include "exchange.hh"
+#include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/coupling.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/haptics/triple_buffer.hh"
@@ -37,6 +38,9 @@ public:
     m_state.applied_damping = Eigen::VectorXd::Zero(model.num_nodes());
     m_state.applied_group = Eigen::VectorXi::Constant(model.num_nodes(), -1);
   }
+
+  /// After each publish, builds the next contact tree of `contacts` on this thread (Contacts::prepare).
+  void build_contact_trees_for(Contacts<dim>& contacts) { m_trees = &contacts; }
 
   double dt() const { return m_integ->dt(); }
   double time() const { return m_state.t; }
@@ -96,6 +100,9 @@ public:
       s.x.setConstant(std::numeric_limits<double>::quiet_NaN());
     s.finite = s.x.allFinite() && s.v.allFinite() && max_strain(m_model.net, m_state.u) < 10.0;
     m_snap.publish();
+    // The published buffer is only read from here on (by the servo too): no other write until
+    // the next publish.
+    if (m_trees != nullptr && s.finite) m_trees->prepare(s.x);
     return true;
   }
 
@@ -121,6 +128,7 @@ private:
   bool m_multirate;
   double m_fallback; ///< m/N: the half-space's compliance under the tip (0: none)
   bool m_solver_compliance = false;
+  Contacts<dim>* m_trees = nullptr; ///< whose contact trees this thread builds (real time)
   std::vector<double> m_step_us;
 };
 

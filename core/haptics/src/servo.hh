@@ -21,7 +21,7 @@ namespace vtb {
 
 /// The watchdog's stall limit for a physics stepping every dt: a publish overdue by
 /// kStallPeriods of its periods, and never less than the 10 ms of a 1 kHz physics.
-inline constexpr double kStallPeriods = 6.0;
+inline constexpr double kStallPeriods = 10.0;
 inline double stall_limit(double physics_dt) {
   return std::max(0.01, kStallPeriods * physics_dt);
 }
@@ -156,6 +156,8 @@ public:
 
   HapticsReport& report() { return m_rep; }
   const TipFootprint<dim>& tip() const { return m_contacts.tip(); }
+  /// The contact finders; the physics' thread prepares their next tree (Contacts::prepare).
+  Contacts<dim>& contacts() { return m_contacts; }
   /// The local model's error: the coupling force's change at each publish in contact (N).
   double prediction_error_rms() const { return m_predictions ? std::sqrt(m_prediction_sq / m_predictions) : 0.0; }
   double prediction_error_max() const { return m_prediction_max; }

@@ -234,11 +234,18 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     for (auto& d : devices) d->advance(dt);
   };
   const double servo_tip_edge = servo.tip().mean_edge();
+  // In real time the physics builds the contact trees the servo adopts (no build in a servo
+  // cycle while it keeps up); lockstep keeps the builds in the servo (outputs as before).
+  if (!opt.lockstep) physics.build_contact_trees_for(servo.contacts());
   LoopTiming lt = opt.lockstep ? run_lockstep(servo, physics, ticks, period, advance_devices)
                                : run_realtime(servo, physics, ticks, period, opt, advance_devices);
   HapticsReport rep = finish_report(std::move(servo.report()), std::move(lt), physics, opt.lockstep);
   rep.local_model_error_rms = servo.prediction_error_rms();
   rep.local_model_error_max = servo.prediction_error_max();
+  if constexpr (dim == 3) {
+    rep.contact_tree_builds_physics = servo.contacts().tree().prepared();
+    rep.contact_tree_builds_servo = servo.contacts().tree().builds();
+  }
   rep.coupling_stiffness = h.coupling_stiffness;
   rep.tip_radius = h.tip_radius_for(dim);
   rep.surface_mean_edge = servo_tip_edge;

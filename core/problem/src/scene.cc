@@ -156,9 +156,9 @@ void read_mesh(const TableReader& top, const std::string& name, const std::files
       s.mesh.file = base_dir / r.string("file", std::nullopt);
     } else {
       const toml::table* g = r.table("generate");
-      const TableReader gr(*g, "[mesh].generate", name,
-                           {"shape", "size", "divisions", "mesher", "nodes", "hole", "file", "cell_size", "scale",
-                            "refine"});
+      const TableReader gr(
+          *g, "[mesh].generate", name,
+          {"shape", "size", "divisions", "mesher", "nodes", "hole", "file", "cell_size", "scale", "refine"});
       s.mesh.shape = gr.string("shape", std::nullopt, {"rectangle", "box", "surface"});
       if (s.mesh.shape == "surface")
         read_surface_generate(gr, base_dir, s.mesh);

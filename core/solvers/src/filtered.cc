@@ -78,6 +78,9 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   if (m_filter == solvers::kFilterMultigrid) {
     m_mg = std::make_unique<SymmetricMultigrid<dim>>(filter_system_matrix(model, o.dt));
     m_rhs.resize(dim, nf);
+    m_mg_units = std::make_unique<CouplingSet<dim>>(model.free_index);
+    m_mg_in = Nodal<dim>::Zero(dim, nf);
+    m_mg_out = Nodal<dim>::Zero(dim, nf);
   } else if (m_full) {
     OrderedLDLT factor(filter_system_matrix(model, o.dt));
     if (!factor.factorize()) throw std::runtime_error("filtered: H is not positive definite");
@@ -200,6 +203,9 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
     m_tensor->correct(s.u, s.v, m_force, *m_units, dt, m_dv);
     m_tensor->advance_refresh(m_mismatch); // this step's part of a refactorisation under way
   } else if (m_mg) {
+    // The couplings' units, for their local models only (coupling_compliance).
+    if (s.applied_stiffness.size() == m_force.cols() || s.applied_damping.size() == m_force.cols())
+      m_mg_units->gather(s, dt);
     // H^-1 F_node by one V-cycle, in the free nodes' order.
     for (Eigen::Index a = 0; a < nf; ++a) m_rhs.col(a) = m_force.col(free[static_cast<std::size_t>(a)]);
     m_mg->apply(m_rhs, m_dv);
@@ -234,6 +240,12 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
 
 template <int dim>
 bool FilteredImplicit<dim>::coupling_compliance(int group, Eigen::Matrix<double, dim, dim>& out) const {
+  if (m_mg_units) {
+    const int u = m_mg_units->unit_of_group(group);
+    if (u < 0) return false;
+    out = this->dt() * this->dt() * multigrid_response(u) * Eigen::Matrix<double, dim, dim>::Identity();
+    return true;
+  }
   if (!m_units || m_fallback) return false;
   const int u = m_units->unit_of_group(group);
   if (u < 0) return false;
@@ -247,6 +259,32 @@ bool FilteredImplicit<dim>::coupling_compliance(int group, Eigen::Matrix<double,
     return true;
   }
   return false;
+}
+
+template <int dim> double FilteredImplicit<dim>::multigrid_response(int u) const {
+  const CouplingSet<dim>& units = *m_mg_units;
+  MgResponse& r = m_mg_response[static_cast<std::size_t>(u)];
+  // Kept while the nodes are the same and the weights (which sum to 1) moved by at most
+  // kResponseTolerance in sum: w^T A w then moves by about twice that, relative.
+  bool same = r.size == units.size(u);
+  double moved = 0;
+  for (int p = 0; p < units.size(u) && same; ++p) {
+    same = r.node[static_cast<std::size_t>(p)] == units.node(u, p);
+    moved += std::abs(r.weight[static_cast<std::size_t>(p)] - units.weight(u, p));
+  }
+  if (same && moved <= kResponseTolerance) return r.value;
+  // One V-cycle on the unit's weights (one axis: the scalar filter is the same on each).
+  m_mg_in.setZero();
+  for (int p = 0; p < units.size(u); ++p) m_mg_in(0, units.slot(u, p)) = units.weight(u, p);
+  m_mg->apply(m_mg_in, m_mg_out);
+  r.value = 0;
+  r.size = units.size(u);
+  for (int p = 0; p < units.size(u); ++p) {
+    r.value += units.weight(u, p) * m_mg_out(0, units.slot(u, p));
+    r.node[static_cast<std::size_t>(p)] = units.node(u, p);
+    r.weight[static_cast<std::size_t>(p)] = units.weight(u, p);
+  }
+  return r.value;
 }
 
 /// The step's end: the time, the supports' prescribed motion, the strain limit.

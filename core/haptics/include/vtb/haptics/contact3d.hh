@@ -19,6 +19,7 @@
 #include "vtb/meshes/mesh.hh"
 #include "vtb/springs/spring_kernels.hh"
 
+#include <atomic>
 #include <limits>
 #include <memory>
 #include <span>
@@ -36,9 +37,17 @@ public:
   /// Moves the tree to the body's nodes at `x`, building its boxes again when a node has moved
   /// more than margin() since the last build; a non-finite `x` is ignored (the watchdog deals
   /// with it), as a wrong node count would be.
+  /// Servo side: adopts the tree the physics last prepared, if any, before it moves to `x`.
   void rebuild(const Nodal<3>& x);
+  /// Physics side (another thread than rebuild's and the queries'): builds the spare tree on `x`
+  /// once a node has moved more than half the margin since the last one offered, and offers it
+  /// to the servo; nothing while the last offer waits to be adopted. The servo then builds
+  /// nothing itself while the physics keeps up.
+  void prepare(const Nodal<3>& x);
   double margin() const;
-  long builds() const { return m_builds; } ///< box builds since construction (the first not counted)
+  long builds() const { return m_builds; }   ///< builds in the servo (rebuild) since construction
+  long adopted() const { return m_adopted; } ///< trees the servo took from the physics
+  long prepared() const { return m_prepared.load(std::memory_order_relaxed); } ///< trees the physics built
   /// Whether p is inside the body as the tree last saw it (ray parity, majority of three rays).
   bool inside(const Eigen::Vector3d& p) const;
   /// A triangle crossed by the segment [a, b], or -1.
@@ -64,6 +73,8 @@ private:
   std::vector<int> m_ring_ptr, m_ring; ///< CSR
   std::unique_ptr<Impl> m_impl;
   long m_builds = 0;
+  long m_adopted = 0;
+  std::atomic<long> m_prepared{0};
 };
 
 class SurfaceContact {

@@ -42,6 +42,7 @@ public:
       : m_c(probes, BoundaryContact(mesh)), m_tip(m_c.front().facets(), mesh.points, tip_radius, material.young_modulus,
                                                   material.poisson_ratio, material.thickness) {}
   void refit(const Nodal<2>&) {}
+  void prepare(const Nodal<2>&) {}
   ContactResult<2> update(std::size_t i, const Eigen::Vector2d& h, const Nodal<2>& x) {
     return hold_tip(m_c[i], m_last[i], m_tip, h, x);
   }
@@ -60,6 +61,9 @@ public:
       : m_tree(mesh), m_c(probes, SurfaceContact(m_tree)),
         m_tip(m_tree.facets(), mesh.points, tip_radius, material.young_modulus, material.poisson_ratio) {}
   void refit(const Nodal<3>& x) { m_tree.rebuild(x); }
+  /// From the physics' thread: the next contact tree built there (SurfaceTree::prepare).
+  void prepare(const Nodal<3>& x) { m_tree.prepare(x); }
+  const SurfaceTree& tree() const { return m_tree; }
   ContactResult<3> update(std::size_t i, const Eigen::Vector3d& h, const Nodal<3>& x) {
     return hold_tip(m_c[i], m_last[i], m_tip, h, x);
   }

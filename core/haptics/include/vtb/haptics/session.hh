@@ -76,6 +76,10 @@ struct HapticsReport {
   /// predicted against what the new physics step gives (N; one servo period of the hand's
   /// motion included).
   double local_model_error_rms = 0, local_model_error_max = 0;
+  /// 3D contact trees (the AABB tree of the surface): built by the physics' thread and adopted by
+  /// the servo (real time), or built in the servo's cycle (lockstep; real time when the physics
+  /// has not kept up).
+  long contact_tree_builds_physics = 0, contact_tree_builds_servo = 0;
   /// The physics' step budget: [solver].step_budget, or the servo period when the scene sets
   /// none (one physics step per servo cycle); the steps over it; the filter auto picked within
   /// it and why (filter_pick.hh; empty for other solvers or a named filter).

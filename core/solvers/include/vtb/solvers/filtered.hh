@@ -56,7 +56,9 @@ public:
   FilteredImplicit(const Model<dim>& model, const IntegratorOptions& options);
   void step(State<dim>& s) override;
   std::string_view name() const override { return solvers::kFiltered; }
-  /// The tensor and full filters, which solve their couplings through Woodbury's identity.
+  /// The tensor and full filters, which solve their couplings through Woodbury's identity; the
+  /// multigrid filter, whose V-cycle applies a coupling as a force alone, gives the footprint's
+  /// response to that force (dt^2 w^T H^-1 w by one V-cycle, kept while the footprint holds).
   bool coupling_compliance(int group, Eigen::Matrix<double, dim, dim>& out) const override;
   const std::string& filter() const { return m_filter; }
   /// Tensor filter: the steps taken by implicit Euler, its safety net for a state whose
@@ -78,6 +80,8 @@ private:
   void finish_step(State<dim>& s);
   void correct_momentum(const State<dim>& s);
   void limit_strain(State<dim>& s) const;
+  /// multigrid: unit u's w^T H^-1 w (kept in m_mg_response while it holds).
+  double multigrid_response(int u) const;
 
   const Model<dim>& m_model;
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
@@ -99,6 +103,19 @@ private:
   Nodal<dim> m_force;                                    ///< per node
   Nodal<dim> m_acc, m_dv;                                ///< per free node
   Nodal<dim> m_rhs;                                      ///< full: dim x free nodes, factor order
+  /// multigrid: the couplings' units (their force stays explicit: the V-cycle's system holds no
+  /// coupling) and each unit's one-step response w^T H^-1 w by one V-cycle, kept while its nodes
+  /// and weights (in sum) move less than kResponseTolerance (coupling_compliance).
+  struct MgResponse {
+    std::array<int, CouplingSet<dim>::kMaxNodes> node{};
+    std::array<double, CouplingSet<dim>::kMaxNodes> weight{};
+    int size = -1;
+    double value = 0;
+  };
+  static constexpr double kResponseTolerance = 0.02;
+  std::unique_ptr<CouplingSet<dim>> m_mg_units;
+  mutable std::array<MgResponse, CouplingSet<dim>::kMaxUnits> m_mg_response;
+  mutable Nodal<dim> m_mg_in, m_mg_out;
 };
 
 } // namespace vtb
