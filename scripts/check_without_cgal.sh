@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# The build without the CGAL mesh generators (VTB_WITH_CGAL=OFF: no CLI, no viewer) configures,
-# builds and passes its tests. Run by .ci/run after the README's test command.
+# The build without the CGAL mesh generators (VTB_WITH_CGAL=OFF: the CLI, viewer and Python module
+# without CGAL meshes) configures, builds and passes its tests. Run by .ci/run after the README's test command.
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=${VTB_BUILD_NOCGAL:-$root/build-nocgal}

@@ -1,11 +1,13 @@
 #include "commands.hh"
 
-#include "vtb/meshes/cgal_generate.hh"
+#include "vtb/meshes/cgal_generate.hh" // Refinement, refinement_error: declarations only without CGAL
 #include "vtb/meshes/generate.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/meshes/quality.hh"
+#ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/surface.hh"
+#endif
 #include "vtb/meshes/vtu_io.hh"
 
 #include <iostream>
@@ -73,6 +75,7 @@ std::vector<Refinement> refinements(const MeshOpts& o) {
   return out;
 }
 
+#ifdef VTB_HAVE_CGAL_MESHERS
 /// `vtb mesh generate surface FILE`: a closed surface's inside (surface.hh, mesh_surface).
 void generate_surface(const MeshOpts& o, const std::vector<Refinement>& refine) {
   if (o.surface.empty()) throw InputError("vtb mesh generate surface: the surface FILE is required");
@@ -82,6 +85,36 @@ void generate_surface(const MeshOpts& o, const std::vector<Refinement>& refine) 
     throw InputError("vtb mesh generate surface: give --nodes N or --size H (one of them, > 0)");
   const std::filesystem::path file(o.surface);
   write_msh(mesh_surface(read_surface(file, o.scale), o.nodes, h, refine, file.filename().string()), o.out);
+}
+#endif
+
+/// The shapes CGAL meshes: the paper's plate, the Mesh_3 slab and sphere, a surface's inside, and
+/// an unstructured rectangle or box (--nodes).
+void generate_cgal(const MeshOpts& o, const std::vector<Refinement>& refine) {
+#ifdef VTB_HAVE_CGAL_MESHERS
+  if (o.shape == "surface") return generate_surface(o, refine);
+  if (o.shape == "plate" || o.shape == "slab" || o.shape == "sphere") {
+    if (o.nodes <= 0) throw InputError("vtb mesh generate " + o.shape + ": --nodes N (N > 0) is required");
+    if (o.shape == "plate")
+      write_msh(mesh_polygon(paper_plate(), o.nodes), o.out);
+    else
+      write_msh(mesh_solid(o.shape, o.nodes, refine), o.out);
+    return;
+  }
+  const std::size_t d = o.shape == "rectangle" ? 2 : 3;
+  if (o.size.size() != d || !o.divisions.empty())
+    throw InputError("vtb mesh generate " + o.shape + " --nodes N: needs --size with " + std::to_string(d) +
+                     " values and no --divisions");
+  if (d == 2)
+    write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes, o.hole), o.out);
+  else
+    write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes, refine), o.out);
+#else
+  (void)refine;
+  throw InputError("vtb mesh generate " + o.shape +
+                   ": this build has no CGAL meshers (VTB_WITH_CGAL=OFF); a structured rectangle or box "
+                   "(--size, --divisions) needs none");
+#endif
 }
 
 /// `vtb mesh convert IN OUT`: a .msh (2.2 or 4.x) to .msh 4.1 or .vtu.
@@ -110,29 +143,12 @@ void generate_mesh(const MeshOpts& o) {
   if (!refine.empty() && o.shape != "surface" && o.shape != "slab" && o.shape != "sphere" &&
       !(o.shape == "box" && o.nodes > 0))
     throw InputError("vtb mesh generate " + o.shape + ": refinement is for surface, slab, sphere and a CGAL box");
-  if (o.shape == "surface") return generate_surface(o, refine);
-  if (o.shape == "plate" || o.shape == "slab" || o.shape == "sphere") {
-    if (o.nodes <= 0) throw InputError("vtb mesh generate " + o.shape + ": --nodes N (N > 0) is required");
-    if (o.shape == "plate")
-      write_msh(mesh_polygon(paper_plate(), o.nodes), o.out);
-    else
-      write_msh(mesh_solid(o.shape, o.nodes, refine), o.out);
-    return;
-  }
   const std::size_t d = o.shape == "rectangle" ? 2 : 3;
   if (o.hole != 0 && (d != 2 || o.nodes <= 0))
     throw InputError("vtb mesh generate " + o.shape + ": --hole is for an unstructured rectangle (--nodes)");
   if (o.hole < 0) throw InputError("vtb mesh generate " + o.shape + ": --hole must be > 0");
-  if (o.nodes > 0) { // unstructured (CGAL)
-    if (o.size.size() != d || !o.divisions.empty())
-      throw InputError("vtb mesh generate " + o.shape + " --nodes N: needs --size with " + std::to_string(d) +
-                       " values and no --divisions");
-    if (d == 2)
-      write_msh(mesh_rectangle(Eigen::Vector2d(o.size[0], o.size[1]), o.nodes, o.hole), o.out);
-    else
-      write_msh(mesh_box(Eigen::Vector3d(o.size[0], o.size[1], o.size[2]), o.nodes, refine), o.out);
-    return;
-  }
+  if (o.shape == "surface" || o.shape == "plate" || o.shape == "slab" || o.shape == "sphere" || o.nodes > 0)
+    return generate_cgal(o, refine);
   if (o.size.size() != d || o.divisions.size() != d)
     throw InputError("vtb mesh generate " + o.shape + ": --size and --divisions need " + std::to_string(d) + " values");
   if (d == 2)

@@ -4,7 +4,10 @@
 #include "vtb/haptics/session.hh"
 #include "vtb/harness/metrics.hh"
 #include "vtb/harness/solvers.hh"
+#ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
+#endif
+#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/problem/output.hh"
 #include "vtb/problem/problem.hh"
@@ -179,7 +182,14 @@ void write_multirate(const std::filesystem::path& out, const std::filesystem::pa
   if (log) *log << "[multirate] the slab press on " << kMultirateNodes << " nodes: lockstep at 1 kHz, then real time\n";
   Scene scene = read_scene(scenes_dir / "haptic_slab_press.toml");
   const std::filesystem::path mesh = out / "multirate_slab.msh";
-  const Mesh3 slab = mesh_solid("slab", kMultirateNodes);
+  const Mesh3 slab = [] {
+#ifdef VTB_HAVE_CGAL_MESHERS
+    return mesh_solid("slab", kMultirateNodes);
+#else
+    throw InputError("the multirate figure meshes a CGAL slab: this build has no CGAL meshers (VTB_WITH_CGAL=OFF)");
+    return Mesh3{};
+#endif
+  }();
   write_msh(slab, mesh);
   scene.mesh.file = mesh;
   scene.solver.springs = "lloyd"; // the comparison is of the loops on one model: no fit to wait for

@@ -89,20 +89,6 @@ Mesh3 mesh_sphere(double size, const std::vector<Refinement>& refine) {
 
 } // namespace
 
-double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refinement>& refine) {
-  double h = body;
-  for (const Refinement& r : refine)
-    h = std::min(h, r.size + kRefineGrowth * std::max(0.0, (x - r.center).norm() - r.radius));
-  return h;
-}
-
-std::string refinement_error(const Refinement& r) {
-  if (!r.center.allFinite()) return "center must be finite";
-  if (!(r.radius >= 0) || !std::isfinite(r.radius)) return "radius must be >= 0";
-  if (!(r.size > 0) || !std::isfinite(r.size)) return "size must be > 0";
-  return {};
-}
-
 namespace {
 
 void check_refinements(const std::string& what, const std::vector<Refinement>& refine) {
