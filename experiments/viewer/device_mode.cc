@@ -1,6 +1,7 @@
 #include "device_mode.hh"
 
 #include "vtb/haptics/coupling.hh"
+#include "vtb/haptics/local_model.hh"
 
 #include <algorithm>
 #include <cmath>
@@ -25,49 +26,70 @@ DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene)
       m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_plane(device_plane(scene, mesh)),
       m_hand(still_hand(scene)),
       m_contact(mesh, 1, (scene.haptics ? *scene.haptics : HapticsDesc{}).tip_radius_for(dim), scene.material),
-      m_shaper(m_params), m_x(mesh.points) {}
+      m_probe(m_k, m_b, 1), m_shaper(m_params), m_x(mesh.points),
+      m_fallback(half_space_tip_compliance(dim, scene.material.young_modulus, scene.material.poisson_ratio,
+                                           m_contact.tip().radius())) {}
+
+template <int dim> int DeviceMode<dim>::ticks_in(double dt) const {
+  return std::max(1, static_cast<int>(std::lround(dt / m_period)));
+}
 
 template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, State<dim>& s, double dt) {
-  // The ticks that fall in [t, t + dt): at least one per step.
-  const int n = std::max(1, static_cast<int>(std::lround(dt / m_period)));
-  const double h = dt / n;
+  // The step's force on the body from the ticks since the last step (as the session's physics
+  // takes it): a step of one tick its force, a longer one the spring to the anchor its ticks
+  // held (applied_force), on the last tick's footprint with the coupling's stiffness and
+  // damping by the same weights in one group, for the solvers that take them implicitly.
+  m_dt = dt;
+  m_model.valid = false;
+  const Footprint& fp = m_footprint;
+  if (!m_touching || fp.count == 0) return;
+  const bool slow = ticks_in(dt) > 1;
+  const Vec<dim> at = footprint_mean<dim>(fp, model.net.rest) + footprint_mean<dim>(fp, s.u);
+  const Vec<dim> f = slow && m_probe.history().cycles > 0
+                         ? applied_force<dim>(m_probe.history(), at, tip_stiffness(m_k, fp))
+                         : m_force_on_body;
+  apply_to_body<dim>(fp, f, m_k, m_b, kDeviceGroup, s);
+  m_model.applied = f;
+  m_model.valid = slow && m_contact.tip().radius() > 0;
+}
+
+template <int dim>
+void DeviceMode<dim>::after_step(const Model<dim>& model, const State<dim>& s, const Integrator<dim>& integrator) {
+  // The contact's compliance over the step just taken (the solver's, else the half-space's).
+  if (m_model.valid) {
+    typename LocalModel<dim>::Mat c;
+    if (integrator.coupling_compliance(kDeviceGroup, c) && c.allFinite()) {
+      m_model.compliance = c;
+    } else {
+      m_model.compliance = m_fallback * LocalModel<dim>::Mat::Identity();
+      m_model.valid = m_fallback > 0;
+    }
+  }
+  // The ticks that fall in the step, against the body it reached: its nodes moved back with
+  // their velocities to each tick's time (the tick at the step's end sees them as they are).
+  const int n = ticks_in(m_dt);
+  const double h = m_dt / n;
   if (!m_device) { // the handle starts where the hand is (not dragged in from the origin)
-    m_hand.waypoints = {m_hand_device};
+    m_hand.waypoints = {m_hand_device, m_hand_device};
     m_device.emplace(DeviceSpec{}, m_hand);
   }
   SimulatedProCAT& device = *m_device;
-  device.hold_hand_at(m_hand_device);
+  device.move_hand_to(m_hand_device, m_dt); // over the step's ticks: the hand moves, it does not jump
   m_x = model.net.rest + s.u;
   const bool finite = m_x.allFinite() && s.v.allFinite();
   if (finite) m_contact.refit(m_x);
-  Footprint footprint;
-  // Several ticks a step: the local model of the last step (its compliance C and force g): the
-  // contact on the body moved by C (f_prev - g), the coupling in series with C.
-  const bool modelled = n > 1 && m_model.valid && m_contact.tip().radius() > 0;
-  ForceHistory<dim> history;
-  for (int k = 0; k < n; ++k) {
+  m_probe.set_blend_cycles(n);
+  for (int k = 1; k <= n; ++k) {
     Eigen::Vector2d pos, vel;
     device.read(pos, vel);
     const Vec<dim> handle = m_plane.to_world(pos);
-    LocalModel<dim> local = m_model;
-    const Vec<dim> f_prev = m_touching ? m_last_solved : Vec<dim>::Zero();
-    Vec<dim> shift = modelled ? Vec<dim>(local.compliance * (f_prev - local.applied)) : Vec<dim>::Zero();
-    if (n > 1 && m_touching) // the body's free motion at the tip since the step began
-      shift += (k * h) * footprint_mean<dim>(m_footprint, s.v);
-    local.applied = f_prev;
-    ContactResult<dim> c;
-    if (finite) c = m_contact.update(0, Vec<dim>(handle - shift), m_x);
-    if (c.touching) c.proxy += shift;
-    Vec<dim> raw = Vec<dim>::Zero(), proxy = c.proxy;
-    if (c.touching) {
-      raw = virtual_coupling<dim>(c, handle, m_plane.axes * vel, s.v, m_k, m_b);
-      if (modelled) {
-        raw = solve_against_local_model<dim>(raw, c.proxy - handle, tip_stiffness(m_k, c.footprint), local);
-        proxy += local.compliance * (-raw - local.applied);
-      }
-    }
-    m_last_solved = -raw;
+    const Vec<dim> raw =
+        m_probe.cycle(m_contact, 0, handle, m_plane.axes * vel,
+                      typename ProbeCoupling<dim>::Body{m_x, s.v, (k - n) * h, k == 1, finite, &m_model});
+    const ContactResult<dim>& c = m_probe.contact();
     const Vec<dim> f = m_shaper.shape(raw, m_t, m_t, finite);
+    m_probe.rendered(f);
+    m_force_on_body = -f;
     m_force_device = m_plane.axes.transpose() * f;
     m_saturated += m_shaper.last_saturated();
     device.command(m_force_device);
@@ -76,35 +98,12 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
     ++m_ticks;
     m_touching = c.touching;
     m_proxy = c.touching ? c.proxy : handle;
-    m_footprint = c.footprint;
+    m_footprint = c.touching ? c.footprint : Footprint{};
     m_normal = c.normal;
-    if (c.touching) {
-      footprint = c.footprint;
-      history.sum -= f;
-      history.proxy_sum += proxy;
-      ++history.cycles;
-    }
     m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force_device.norm());
     m_head = (m_head + 1) % kTrace;
     m_count = std::min(m_count + 1, kTrace);
   }
-  // The step's force on the body: the ticks' mean (a step of several ticks: the spring to the
-  // anchor they held, applied_force), on the last footprint's nodes, with the coupling's
-  // stiffness and damping by the same weights in one group for the solvers that take them
-  // implicitly (as vtb haptics does: docs/haptics.md).
-  m_model.valid = false;
-  if (footprint.count > 0) {
-    Vec<dim> f = history.sum / n; // the ticks' forces on the body, summed over those in contact
-    if (n > 1) f = applied_force<dim>(history, footprint_mean<dim>(footprint, m_x), tip_stiffness(m_k, footprint));
-    apply_to_body<dim>(footprint, f, m_k, m_b, kDeviceGroup, s);
-    m_model.applied = f;
-    m_model.valid = n > 1;
-  }
-}
-
-template <int dim> void DeviceMode<dim>::after_step(const Integrator<dim>& integrator) {
-  // The contact's compliance over the step just taken, for the next step's ticks.
-  if (m_model.valid) m_model.valid = integrator.coupling_compliance(kDeviceGroup, m_model.compliance);
 }
 
 template <int dim> int DeviceMode<dim>::force_trace(float* out) const {

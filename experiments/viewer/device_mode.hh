@@ -6,10 +6,12 @@
 /// deformed surface (the haptics module's contact, one AABB tree), the virtual coupling's force
 /// is shaped whole (saturation, ramp-in, watchdog), the device renders its in-plane part and the
 /// body receives the whole reaction. The servo runs at 1 kHz of simulated time, in lockstep with
-/// the physics steps (each step runs the ticks that fall in it). A physics step of several servo
-/// periods (a large body at the rate it affords) is rendered as `vtb haptics` renders it: its
-/// ticks solve the coupling against the local contact model of the step before
-/// (local_model.hh), and the step takes the spring to the anchor they held.
+/// the physics steps as `vtb haptics --lockstep` runs them: each step is taken first, then the
+/// servo ticks that fall in it run against the body it reached, and the next step takes their
+/// force. Each tick is the session's own (ProbeCoupling): a step of several servo periods (a
+/// large body at the rate it affords) has its ticks solve the coupling against the local
+/// contact model of that step (local_model.hh), its change blended in over the step, and the
+/// next step takes the spring to the anchor they held.
 
 #include "live_sim.hh"
 
@@ -18,6 +20,7 @@
 #include "vtb/haptics/device_plane.hh"
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/haptics/local_model.hh"
+#include "vtb/haptics/probe_coupling.hh"
 
 #include <array>
 #include <optional>
@@ -34,7 +37,7 @@ public:
   DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
 
   void before_step(const Model<dim>& model, State<dim>& s, double dt) override;
-  void after_step(const Integrator<dim>& integrator) override;
+  void after_step(const Model<dim>& model, const State<dim>& s, const Integrator<dim>& integrator) override;
 
   /// Where the user's hand holds the handle: a body point, taken to the device's plane.
   void set_hand(const Vec<dim>& p) { m_hand_device = m_plane.to_device(p); }
@@ -61,6 +64,9 @@ public:
   int force_trace(float* out) const;
 
 private:
+  /// Servo ticks in a step of dt: at least one.
+  int ticks_in(double dt) const;
+
   typename BasicForceShaper<dim>::Params m_params;
   double m_k, m_b, m_period;
   DevicePlane<dim> m_plane;
@@ -68,6 +74,7 @@ private:
   Eigen::Vector2d m_hand_device = Eigen::Vector2d::Zero();
   std::optional<SimulatedProCAT> m_device; ///< made at the first tick, with the handle in the hand
   Contacts<dim> m_contact;                 ///< one probe
+  ProbeCoupling<dim> m_probe;
   BasicForceShaper<dim> m_shaper;
   Nodal<dim> m_x;
   Vec<dim> m_proxy = Vec<dim>::Zero();
@@ -77,7 +84,9 @@ private:
   bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;
   LocalModel<dim> m_model; ///< the last step's contact model (valid: it coupled the tip and has a compliance)
-  Vec<dim> m_last_solved = Vec<dim>::Zero(); ///< the last tick's force on the body, as solved
+  Vec<dim> m_force_on_body = Vec<dim>::Zero(); ///< the last tick's
+  double m_fallback;                           ///< m/N: the half-space's compliance under the tip (0: none)
+  double m_dt = 0;                             ///< the step being taken
   double m_t = 0;
   std::array<float, kTrace> m_trace{};
   int m_head = 0, m_count = 0;

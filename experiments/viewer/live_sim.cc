@@ -143,7 +143,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   const auto a = clock::now();
   m_integ->step(m_state);
   const double us = std::chrono::duration<double, std::micro>(clock::now() - a).count();
-  if (m_hook) m_hook->after_step(*m_integ);
+  if (m_hook) m_hook->after_step(*m_model, m_state, *m_integ);
   m_step_us[static_cast<std::size_t>(m_step_count % static_cast<int>(m_step_us.size()))] = us;
   if (m_stats.step_budget_us > 0 && us > m_stats.step_budget_us) ++m_stats.steps_over_budget;
   ++m_step_count;

@@ -73,13 +73,14 @@ struct SimStats {
 
 /// Called before every step with the state whose applied forces (and their couplings'
 /// stiffness and damping, State::applied_stiffness, applied_damping) already hold the pulls:
-/// adds its own, e.g. the device's contact force and coupling. Must not allocate.
+/// adds its own, e.g. the device's contact force and coupling; and after it, with the state it
+/// reached and the integrator that took it (its coupling compliance: local_model.hh). Must not
+/// allocate.
 template <int dim> class StepHook {
 public:
   virtual ~StepHook() = default;
   virtual void before_step(const Model<dim>& model, State<dim>& s, double dt) = 0;
-  /// After the step, with the integrator that took it (its coupling compliance: local_model.hh).
-  virtual void after_step(const Integrator<dim>& /*integrator*/) {}
+  virtual void after_step(const Model<dim>& model, const State<dim>& s, const Integrator<dim>& integrator) = 0;
 };
 
 template <int dim> class LiveSim {

@@ -614,6 +614,29 @@ TEST(Haptics, TheHandleStaysInTheWorkspaceAndTooStiffACouplingIsLimited) {
       << r.notes[0];
 }
 
+TEST(Haptics, ALiveHandMovedOnceAPhysicsStepDoesNotRingTheHandle) {
+  // The viewer's hand gets a new target once a physics step; at 55 ms the targets come at the
+  // grip mode's own frequency (sqrt(2000 N/m / 0.15 kg) = 18.4 Hz, damping ratio
+  // 0.5 / (2 0.15 115) = 1.5 %). The hand goes to each target over the step (move_hand_to), so
+  // the handle follows a ramp at 23 mm/s: its lag is the friction's and damping's over the grip,
+  // (0.02 N + 0.5 N s/m 0.023 m/s) / 2000 N/m = 16 um, plus the ramp's start transient v/omega =
+  // 0.2 mm. 0.5 mm bounds both; a hand that jumped to the targets rang the handle by 12 mm.
+  HandScript hand;
+  hand.waypoints = {Eigen::Vector2d(0.1, 0.05), Eigen::Vector2d(0.1, 0.05)};
+  SimulatedProCAT dev(DeviceSpec{}, hand);
+  const double step = 0.055, speed = 0.023, period = 1e-3;
+  double worst = 0;
+  for (int s = 1; s <= 20; ++s) {
+    const Eigen::Vector2d target(0.1, 0.05 - speed * step * s);
+    dev.move_hand_to(target, step);
+    for (int k = 0; k < 55; ++k) {
+      dev.advance(period);
+      const double along = 0.05 - speed * (step * (s - 1) + period * (k + 1)); // where the hand is now
+      worst = std::max(worst, std::abs(dev.true_position().y() - along));
+    }
+  }
+  EXPECT_LT(worst, 0.5e-3);
+}
 TEST(Haptics, ASceneAskingForAReferenceSolverIsRefusedNotSilentlyFiltered) {
   Scene s = press_scene();
   for (const char* kind : {"cvode", "fem"}) {

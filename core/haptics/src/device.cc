@@ -45,7 +45,7 @@ void SimulatedProCAT::advance(double dt) {
   const int sub = 8;
   const double h = dt / sub;
   for (int k = 0; k < sub; ++k) {
-    const Eigen::Vector2d hand = m_hand.at(m_t + (k + 1) * h);
+    const Eigen::Vector2d hand = m_hand.at(m_t - m_hand_start + (k + 1) * h);
     const double speed = m_v.norm();
     const Eigen::Vector2d friction = m_phys.coulomb * m_v / std::max(speed, 1e-3);
     const Eigen::Vector2d f = m_hand.grip_stiffness * (hand - m_x) + m_force - m_phys.viscous * m_v - friction;
@@ -69,6 +69,15 @@ void SimulatedProCAT::advance(double dt) {
   const Eigen::Vector2d raw = (m_measured - m_measured_prev) / dt;
   const double alpha = std::min(1.0, dt * 2 * 3.14159265358979 * 100.0); // 100 Hz low-pass
   m_velocity_estimate += alpha * (raw - m_velocity_estimate);
+}
+
+void SimulatedProCAT::move_hand_to(const Eigen::Vector2d& p, double over) {
+  const Eigen::Vector2d now = m_hand.at(m_t - m_hand_start);
+  m_hand.waypoints.resize(2);
+  m_hand.waypoints[0] = now;
+  m_hand.waypoints[1] = p;
+  m_hand.duration = std::max(over, 1e-9);
+  m_hand_start = m_t;
 }
 
 ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& csv, int probe) : m_spec(spec) {

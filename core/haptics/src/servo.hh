@@ -9,6 +9,7 @@
 #include "vtb/haptics/device.hh"
 #include "vtb/haptics/device_plane.hh"
 #include "vtb/haptics/force_shaping.hh"
+#include "vtb/haptics/probe_coupling.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/haptics/triple_buffer.hh"
 
@@ -36,13 +37,12 @@ public:
         TripleBuffer<Snapshot<dim>>& snap, TripleBuffer<Commands<dim>>& cmd)
       : m_devices(devices), m_contacts(mesh, devices.size(), h.tip_radius_for(dim), material), m_h(h), m_plane(plane),
         m_snap(snap), m_cmd(cmd), m_x(mesh.points), m_max(max_samples), m_physics_dt(physics_dt),
-        m_history(devices.size()), m_last_raw(devices.size(), Vec::Zero()), m_last_solved(devices.size(), Vec::Zero()),
-        m_last_touching(devices.size(), 0), m_last_footprint(devices.size()),
-        m_blend_cycles(static_cast<int>(std::lround(physics_dt * h.rate))), m_offset(devices.size(), Vec::Zero()),
-        m_offset_left(devices.size(), 0) {
+        m_blend_cycles(static_cast<int>(std::lround(physics_dt * h.rate))) {
+    m_probes.reserve(devices.size());
     m_rep.t.reserve(static_cast<std::size_t>(max_samples));
     m_rep.probes.resize(devices.size());
     for (std::size_t i = 0; i < devices.size(); ++i) {
+      m_probes.emplace_back(h.coupling_stiffness, h.coupling_damping, m_blend_cycles);
       m_shapers.emplace_back(typename BasicForceShaper<dim>::Params{std::min(h.max_force, devices[i]->spec().max_force),
                                                                     0.5, 0.03, stall_limit(physics_dt)});
       for (auto* v : {&m_rep.probes[i].hx, &m_rep.probes[i].hy, &m_rep.probes[i].fx, &m_rep.probes[i].fy})
@@ -54,10 +54,7 @@ public:
   void tick(double t) {
     const bool fresh = m_snap.fetch();
     const Snapshot<dim>& s = m_snap.front();
-    if (fresh) { // a new physics step: its force comes from the cycles from here on
-      m_arrival = t;
-      for (ForceHistory<dim>& h : m_history) h = ForceHistory<dim>{};
-    }
+    if (fresh) m_arrival = t; // a new physics step: its force comes from the cycles from here on
     // The body's free motion between physics updates: the contact is found on the published
     // body, and its proxy moved with the footprint's velocity back to the cycle's time (the
     // tip's nodes', not the whole body's: the cycle's cost does not grow with the body). A
@@ -82,66 +79,21 @@ public:
       Eigen::Vector2d pos, vel;
       m_devices[i]->read(pos, vel);
       const Vec handle = m_plane.origin + m_plane.axes * pos;
-      Vec raw = Vec::Zero();
-      ContactResult<dim> c;
-      // Multirate: the body where the local model puts it, with the last cycle's force f_prev
-      // (its free motion at the last footprint, and its answer to f_prev): the contact is found
-      // on the published body for the handle moved by the opposite shift, so that contact
-      // begins, holds and ends on the modelled surface alike.
-      const bool modelled = !whole && i < s.models.size() && s.models[i].valid;
-      LocalModel<dim> model = modelled ? s.models[i] : LocalModel<dim>{};
-      const Vec f_prev = m_last_touching[i] ? m_last_solved[i] : Vec::Zero();
-      Vec shift = Vec::Zero();
-      if (!whole) {
-        if (m_last_touching[i]) shift += age * footprint_mean<dim>(m_last_footprint[i], s.v);
-        if (modelled) shift += model.compliance * (f_prev - model.applied);
-      }
-      if (finite) c = m_contacts.update(i, Vec(handle - shift), x);
-      if (c.touching) c.proxy += shift;
-      model.applied = f_prev; // the proxy now answers f_prev: the model goes on from there
-      Vec proxy = c.proxy;    // where the local model puts it, with the force solved against it
-      if (c.touching) {
-        raw = coupling(c, handle, m_plane.axes * vel, s.v);
-        if (modelled) {
-          raw = solve_against_local_model<dim>(raw, c.proxy - handle,
-                                               tip_stiffness(m_h.coupling_stiffness, c.footprint), model);
-          proxy += model.compliance * (-raw - model.applied);
-        }
-      }
-      m_last_solved[i] = -raw;
-      // What the local model predicted against what the new physics step gives: the change of
-      // the coupling force at a publish, in contact on both sides of it. A physics slower than
-      // the servo has that change blended in over its period (the force leaves the old model's
-      // prediction for the new one linearly), so that no publish is felt as a step; a contact
-      // that a publish begins (the body moved onto the handle) ramps in over it too.
-      if (fresh && c.touching && m_last_touching[i]) count_prediction((raw - m_last_raw[i]).norm());
-      if (fresh && c.touching && m_blend_cycles > 1) { // a contact the publish began ramps in likewise
-        m_offset[i] = (m_last_touching[i] ? m_last_raw[i] : Vec::Zero()) - raw;
-        m_offset_left[i] = m_blend_cycles;
-      }
-      if (!c.touching) m_offset_left[i] = 0;
-      if (m_offset_left[i] > 0) {
-        raw += m_offset[i] * (static_cast<double>(--m_offset_left[i]) / m_blend_cycles);
-        if (const double d2 = (c.proxy - handle).squaredNorm(); d2 > 0) { // it never pulls
-          const double normal = raw.dot(c.proxy - handle) / d2;
-          if (normal < 0) raw -= normal * (c.proxy - handle);
-        }
-      }
-      m_last_raw[i] = raw;
-      m_last_touching[i] = c.touching;
-      m_last_footprint[i] = c.footprint;
+      const LocalModel<dim>* model = i < s.models.size() ? &s.models[i] : nullptr;
+      ProbeCoupling<dim>& probe = m_probes[i];
+      const Vec raw = probe.cycle(m_contacts, i, handle, m_plane.axes * vel,
+                                  typename ProbeCoupling<dim>::Body{x, s.v, age, fresh, finite, model});
+      const ContactResult<dim>& c = probe.contact();
+      if (probe.publish_change() >= 0) count_prediction(probe.publish_change());
       // The coupling force is shaped whole; a planar device renders its in-plane part (the
       // rest is taken by its mechanism), the body receives the whole reaction.
       const Vec f = m_shapers[i].shape(raw, t, m_arrival, finite);
       const Eigen::Vector2d fd = m_plane.axes.transpose() * f;
       m_devices[i]->command(fd);
-      ForceHistory<dim>& history = m_history[i];
-      history.sum -= f;
-      history.proxy_sum += c.touching ? proxy : handle;
-      ++history.cycles;
+      probe.rendered(f);
       out[i].footprint = c.touching ? c.footprint : Footprint{};
       out[i].force_on_body = -f;
-      out[i].history = history;
+      out[i].history = probe.history();
       if (c.touching) count_footprint(m_rep.probes[i], c.footprint);
       all_zero = all_zero && f.norm() == 0.0;
       if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, fd);
@@ -163,12 +115,6 @@ public:
   double prediction_error_max() const { return m_prediction_max; }
 
 private:
-  Vec coupling(const ContactResult<dim>& c, const Vec& handle, const Vec& handle_velocity,
-               const Nodal<dim>& node_velocity) const {
-    return virtual_coupling<dim>(c, handle, handle_velocity, node_velocity, m_h.coupling_stiffness,
-                                 m_h.coupling_damping);
-  }
-
   void count_prediction(double e) {
     ++m_predictions;
     m_prediction_sq += e * e;
@@ -209,14 +155,8 @@ private:
   long m_max = 0;
   double m_physics_dt;
   double m_arrival = 0;                     ///< servo time at which the snapshot in use arrived
-  std::vector<ForceHistory<dim>> m_history; ///< per probe: the forces on the body since then
-  std::vector<Vec> m_last_raw;              ///< per probe: the last cycle's coupling force
-  std::vector<Vec> m_last_solved; ///< per probe: the last cycle's force on the body, as solved (before blending)
-  std::vector<char> m_last_touching;
-  std::vector<Footprint> m_last_footprint; ///< per probe: the last cycle's
-  int m_blend_cycles;                      ///< servo cycles in a physics step: a publish's change is blended over them
-  std::vector<Vec> m_offset;               ///< per probe: the change at the last publish, blended out
-  std::vector<int> m_offset_left;          ///< per probe: the cycles of it left
+  int m_blend_cycles;                       ///< servo cycles in a physics step: a publish's change is blended over them
+  std::vector<ProbeCoupling<dim>> m_probes; ///< per probe: its coupling against the local model
   long m_predictions = 0;
   double m_prediction_sq = 0, m_prediction_max = 0;
 };
