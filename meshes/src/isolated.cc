@@ -10,9 +10,25 @@
 
 #include <cerrno>
 #include <csignal>
+#include <fstream>
 #include <iostream>
+#include <sstream>
 
 namespace vtb {
+
+std::string read_untrusted(const std::filesystem::path& file, const std::string& what) {
+  const std::string src = file.string();
+  std::error_code ec;
+  const auto size = std::filesystem::file_size(file, ec);
+  if (ec) throw InputError(src + ": cannot open " + what + " file");
+  if (size > (std::uintmax_t{1} << 30)) throw InputError(src + ": " + what + " file larger than 1 GiB; refused");
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(src + ": cannot open " + what + " file");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
 namespace {
 
 /// The child: runs the work, writes "R" + its bytes or "E" + the error to the pipe, and exits;

@@ -12,9 +12,7 @@
 
 #include <algorithm>
 #include <chrono>
-#include <fstream>
 #include <iostream>
-#include <sstream>
 
 namespace vtb {
 namespace {
@@ -56,18 +54,7 @@ AnyMesh read_msh_isolated(const std::string& src, std::chrono::seconds limit) {
 
 AnyMesh read_msh(const std::filesystem::path& file) {
   const std::string src = file.string();
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(file, ec);
-  if (ec) throw InputError(src + ": cannot open mesh file");
-  if (size > (std::uintmax_t{1} << 30)) throw InputError(src + ": mesh file larger than 1 GiB; refused");
-  std::string content;
-  {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(src + ": cannot open mesh file");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    content = ss.str();
-  }
+  const std::string content = read_untrusted(file, "mesh");
   prescan_msh(content, src);
   AnyMesh mesh = read_msh_isolated(src, std::chrono::seconds(8));
   const int flipped = std::visit([](auto& m) { return check_and_orient(m); }, mesh);

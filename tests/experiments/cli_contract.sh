@@ -1,15 +1,7 @@
 #!/usr/bin/env bash
 # The CLI contract (README.md, docs/scenes.md, docs/harness.md): --help everywhere, bad input -> one clear line on stderr,
 # a non-zero exit and no output files; a good scene -> the three files and exit 0.
-set -u
-vtb=$1
-src=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail=0
-check() { # name, condition
-  if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi
-}
+source "$(dirname "$0")/check_lib.sh"
 
 "$vtb" --help >/dev/null; check "vtb --help" '[ $? -eq 0 ]'
 "$vtb" run --help >/dev/null; check "vtb run --help" '[ $? -eq 0 ]'

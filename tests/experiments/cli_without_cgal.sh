@@ -2,15 +2,7 @@
 # The CLI of a build without the CGAL mesh generators (VTB_WITH_CGAL=OFF): everything that needs
 # no CGAL mesh runs; what does (the plate, the Mesh_3 solids, a surface, an unstructured mesh, a
 # scene that generates one) exits 1 with one line saying so and writes nothing.
-set -u
-vtb=$1
-src=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-fail=0
-check() { # name, condition
-  if eval "$2"; then echo "ok   $1"; else echo "FAIL $1"; fail=1; fi
-}
+source "$(dirname "$0")/check_lib.sh"
 "$vtb" --help >/dev/null; check "vtb --help" '[ $? -eq 0 ]'
 "$vtb" mesh generate rectangle --size 0.2 0.05 --divisions 4 2 -o "$work/r.msh" >/dev/null; rc=$?
 check "a structured mesh needs no CGAL" '[ $rc -eq 0 ] && "$vtb" mesh info "$work/r.msh" | grep -q "nodes: 15"'

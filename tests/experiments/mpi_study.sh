@@ -6,17 +6,9 @@
 #  2. vtb sweep writes the serial stability.csv but for its timing column;
 #  3. a command that does not spread (run with a spring solver, solvers) prints once.
 # Usage: mpi_study.sh VTB SRC_DIR
-set -u
-vtb=$1
-src=$2
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
+source "$(dirname "$0")/check_lib.sh"
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1
 mpi=(mpirun --allow-run-as-root --oversubscribe -np 2)
-fail=0
-check() { # NAME CONDITION
-  if eval "$2"; then echo "ok: $1"; else echo "FAIL: $1"; fail=1; fi
-}
 scene=$src/experiments/scenes/plate123_step.toml
 args=(--quick --solvers filtered-full,implicit-euler,cvode --reference cvode)
 

@@ -54,6 +54,17 @@ std::string off(const std::vector<Eigen::Vector3d>& v, const std::vector<Tri>& f
   return o.str();
 }
 
+/// Two 2 cm cubes, the second moved by `offset`, as one OFF file.
+std::string two_cubes(const Eigen::Vector3d& offset) {
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Tri> f;
+  cube(v, f);
+  const std::vector<Tri> one = f;
+  for (int c = 0; c < 8; ++c) v.push_back(v[static_cast<std::size_t>(c)] + offset);
+  for (const auto& t : one) f.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
+  return off(v, f);
+}
+
 std::string obj(const std::vector<Eigen::Vector3d>& v, const std::vector<Tri>& f) {
   std::ostringstream o;
   o.precision(17);
@@ -231,24 +242,10 @@ TEST(Surface, BadSurfacesAreRefusedWithOneLine) {
   auto open = f;
   open.pop_back();
   expect_refused(write(dir, "open.off", off(v, open)), "not closed");
-  // Two cubes sharing an edge: four faces on it.
-  auto v2 = v;
-  auto f2 = f;
-  for (int c = 0; c < 8; ++c) v2.push_back(v[static_cast<std::size_t>(c)] + Eigen::Vector3d(0.02, 0.02, 0));
-  for (const auto& t : f) f2.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
-  expect_refused(write(dir, "edge.off", off(v2, f2)), "not manifold");
-  // Two cubes sharing a corner only.
-  auto v3 = v;
-  auto f3 = f;
-  for (int c = 0; c < 8; ++c) v3.push_back(v[static_cast<std::size_t>(c)] + Eigen::Vector3d(0.02, 0.02, 0.02));
-  for (const auto& t : f) f3.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
-  expect_refused(write(dir, "corner.off", off(v3, f3)), "not manifold");
-  // Two overlapping cubes.
-  auto v4 = v;
-  auto f4 = f;
-  for (int c = 0; c < 8; ++c) v4.push_back(v[static_cast<std::size_t>(c)] + Eigen::Vector3d(0.01, 0.01, 0.01));
-  for (const auto& t : f) f4.push_back({t[0] + 8, t[1] + 8, t[2] + 8});
-  expect_refused(write(dir, "cross.off", off(v4, f4)), "self-intersecting");
+  // Two cubes sharing an edge (four faces on it), a corner only, and overlapping.
+  expect_refused(write(dir, "edge.off", two_cubes(Eigen::Vector3d(0.02, 0.02, 0))), "not manifold");
+  expect_refused(write(dir, "corner.off", two_cubes(Eigen::Vector3d(0.02, 0.02, 0.02))), "not manifold");
+  expect_refused(write(dir, "cross.off", two_cubes(Eigen::Vector3d(0.01, 0.01, 0.01))), "self-intersecting");
   expect_refused(write(dir, "empty.off", ""), "empty");
   const std::string stl = stl_binary(v, f);
   expect_refused(write(dir, "cut.stl", stl.substr(0, stl.size() - 30)), "truncated");

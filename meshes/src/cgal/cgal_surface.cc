@@ -29,21 +29,16 @@ Polyhedron to_cgal(const Surface& in) {
   return s;
 }
 
-using Key = std::array<double, 3>;
-
 /// The mesh with "surface" and one "patch_K" group per patch of the complex's boundary facets.
 Mesh3 with_patches(const C3t3& c3t3) {
-  Mesh3 m = to_mesh(c3t3);
-  std::map<Key, int> node;
-  for (Eigen::Index i = 0; i < m.points.cols(); ++i)
-    node[{m.points(0, i), m.points(1, i), m.points(2, i)}] = static_cast<int>(i);
+  std::map<Tr::Vertex_handle, int> node;
+  Mesh3 m = to_mesh(c3t3, &node);
   std::map<std::array<int, 3>, int> patch;
   for (auto f = c3t3.facets_in_complex_begin(); f != c3t3.facets_in_complex_end(); ++f) {
     std::array<int, 3> ids{};
     for (int k = 0, j = 0; k < 4; ++k) {
       if (k == f->second) continue;
-      const auto& w = f->first->vertex(k)->point();
-      const auto it = node.find(Key{CGAL::to_double(w.x()), CGAL::to_double(w.y()), CGAL::to_double(w.z())});
+      const auto it = node.find(f->first->vertex(k));
       ids[static_cast<std::size_t>(j++)] = it == node.end() ? -1 : it->second;
     }
     std::sort(ids.begin(), ids.end());

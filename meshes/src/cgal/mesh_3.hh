@@ -25,7 +25,9 @@ namespace params = CGAL::parameters;
 /// Copies the cells of a complex into a Mesh3, numbering vertices in geometric order. A cell
 /// of zero volume (four coplanar vertices, which Mesh_3 can leave on a flat face beside a
 /// protected sharp edge where a refinement meets it) is dropped: it holds no material.
-template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
+/// `node_of`, when given, receives each kept vertex's node number.
+template <typename C3t3>
+Mesh3 to_mesh(const C3t3& c3t3, std::map<typename C3t3::Triangulation::Vertex_handle, int>* node_of = nullptr) {
   using Vh = typename C3t3::Triangulation::Vertex_handle;
   auto p = [](const Vh& v) {
     const auto& w = v->point();
@@ -60,6 +62,7 @@ template <typename C3t3> Mesh3 to_mesh(const C3t3& c3t3) {
   for (const auto& c : cells) m.cells.push_back({id[c[0]], id[c[1]], id[c[2]], id[c[3]]});
   check_and_orient(m);
   std::sort(m.cells.begin(), m.cells.end());
+  if (node_of != nullptr) *node_of = std::move(id);
   return m;
 }
 

@@ -22,7 +22,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
 #include <iostream>
 #include <map>
 #include <sstream>
@@ -235,7 +234,6 @@ void prescan_surface(std::string_view content, std::string_view format, const st
 }
 
 Surface parse_surface(std::string_view content, std::string_view format, const std::string& src, double scale) {
-  if (!(scale > 0) || !std::isfinite(scale)) throw InputError(src + ": the scale must be > 0");
   if (content.empty()) throw InputError(src + ": the file is empty");
   prescan_surface(content, format, src);
   std::vector<Point> points;
@@ -301,18 +299,7 @@ Surface read_surface(const std::filesystem::path& file, double scale) {
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (std::find(kSurfaceFormats.begin(), kSurfaceFormats.end(), ext) == kSurfaceFormats.end())
     throw InputError(src + ": unknown surface format '" + ext + "' (.off, .stl, .obj or .ply)");
-  std::error_code ec;
-  const auto size = std::filesystem::file_size(file, ec);
-  if (ec) throw InputError(src + ": cannot open surface file");
-  if (size > (std::uintmax_t{1} << 30)) throw InputError(src + ": surface file larger than 1 GiB; refused");
-  std::string content;
-  {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) throw InputError(src + ": cannot open surface file");
-    std::ostringstream ss;
-    ss << in.rdbuf();
-    content = ss.str();
-  }
+  const std::string content = read_untrusted(file, "surface");
   const Surface s = decode(run_isolated(src, "surface", std::chrono::seconds(8),
                                         [&] { return encode(parse_surface(content, ext, src, scale)); }),
                            src);
