@@ -1,6 +1,6 @@
 #include "commands.hh"
 
-#include "vtb/harness/bench_scale.hh"
+#include "vtb/reproduction/bench_scale.hh"
 
 #include <iostream>
 #include <memory>
@@ -22,7 +22,7 @@ Action add_bench(CLI::App& app) {
   scale->add_flag("--quick", o->quick, "The reproduction's small ladder (2D to 4,257 nodes, 3D to 1,225)");
   scale->add_option("--out", o->out, "Output folder (default: out/bench-scale)");
   return [o]() {
-    harness::bench_scale(o->out, o->quick, &std::cerr, std::cout);
+    reproduction::bench_scale(o->out, o->quick, &std::cerr, std::cout);
     return 0;
   };
 }

@@ -1,6 +1,6 @@
 #include "commands.hh"
 
-#include "vtb/harness/paper_data.hh"
+#include "vtb/reproduction/paper_data.hh"
 
 #include <iostream>
 #include <memory>
@@ -18,7 +18,7 @@ Action add_paper_data(CLI::App& app) {
   cmd->add_option("reproduce_dir", o->in, "The folder vtb reproduce wrote (default: out/reproduce)");
   cmd->add_option("out_dir", o->out, "Where to write (default: out/paper/data)");
   return [o]() {
-    harness::write_paper_data(o->in, o->out);
+    reproduction::write_paper_data(o->in, o->out);
     std::cout << "paper data in " << o->out << "\n";
     return 0;
   };

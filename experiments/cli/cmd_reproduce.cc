@@ -1,6 +1,6 @@
 #include "commands.hh"
 
-#include "vtb/harness/reproduce.hh"
+#include "vtb/reproduction/reproduce.hh"
 
 #include <iostream>
 #include <memory>
@@ -22,12 +22,12 @@ Action add_reproduce(CLI::App& app) {
   cmd->add_option("--scenes", o->scenes,
                   "Folder with plate517_step.toml, plate517_four_forces.toml, plate123_step.toml");
   return [o]() {
-    harness::ReproduceOptions ro;
+    reproduction::ReproduceOptions ro;
     ro.quick = o->quick;
     ro.out = o->out;
     ro.scenes_dir = o->scenes;
     ro.progress = &std::cerr;
-    std::cout << harness::run_reproduce(ro) << "\noutputs in " << o->out << "\n";
+    std::cout << reproduction::run_reproduce(ro) << "\noutputs in " << o->out << "\n";
     return 0;
   };
 }

@@ -15,6 +15,8 @@ rules=(
   "core/solvers|solvers springs problem linalg meshes"
   "core/haptics|haptics solvers springs problem linalg meshes"
   "reference_fem|fem problem meshes"
+  "experiments/harness|harness fem haptics solvers springs problem linalg meshes"
+  "experiments/reproduction|reproduction harness fem haptics solvers springs problem linalg meshes"
 )
 for rule in "${rules[@]}"; do
   dir=${rule%%|*}

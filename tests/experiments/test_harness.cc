@@ -2,7 +2,7 @@
 // explicit stability boundary.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
-#include "vtb/harness/bench_scale.hh"
+#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/csv_table.hh"
 #include "vtb/harness/ranks.hh"
@@ -415,7 +415,7 @@ TEST(BenchScale, FitsTheExponentOfEachCostAgainstNodes) {
       f << "box,3," << n << ",0," << solver << ',' << 2 * n << ',' << std::pow(n, 1.5) << ',' << std::pow(n, 1.25)
         << '\n';
   f.close();
-  const harness::CsvTable fit = harness::CsvTable::parse(harness::scaling_fit(dir.path()), "scaling_fit.csv");
+  const harness::CsvTable fit = harness::CsvTable::parse(reproduction::scaling_fit(dir.path()), "scaling_fit.csv");
   ASSERT_EQ(fit.rows(), 2u);
   for (std::size_t r = 0; r < fit.rows(); ++r) {
     EXPECT_NEAR(fit.number(r, "step_exponent"), 1.5, 1e-3); // printed to 4 digits

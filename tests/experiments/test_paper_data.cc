@@ -1,8 +1,8 @@
 // The paper's data step: LaTeX escaping, the CSV reader, numbers computed from the fixture
 // reproduction, and the figure list that report.md and build_paper.sh share.
 #include "vtb/harness/csv_table.hh"
-#include "vtb/harness/paper_data.hh"
-#include "vtb/harness/reproduce.hh"
+#include "vtb/reproduction/paper_data.hh"
+#include "vtb/reproduction/reproduce.hh"
 #include "vtb/harness/tex.hh"
 #include "vtb/meshes/input_error.hh"
 
@@ -68,7 +68,7 @@ TEST(CsvTable, QuotedFieldsAndClearErrors) {
 
 std::map<std::string, std::string> data_files() {
   std::map<std::string, std::string> m;
-  for (auto& [name, text] : harness::paper_data(kFixture)) m[name] = text;
+  for (auto& [name, text] : reproduction::paper_data(kFixture)) m[name] = text;
   return m;
 }
 
@@ -173,13 +173,13 @@ TEST(PaperData, LogLogSlopeRecoversAPowerLaw) {
   // The fitted order (convergence) and exponent (scaling): y = 3 x^1.5 exactly, plus points
   // that a log axis cannot hold (x or y <= 0), which the fit skips.
   const std::vector<double> x = {1, 2, 4, 8, 0, 5}, y = {3, 3 * std::pow(2, 1.5), 3 * 8.0, 3 * std::pow(8, 1.5), 1, -1};
-  EXPECT_NEAR(harness::paper::loglog_slope(x, y), 1.5, 1e-12);
-  EXPECT_TRUE(std::isnan(harness::paper::loglog_slope({1}, {1})));
+  EXPECT_NEAR(reproduction::paper::loglog_slope(x, y), 1.5, 1e-12);
+  EXPECT_TRUE(std::isnan(reproduction::paper::loglog_slope({1}, {1})));
 }
 
 TEST(PaperData, MissingFileIsOneClearError) {
   try {
-    harness::paper_data(kFixture / "fig3");
+    reproduction::paper_data(kFixture / "fig3");
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("meta.csv: cannot read"), std::string::npos) << e.what();
@@ -187,14 +187,14 @@ TEST(PaperData, MissingFileIsOneClearError) {
 }
 
 TEST(ReportFigures, EachHasItsPgfplotsSource) {
-  for (const auto& f : harness::kReportFigures)
+  for (const auto& f : reproduction::kReportFigures)
     EXPECT_TRUE(std::filesystem::exists(std::filesystem::path(VTB_SOURCE_DIR) / "paper/figures" /
                                         (std::string(f.file) + ".tex")))
         << f.file;
   std::size_t sources = 0;
   for (const auto& e : std::filesystem::directory_iterator(std::filesystem::path(VTB_SOURCE_DIR) / "paper/figures"))
     sources += e.path().extension() == ".tex";
-  EXPECT_EQ(sources, std::size(harness::kReportFigures)) << "a figure the report does not show, or the reverse";
+  EXPECT_EQ(sources, std::size(reproduction::kReportFigures)) << "a figure the report does not show, or the reverse";
 }
 
 } // namespace

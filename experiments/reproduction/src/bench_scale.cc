@@ -1,8 +1,8 @@
-#include "vtb/harness/bench_scale.hh"
+#include "vtb/reproduction/bench_scale.hh"
 
 #include "reproduce_parts.hh"
 #include "vtb/harness/csv_table.hh"
-#include "vtb/harness/paper_data.hh"
+#include "vtb/reproduction/paper_data.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/problem/problem.hh"
@@ -16,7 +16,8 @@
 #include <sstream>
 #include <tuple>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 
 std::string fit_ladder(const std::vector<int>& slabs, std::ostream* log) {
   std::ostringstream os;
@@ -93,4 +94,4 @@ void bench_scale(const std::filesystem::path& out, bool quick, std::ostream* pro
   table << "\nthe spring fit (springs = \"fitted\", no cache), spring_fit.csv:\n" << springs;
 }
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction

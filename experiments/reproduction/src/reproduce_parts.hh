@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <iosfwd>
 
-namespace vtb::harness::parts {
+namespace vtb::reproduction::parts {
 
 /// The linear static displacement of the spring network under the loads at time t:
 /// K_ff u_f = f_f, K the stiffness at rest over the free nodes (the small-load limit).
@@ -73,4 +73,4 @@ void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* l
 /// is the springs alone. The slab's mesh is the scenes' canonical one (scenes_dir/../../meshes/data).
 void write_fidelity(const std::filesystem::path& out, const std::filesystem::path& scenes_dir, std::ostream* log);
 
-} // namespace vtb::harness::parts
+} // namespace vtb::reproduction::parts

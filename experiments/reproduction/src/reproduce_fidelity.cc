@@ -26,7 +26,8 @@
 #include <sstream>
 #include <tuple>
 
-namespace vtb::harness::parts {
+namespace vtb::reproduction::parts {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 
 /// The linear static displacement of the spring network under the loads at time t:
 /// K_ff u_f = f_f with K the stiffness (df/du at rest, stiffness signs) over the free nodes.
@@ -381,4 +382,4 @@ density = 1.0
   write_files_atomically(out, {{"deep_press.csv", os.str()}});
 }
 
-} // namespace vtb::harness::parts
+} // namespace vtb::reproduction::parts

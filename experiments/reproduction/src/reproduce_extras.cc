@@ -20,7 +20,8 @@
 #include <thread>
 #include <variant>
 
-namespace vtb::harness::parts {
+namespace vtb::reproduction::parts {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 namespace {
 
 std::string cpu_model() {
@@ -222,4 +223,4 @@ void write_multirate(const std::filesystem::path& out, const std::filesystem::pa
   write_files_atomically(out, {{"multirate_trace.csv", trace.str()}, {"multirate_summary.csv", summary.str()}});
 }
 
-} // namespace vtb::harness::parts
+} // namespace vtb::reproduction::parts

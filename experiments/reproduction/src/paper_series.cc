@@ -13,7 +13,8 @@
 #include <map>
 #include <sstream>
 
-namespace vtb::harness::paper {
+namespace vtb::reproduction::paper {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 
 std::string series(const std::string& header, const std::vector<std::vector<double>>& columns) {
   std::ostringstream os;
@@ -387,4 +388,4 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
   out.number("vtbDeepNodes", column(t, "nodes", [](std::size_t) { return true; }).front(), 6);
 }
 
-} // namespace vtb::harness::paper
+} // namespace vtb::reproduction::paper

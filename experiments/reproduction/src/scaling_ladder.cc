@@ -16,7 +16,8 @@
 #include <ostream>
 #include <sstream>
 
-namespace vtb::harness::parts {
+namespace vtb::reproduction::parts {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 namespace {
 
 /// Heap bytes in use (glibc), to measure what an integrator holds.
@@ -153,4 +154,4 @@ void write_scaling(const std::filesystem::path& out, bool quick, std::ostream* l
   write_files_atomically(out, {{"scaling.csv", os.str()}});
 }
 
-} // namespace vtb::harness::parts
+} // namespace vtb::reproduction::parts

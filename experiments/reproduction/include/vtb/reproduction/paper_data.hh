@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
 
 /// The files, by name, that write_paper_data writes (for tests).
 std::vector<std::pair<std::string, std::string>> paper_data(const std::filesystem::path& reproduce_dir);
@@ -25,4 +25,4 @@ namespace paper {
 double loglog_slope(const std::vector<double>& x, const std::vector<double>& y);
 } // namespace paper
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction

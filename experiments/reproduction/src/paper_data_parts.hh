@@ -4,14 +4,15 @@
 /// files and macros to the Out.
 
 #include "vtb/harness/csv_table.hh"
-#include "vtb/harness/paper_data.hh"
+#include "vtb/reproduction/paper_data.hh"
 
 #include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
 
-namespace vtb::harness::paper {
+namespace vtb::reproduction::paper {
+using namespace vtb::harness; // a private header of the reproduction: the harness is its base
 
 struct Out {
   std::vector<std::pair<std::string, std::string>> files; ///< name, text
@@ -46,4 +47,4 @@ void multirate(const std::filesystem::path& dir, Out& out);     // multirate_tra
 void tip_force(const std::filesystem::path& dir, Out& out);     // tip_<mesh>_<tip|point>.dat, tip_anchor.dat
 void deep_press(const std::filesystem::path& dir, Out& out);    // deep_<nu>_<model>.dat, vtbDeep* (gaps to neo-Hookean)
 
-} // namespace vtb::harness::paper
+} // namespace vtb::reproduction::paper

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
 
 /// Writes OUT/scaling.csv and OUT/scaling_fit.csv (family, dim, solver, nodes_min, nodes_max,
 /// step_exponent, precompute_exponent, heap_exponent: least-squares slopes of log cost against
@@ -28,4 +28,4 @@ std::string fit_ladder(const std::vector<int>& slabs, std::ostream* log);
 /// The fit of scaling.csv in `dir`, as scaling_fit.csv's text.
 std::string scaling_fit(const std::filesystem::path& dir);
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction

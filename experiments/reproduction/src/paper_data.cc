@@ -1,4 +1,4 @@
-#include "vtb/harness/paper_data.hh"
+#include "vtb/reproduction/paper_data.hh"
 #include "vtb/problem/solver_names.hh"
 
 #include "paper_data_parts.hh"
@@ -12,7 +12,8 @@
 #include <map>
 #include <sstream>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 namespace paper {
 
 void Out::macro(const std::string& name, const std::string& value) {
@@ -292,4 +293,4 @@ void write_paper_data(const std::filesystem::path& reproduce_dir, const std::fil
   write_files_atomically(out_dir, files);
 }
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction

@@ -1,4 +1,4 @@
-#include "vtb/harness/reproduce.hh"
+#include "vtb/reproduction/reproduce.hh"
 #include "vtb/harness/ranks.hh"
 #include "vtb/problem/solver_registry.hh"
 
@@ -6,7 +6,7 @@
 
 #include "vtb/problem/cell_fields.hh"
 
-#include "vtb/harness/bench_scale.hh"
+#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/sweep.hh"
@@ -23,7 +23,8 @@
 #include <ostream>
 #include <sstream>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
+using namespace vtb::harness; // the general harness: solvers, compare, sweep, metrics, tables
 namespace {
 
 using clock_type = std::chrono::steady_clock;
@@ -407,4 +408,4 @@ std::string run_reproduce(const ReproduceOptions& options) {
   return md;
 }
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction

@@ -7,7 +7,7 @@
 #include <iosfwd>
 #include <string>
 
-namespace vtb::harness {
+namespace vtb::reproduction {
 
 /// The figures report.md shows, as scripts/build_paper.sh draws them from paper/figures/FILE.tex
 /// into figures/FILE.png beside it (a test checks that each has its .tex).
@@ -41,4 +41,4 @@ struct ReproduceOptions {
 /// options.out; returns the report's text.
 std::string run_reproduce(const ReproduceOptions& options);
 
-} // namespace vtb::harness
+} // namespace vtb::reproduction
