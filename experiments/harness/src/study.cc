@@ -504,7 +504,7 @@ std::vector<std::pair<std::string, std::string>> plot_data(const StudyResult& r)
   return files;
 }
 
-/// Each solver's pgfplots style (paper/preamble.tex, shared with the paper's figures): cvode,
+/// Each solver's pgfplots style (plot_styles.tex, shared with the paper's figures): cvode,
 /// fem and explicit have styles of their own names.
 std::string plot_style(const std::string& solver) {
   static constexpr std::pair<const char*, const char*> kStyles[] = {{solvers::kFilteredFull, "full"},
@@ -523,12 +523,13 @@ std::string plot_style(const std::string& solver) {
 }
 
 /// study_plot.tex: the paper's accuracy-against-cost figure (paper/figures/accuracy_speed.tex)
-/// for the solvers this study ran, whichever they are, drawn from data/ (standalone class).
-/// Legend entries are drawn apart from the data, so that an empty series cannot shift them.
-std::string plot_tex(const std::filesystem::path& paper_dir, const std::vector<std::string>& names) {
+/// for the solvers this study ran, whichever they are, drawn from data/ (standalone class) in
+/// vtb's figure look (plot_styles.tex beside it). Legend entries are drawn apart from the data,
+/// so that an empty series cannot shift them.
+std::string plot_tex(const std::vector<std::string>& names) {
   std::ostringstream t;
-  t << "\\documentclass[border=4pt]{standalone}\n\\input{" << (paper_dir / "preamble.tex").string()
-    << "}\n\\begin{document}\n\\begin{tikzpicture}\n"
+  t << "\\documentclass[border=4pt]{standalone}\n\\input{plot_styles.tex}\n\\input{data/numbers.tex}\n"
+    << "\\begin{document}\n\\begin{tikzpicture}\n"
     << "\\begin{axis}[vtb, width=9cm, height=6.2cm, xmode=log, ymode=log,\n"
     << "  xlabel={wall time per simulated second [s]}, ylabel={max.\\ rel.\\ $L_2$ displacement error vs "
        "\\vtbAccuracyReference},\n  legend pos=outer north east]\n";
@@ -665,7 +666,8 @@ std::filesystem::path write_study(const StudyResult& r, const std::filesystem::p
   write_files_atomically(dir / "data", plot_data(r));
   write_files_atomically(dir, {{"study.csv", c.str()},
                                {"study.json", study_json(r).dump(1) + "\n"},
-                               {"study_plot.tex", plot_tex(VTB_PAPER_DIR, plotted_solvers(r))}});
+                               {"plot_styles.tex", std::string(plot_styles())},
+                               {"study_plot.tex", plot_tex(plotted_solvers(r))}});
   // The PNG needs LaTeX (pgfplots) and poppler: both optional here, so their absence is a note.
   if (std::system("command -v pdflatex >/dev/null 2>&1 && command -v pdftoppm >/dev/null 2>&1") != 0) {
     note = "no plot: pdflatex or pdftoppm is not installed (study_plot.tex is written; the paper's setup installs "

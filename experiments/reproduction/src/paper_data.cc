@@ -285,6 +285,7 @@ std::vector<std::pair<std::string, std::string>> paper_data(const std::filesyste
   paper::tip_force(dir, out);
   paper::deep_press(dir, out);
   out.files.emplace_back("numbers.tex", out.macros);
+  out.files.emplace_back("plot_styles.tex", std::string(plot_styles())); // the figures' look (paper/preamble.tex)
   return out.files;
 }
 

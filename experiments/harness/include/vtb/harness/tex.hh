@@ -17,6 +17,10 @@ std::string tex_number(double value, int digits = 3);
 /// A number as pgfplots parses it (plain or 1e-05 form, 8 digits), for coordinates.
 std::string plain_number(double value);
 
+/// vtb's figure look as LaTeX (experiments/harness/tex/plot_styles.tex): fonts, pgfplots and
+/// one style per solver, for the paper's figures and `vtb study`'s plot alike.
+std::string_view plot_styles();
+
 /// \newcommand\NAME{VALUE}\n, NAME letters only (checked: a bad name is a programming error).
 std::string tex_macro(const std::string& name, const std::string& value);
 
