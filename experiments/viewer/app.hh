@@ -6,9 +6,9 @@
 #include "camera.hh"
 #include "device_mode.hh"
 #include "gl_draw.hh"
-#include "live_sim.hh"
 #include "surface.hh"
 #include "viewer.hh"
+#include "vtb/stepper/live_sim.hh"
 
 struct ImDrawList;
 

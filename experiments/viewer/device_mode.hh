@@ -13,7 +13,7 @@
 /// contact model of that step (local_model.hh), its change blended in over the step, and the
 /// next step takes the spring to the anchor they held.
 
-#include "live_sim.hh"
+#include "vtb/stepper/live_sim.hh"
 
 #include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/device.hh"

@@ -13,6 +13,7 @@ rules=(
   "core/problem|problem linalg meshes"
   "core/springs|springs problem linalg meshes"
   "core/solvers|solvers springs problem linalg meshes"
+  "core/stepper|stepper solvers springs problem linalg meshes"
   "core/haptics|haptics solvers springs problem linalg meshes"
   "reference_fem|fem problem meshes"
   "experiments/harness|harness fem haptics solvers springs problem linalg meshes"

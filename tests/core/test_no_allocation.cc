@@ -12,7 +12,7 @@
 
 #include <gtest/gtest.h>
 #ifdef VTB_HAVE_LIVE_SIM
-#include "live_sim.hh"
+#include "vtb/stepper/live_sim.hh"
 #endif
 
 #include <algorithm>
@@ -295,11 +295,11 @@ namespace {
 TEST(NoAllocation, InteractiveStepsWithExternalForcesAllocateNothing) {
   for (const char* solver : {"filtered", "implicit-euler", "explicit"}) {
     const Scene scene = parse_scene(test::pulled_plate(12, 3, "[solver]\nsprings = \"lloyd\"\n"), "test.toml", ".");
-    viewer::SimControls c;
+    SimControls c;
     c.solver = solver;
     c.springs = "lloyd";
     c.dt = std::string(solver) == "explicit" ? 1e-6 : 1e-3;
-    viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), c);
+    LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), c);
     sim.add_pull(5, Vec<2>(0.1, 0.0));
     sim.steps(2); // warm up
     g_allocations = 0;

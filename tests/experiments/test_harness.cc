@@ -2,7 +2,6 @@
 // explicit stability boundary.
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
-#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/csv_table.hh"
 #include "vtb/harness/ranks.hh"
@@ -10,6 +9,7 @@
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/solvers/explicit_euler.hh"
 
 #include <gtest/gtest.h>

@@ -2,11 +2,11 @@
 // checked for content, not for pixels: the body is drawn where the scene puts it, a drag pulls
 // it toward the cursor and brings out the strain colours, and an unstable solver is reported
 // while the viewer carries on.
-#include "../../experiments/viewer/live_sim.hh"
 #include "../../experiments/viewer/viewer.hh"
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
 #include "vtb/springs/load_check.hh"
+#include "vtb/stepper/live_sim.hh"
 
 #include <gtest/gtest.h>
 
@@ -173,8 +173,8 @@ TEST(Viewer, ThePanelRunsTheTensorFilterOnFittedSprings) {
   const test::FreshDir cache; // the fit's cache, away from the user's
   ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
   const Scene scene = plate();
-  viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
-  viewer::SimControls c = sim.controls();
+  LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), SimControls{});
+  SimControls c = sim.controls();
   c.filter = solvers::kFilterTensor;
   c.springs = "fitted";
   sim.configure(c);
@@ -184,7 +184,7 @@ TEST(Viewer, ThePanelRunsTheTensorFilterOnFittedSprings) {
   for (int k = 0; k < 20; ++k) sim.advance(0.01, 10.0);
   EXPECT_TRUE(sim.failure().empty()) << sim.failure();
   EXPECT_GT(sim.state().u.col(tip)(1), 1e-4);
-  viewer::SimControls bad = sim.controls();
+  SimControls bad = sim.controls();
   bad.springs = "hooke";
   EXPECT_THROW(sim.configure(bad), InputError);
   EXPECT_EQ(sim.controls().springs, "fitted");
@@ -194,7 +194,7 @@ TEST(Viewer, ThePanelRunsTheTensorFilterOnFittedSprings) {
 /// A pull 4 mm upward at the top face's centre of a 2 cm box (2.5 mm spacing, Lloyd's springs,
 /// bottom clamped) for 0.2 s with the viewer's pull spring, with the scene's grab radius.
 /// Returns the pull, the largest spring strain and the pull's force.
-viewer::Pull<3> held_pull(double radius, double& max_strain, double& force) {
+Pull<3> held_pull(double radius, double& max_strain, double& force) {
   const std::string text = "[scene]\nname = \"grab\"\nduration = 1.0\noutput_interval = 0.01\n[mesh]\n"
                            "generate = { shape = \"box\", size = [0.02, 0.02, 0.02], divisions = [8, 8, 8] }\n"
                            "[material]\nyoung_modulus = 5.0e3\npoisson_ratio = 0.45\ndensity = 1000.0\n"
@@ -204,9 +204,9 @@ viewer::Pull<3> held_pull(double radius, double& max_strain, double& force) {
   const Scene scene = parse_scene(text, "grab.toml", ".");
   // The scene's springs (Lloyd's), as `vtb view` starts (initial_controls): default controls
   // would ask for "auto", whose fit this small box's pull is not about.
-  viewer::SimControls controls;
+  SimControls controls;
   controls.springs = scene.solver.springs;
-  viewer::LiveSim<3> sim(scene, std::get<Mesh3>(load_mesh(scene)), controls);
+  LiveSim<3> sim(scene, std::get<Mesh3>(load_mesh(scene)), controls);
   int top = 0;
   const Vec<3> centre(0.01, 0.01, 0.02);
   for (int i = 0; i < sim.model().num_nodes(); ++i)
@@ -228,8 +228,8 @@ TEST(Viewer, APullGrabsAPatchOfTheToolsSizeNotANode) {
   // moves it less and pulls harder; and yet its largest spring strain is well below the single
   // node's (measured 0.16 at 0.14 N against 0.32 at 0.094 N).
   double patch_strain = 0, node_strain = 0, patch_force = 0, node_force = 0;
-  const viewer::Pull<3> patch = held_pull(0.004, patch_strain, patch_force);
-  const viewer::Pull<3> node = held_pull(0.0, node_strain, node_force);
+  const Pull<3> patch = held_pull(0.004, patch_strain, patch_force);
+  const Pull<3> node = held_pull(0.0, node_strain, node_force);
   EXPECT_EQ(node.count, 1);
   EXPECT_EQ(patch.count, 9);
   EXPECT_NEAR(patch.weights[0] * patch.count, 1.0, 1e-12);
@@ -244,11 +244,11 @@ TEST(Viewer, ThePanelSaysWhatTheAutoFilterRuns) {
   const test::FreshDir cache;
   ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
   const Scene scene = plate();
-  viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
+  LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), SimControls{});
   EXPECT_EQ(sim.controls().filter, solvers::kFilterAuto);
   EXPECT_EQ(sim.running_filter(), chosen_filter(sim.model(), solvers::kFilterAuto));
   EXPECT_EQ(sim.running_filter(), solvers::kFilterTensor);
-  viewer::SimControls c = sim.controls();
+  SimControls c = sim.controls();
   c.filter = solvers::kFilterFull;
   sim.configure(c);
   EXPECT_EQ(sim.running_filter(), solvers::kFilterFull);
@@ -270,10 +270,10 @@ TEST(Viewer, KeepsTheSpringsLoadErrorUntilTheSpringsChange) {
   const test::FreshDir cache;
   ::setenv("VTB_CACHE_DIR", cache.path().c_str(), 1);
   const Scene scene = plate("[[load]]\ngroup = \"right\"\ntotal_force = [0.0, -0.5]\n");
-  viewer::LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), viewer::SimControls{});
+  LiveSim<2> sim(scene, std::get<Mesh2>(load_mesh(scene)), SimControls{});
   const double first = sim.model().net.calibration_load_error;
   ASSERT_TRUE(std::isfinite(first));
-  viewer::SimControls c = sim.controls();
+  SimControls c = sim.controls();
   c.stiffness_scale = 3.0;
   c.dt = 4e-3;
   c.filter = solvers::kFilterFull;

@@ -1,12 +1,12 @@
 #include "bindings.hh"
 
-#include "live_sim.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/region.hh"
 #include "vtb/problem/cell_fields.hh"
 #include "vtb/problem/problem.hh"
 #include "vtb/solvers/integrator.hh"
+#include "vtb/stepper/live_sim.hh"
 
 #include <pybind11/eigen.h>
 #include <pybind11/numpy.h>
@@ -20,10 +20,8 @@ namespace vtb::python {
 
 namespace {
 
-using viewer::LiveSim;
-using viewer::SimControls;
-
-/// A scene stepped from Python: the viewer's LiveSim (no window) in the mesh's dimension.
+/// A scene stepped from Python: the interactive stepper LiveSim (core/stepper, the viewer's
+/// too) in the mesh's dimension.
 /// Arrays of the state are views of the simulation's own storage (no copy; valid while the
 /// simulation lives, since reset and configure copy into that storage).
 class Simulation {

@@ -2,10 +2,10 @@
 
 #include "reproduce_parts.hh"
 #include "vtb/harness/csv_table.hh"
-#include "vtb/reproduction/paper_data.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
 #include "vtb/problem/problem.hh"
+#include "vtb/reproduction/paper_data.hh"
 #include "vtb/springs/fitted_springs.hh"
 
 #include <algorithm>

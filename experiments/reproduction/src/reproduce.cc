@@ -6,12 +6,12 @@
 
 #include "vtb/problem/cell_fields.hh"
 
-#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/sweep.hh"
 #include "vtb/meshes/vtu_io.hh"
 #include "vtb/problem/output.hh"
+#include "vtb/reproduction/bench_scale.hh"
 #include "vtb/solvers/explicit_euler.hh"
 
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "live_sim.hh"
+#include "vtb/stepper/live_sim.hh"
 #include "vtb/problem/solver_registry.hh"
 #include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/filtered.hh"
@@ -12,7 +12,7 @@
 #include <cmath>
 #include <sstream>
 
-namespace vtb::viewer {
+namespace vtb {
 
 template <int dim>
 LiveSim<dim>::LiveSim(const Scene& scene, Mesh<dim> mesh, SimControls controls, Yardstick yardstick)
@@ -288,4 +288,4 @@ template <int dim> int LiveSim<dim>::probe_trace(float* out) const {
 template class LiveSim<2>;
 template class LiveSim<3>;
 
-} // namespace vtb::viewer
+} // namespace vtb

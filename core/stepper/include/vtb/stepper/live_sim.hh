@@ -19,7 +19,7 @@
 #include <optional>
 #include <string>
 
-namespace vtb::viewer {
+namespace vtb {
 
 /// The solvers that can run interactively (one step at a time): the fixed-step spring
 /// integrators. cvode and fem produce whole trajectories and are run by `vtb run`/`compare`.
@@ -194,4 +194,4 @@ private:
   std::string m_running_filter; ///< what the filtered solver runs (auto resolved)
 };
 
-} // namespace vtb::viewer
+} // namespace vtb
