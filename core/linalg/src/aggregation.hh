@@ -11,6 +11,8 @@
 namespace vtb::detail {
 
 using RowSparse = Eigen::SparseMatrix<double, Eigen::RowMajor>;
+/// A node's block (at most 6 x 6: a 3D coarse node's rigid modes), on the stack.
+using Small = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
 
 /// Aggregate of each row of A (graph of the off-diagonal entries |a_ij| >= theta sqrt(a_ii
 /// a_jj)); returns their count.
