@@ -17,9 +17,9 @@ mutations=(
   "dashpot dropped from implicit Euler's matrix|core/solvers/src/implicit_euler.cc|s/const Mat<dim> B = dt \* dt \* K + dt \* dashpot_jacobian<dim>(xi, xj, net.damping\[sp\]);/const Mat<dim> B = dt * dt * K;/"
   "dashpot dropped from CVODE's Jacobian|core/solvers/src/cvode_solver.cc|s/const Mat<dim> C = dashpot_jacobian<dim>(xi, xj, net.damping\[s\]);/const Mat<dim> C = Mat<dim>::Zero();/"
   "saturation removed|core/haptics/src/force_shaping.cc|s/if (norm <= max_force) return f;/if (true) return f;/"
-  "torque correction skipped|core/solvers/src/filtered.cc|s/if (m_correct) correct_momentum(s);/(void)m_correct;/"
+  "torque correction skipped|core/solvers/src/filtered/filtered.cc|s/if (m_correct) correct_momentum(s);/(void)m_correct;/"
   "FEM thickness scaling halved|reference_fem/src/grid.hh|s/const double t = dim == 2 ? mat.thickness : 1.0;/const double t = dim == 2 ? 0.5 * mat.thickness : 1.0;/"
-  "strain limit skipped|core/solvers/src/filtered.cc|s/if (m_strain_limit > 0) limit_strain(s);/(void)m_strain_limit;/"
+  "strain limit skipped|core/solvers/src/filtered/filtered.cc|s/if (m_strain_limit > 0) limit_strain(s);/(void)m_strain_limit;/"
 )
 touched=()
 restore() { for f in "${touched[@]}"; do git -C "$root" checkout -- "$f"; done; }

@@ -10,7 +10,7 @@
 #include "vtb/solvers/filtered.hh"
 #include "vtb/solvers/implicit_euler_cg.hh"
 #include "vtb/solvers/integrator.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 #include "vtb/springs/fitted_springs.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
@@ -263,7 +263,7 @@ BENCHMARK(BM_kernel_forces_box1701)->Unit(benchmark::kMicrosecond);
 void BM_kernel_forces_and_turns_plate517(benchmark::State& st) {
   const Model<2>& model = plate517();
   const State<2> s = midrun_state(model);
-  WarpedFilter<2> filter(model, 1e-3);
+  TensorFilter<2> filter(model, 1e-3);
   Nodal<2> f = Nodal<2>::Zero(2, model.num_nodes());
   for (auto _ : st) {
     add_internal_forces_and_turns(model.net, s.u, s.v, f, 1e-3, filter.turns());
@@ -317,7 +317,7 @@ BENCHMARK(BM_kernel_solve_eigen_box1701)->Unit(benchmark::kMicrosecond);
 // the scalar solve above.
 template <int dim> void tensor_kernel(benchmark::State& st, const Model<dim>& model, bool prepare) {
   const State<dim> s = midrun_state(model);
-  WarpedFilter<dim> filter(model, 1e-3);
+  TensorFilter<dim> filter(model, 1e-3);
   filter.prepare(s.u);
   if constexpr (dim == 2) { // the step's force pass, once: prepare_turned reads its turns
     Nodal<2> forces = Nodal<2>::Zero(2, model.num_nodes());

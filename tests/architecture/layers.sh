@@ -36,7 +36,7 @@ done
 while read -r d; do
   n=$(find "$d" -maxdepth 1 -type f | wc -l)
   if [ "$n" -gt 18 ]; then echo "layers: $d holds $n files (at most 18)"; status=1; fi
-done < <(find core meshes reference_fem experiments -type d \( -name src -o -path '*/include/vtb/*' -o -name cli -o -name viewer \))
+done < <(find core meshes reference_fem experiments -type d \( -name src -o -path '*/src/*' -o -path '*/include/vtb/*' -o -name cli -o -name viewer \))
 
 [ $status -eq 0 ] && echo "layers: every include points down the layers; no folder over 18 files"
 exit $status

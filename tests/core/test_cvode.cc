@@ -205,7 +205,7 @@ TEST(Cvode, TensorFilterTracksACantileverStepAsWellAsImplicitEuler) {
   // the Jacobian frozen at rest (exact for this small deflection up to O(rotation)), so its
   // error is implicit Euler's first-order one. Goal (the fidelity issue): at most 1.5x
   // implicit Euler's at dt = 1, 10 and 40 ms. Measured (with the per-spring transverse cover of
-  // warped_filter.hh and the step's correction toward implicit Euler's, which the cover's small
+  // tensor_filter.hh and the step's correction toward implicit Euler's, which the cover's small
   // gain here mostly skips): 0.31/0.42, 2.88/3.91, 9.57/13.6 %; the full filter 15, 59, 92 %.
   // The reproduction's transient.csv runs the same scene.
   const Scene scene = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/cantilever_step.toml");
@@ -282,7 +282,7 @@ TEST(Cvode, TensorFilterTracksASlabPressAndThePapersPlateAsWellAsImplicitEuler) 
   // slab). Goal (issue 26): at most 1.5x implicit Euler's error. With one transverse cover for
   // the whole mesh (the largest mismatch's, set by the driven point's neighbourhood) the slab
   // was at 4.0x (the plate 1.6-1.7x): the cover's transverse damping slowed every spring's
-  // rotation. With each spring's own cover (warped_filter.hh) measured 1.1x and 1.02x.
+  // rotation. With each spring's own cover (tensor_filter.hh) measured 1.1x and 1.02x.
   // The block V-cycle in place of H_t's factor (tensor-multigrid, the large-mesh form) adds the
   // extra mass Delta_t (B^-1 = H_t + Delta_t): measured 1.39x / 1.42x implicit Euler's error at
   // 1 / 10 ms before the step's correction, 1.43x / 1.43x while the correction rested after
@@ -376,7 +376,7 @@ TEST(Cvode, TensorFiltersTrackATwistedBarAsWellAsImplicitEuler) {
   // what the filter relies on here. Measured here (CVODE at rtol 1e-8; largest relative
   // displacement error over the run): tensor 0.94x / 0.98x / 1.00x implicit Euler's, the block
   // V-cycle (tensor-multigrid) 0.99x / 1.00x / 0.99x: its extra mass Delta_t had made it 1.04x /
-  // 1.38x / 1.46x before the step's correction toward implicit Euler's (WarpedFilter::correct);
+  // 1.38x / 1.46x before the step's correction toward implicit Euler's (TensorFilter::correct);
   // the full filter, with vtb compare's CVODE, 80 / 97 / 99 % (its lag), against 1.5 / 12 / 33 %.
   expect_tensor_filter_within_implicit_eulers_error<3>("bar_torsion.toml", 0.6, {"tensor", "tensor-multigrid"},
                                                        {1e-3, 1e-2, 4e-2});
@@ -389,7 +389,7 @@ TEST(Cvode, TensorFilterTracksThePapersPlateUnderFourForcesAsWellAsImplicitEuler
   // each load turns the springs by its patch, where the cover's transverse damping set the
   // filter 5.6x / 4.0x / 3.0x implicit Euler's error (over the scene's 10 s; the cover is what
   // keeps it stable at 10 and 40 ms). The step's correction toward implicit Euler's
-  // (WarpedFilter::correct) removes that lag: measured 0.35x / 0.39x / 0.47x over these 4.5 s
+  // (TensorFilter::correct) removes that lag: measured 0.35x / 0.39x / 0.47x over these 4.5 s
   // (0.26x / 0.47x / 0.57x over 10 s), and 6.2x / 4.5x / 3.3x without it.
   expect_tensor_filter_within_implicit_eulers_error<2>("plate517_four_forces.toml", 4.5, {"tensor"},
                                                        {1e-3, 1e-2, 4e-2});

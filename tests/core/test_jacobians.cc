@@ -13,7 +13,7 @@
 #include "vtb/linalg/block_solve.hh"
 #include "vtb/solvers/cvode_solver.hh"
 #include "vtb/solvers/implicit_euler.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/load_check.hh"
 
@@ -180,7 +180,7 @@ TEST(ForceJacobians, MatchForceDifferences3D) {
   check_force_jacobians(model_of<3>(kBox3));
 }
 
-/// The tensor filter's H (warped_filter.hh) at rest: H(0) = M (1 + dt gamma) + dt D_0 + dt^2 K_0
+/// The tensor filter's H (tensor_filter.hh) at rest: H(0) = M (1 + dt gamma) + dt D_0 + dt^2 K_0
 /// on the free dofs with K_0 = -df/du and D_0 = -df/dv at rest by central differences of
 /// add_internal_forces, and H(1) - H(0) = per spring (dt c + dt^2 k)(I - n n^T) with the signs
 /// of a stiffness (the transverse cover).
@@ -232,7 +232,7 @@ template <int dim> void check_tensor_filter(const Model<dim>& m) {
 /// same spring blocks in another order: round-off, 1e-12 of the largest entry.
 template <int dim> void check_relinearised_filter(const Model<dim>& m) {
   const double dt = 0.01;
-  WarpedFilter<dim> filter(m, dt);
+  TensorFilter<dim> filter(m, dt);
   const int nf = static_cast<int>(m.free_nodes.size());
   Eigen::MatrixXd H0(dim * nf, dim * nf);
   for (int r = 0; r < dim * nf; ++r)
@@ -300,7 +300,7 @@ template <int dim> void expect_block_solve_matches_dense(const Model<dim>& m) {
     const auto n = H.rows();
     for (int i = 0; i < n; ++i) // a node's coordinates stay together and in order
       EXPECT_EQ(factor.ordered(i), factor.ordered(i - i % dim) + i % dim);
-    if (cover > 0) { // new values on the same pattern, as WarpedFilter::cover does
+    if (cover > 0) { // new values on the same pattern, as TensorFilter::cover does
       for (int c = 0; c < H.outerSize(); ++c)
         for (Eigen::SparseMatrix<double>::InnerIterator it(H, c); it; ++it) {
           const int r = factor.ordered(static_cast<int>(it.row())), cc = factor.ordered(c);
@@ -376,7 +376,7 @@ TEST(TensorFilter, RigidRotationLeavesNoMismatch) {
   // spring's direction is its rest direction turned by it (mismatch at round-off), while a
   // shear of 5 % turns springs apart from their nodes' rotations (mismatch of that order).
   const Model<2> m = model_of<2>(kPlate2);
-  WarpedFilter<2> filter(m, 0.01);
+  TensorFilter<2> filter(m, 0.01);
   const double angle = 0.7;
   const Mat<2> R = Eigen::Rotation2Dd(angle).toRotationMatrix();
   const Nodal<2> u = R * m.net.rest - m.net.rest;
@@ -392,11 +392,11 @@ TEST(TensorFilter, RigidRotationLeavesNoMismatch) {
 
 TEST(TensorFilter, RotationsAreTheNeighbourhoodsPolarFactorsIn3D) {
   // Each node's rotation is the polar factor of A_i = sum_j (x_j - x_i)(X_j - X_i)^T, the
-  // rotation nearest to it (found by a scaled Newton iteration, warped_filter.cc): against the
+  // rotation nearest to it (found by a scaled Newton iteration, tensor_filter.cc): against the
   // SVD's U V^T on a rigid rotation and on a rotated random distortion of 15 % of the mesh
   // size. Both are converged to round-off: 1e-12 (|R| = sqrt 3).
   const Model<3> m = model_of<3>(kBox3);
-  WarpedFilter<3> filter(m, 0.01);
+  TensorFilter<3> filter(m, 0.01);
   const Mat<3> R = Eigen::AngleAxisd(0.9, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
   const Nodal<3> rigid = R * m.net.rest - m.net.rest;
   filter.rotations(rigid);
@@ -420,7 +420,7 @@ TEST(TensorFilter, RotationsAreTheNeighbourhoodsPolarFactorsIn3D) {
 /// max over springs s = (i, j) of |d/|d| - t/|t||, d the spring's vector at u and t = (R_i +
 /// R_j) D its rest vector D turned by its ends' rotations: the mismatch's definition, directly.
 template <int dim>
-double mismatch_by_definition(const Model<dim>& m, const WarpedFilter<dim>& filter, const Nodal<dim>& u) {
+double mismatch_by_definition(const Model<dim>& m, const TensorFilter<dim>& filter, const Nodal<dim>& u) {
   double worst = 0;
   for (const auto& [i, j] : m.net.edge) {
     const Vec<dim> D = m.net.rest.col(j) - m.net.rest.col(i);
@@ -432,7 +432,7 @@ double mismatch_by_definition(const Model<dim>& m, const WarpedFilter<dim>& filt
 }
 
 template <int dim> void check_mismatch(const Model<dim>& m) {
-  WarpedFilter<dim> filter(m, 0.01);
+  TensorFilter<dim> filter(m, 0.01);
   Nodal<dim> u = random_state(m, 0.0, 5).u;
   filter.rotations(u);
   EXPECT_GT(filter.direction_mismatch(u), 0.05);
@@ -491,7 +491,7 @@ std::pair<Eigen::MatrixXd, Eigen::VectorXd> implicit_euler_system(const Model<di
 /// x0: r = b - A x0 and z = P r (the filter's own solve), both on the free dofs.
 template <int dim>
 std::pair<Eigen::VectorXd, Eigen::VectorXd>
-residual_and_direction(const Model<dim>& m, WarpedFilter<dim>& filter, const Eigen::MatrixXd& A,
+residual_and_direction(const Model<dim>& m, TensorFilter<dim>& filter, const Eigen::MatrixXd& A,
                        const Eigen::VectorXd& b, const Eigen::VectorXd& x0, const CouplingSet<dim>& coupling) {
   const int nf = static_cast<int>(m.free_nodes.size());
   const Eigen::VectorXd r = b - A * x0;
@@ -518,7 +518,7 @@ template <int dim> void check_correction(const Model<dim>& m, bool multigrid) {
   ASSERT_TRUE(coupling.set(k, damping, group, dt));
   ASSERT_EQ(coupling.units(), 2);
   EXPECT_NEAR(coupling.weight(0, 1), 0.3, 1e-15); // the footprint is unit 0 (its nodes come first)
-  WarpedFilter<dim> filter(m, dt, multigrid);
+  TensorFilter<dim> filter(m, dt, multigrid);
   ASSERT_GT(filter.prepare(s.u), 2e-3) << "the test needs the cover on";
   Nodal<dim> force = Nodal<dim>::Zero(dim, m.num_nodes());
   add_internal_forces(m.net, s.u, s.v, force, dt); // the filter's F, with its dt k axial term
@@ -541,7 +541,7 @@ template <int dim> void check_correction(const Model<dim>& m, bool multigrid) {
 }
 
 TEST(TensorFilter, CorrectionIsOneConjugateGradientStepOnImplicitEulersSystem) {
-  // WarpedFilter::correct applies implicit Euler's matrix and right-hand side spring by spring;
+  // TensorFilter::correct applies implicit Euler's matrix and right-hand side spring by spring;
   // assembled here from the force Jacobians (with mass damping, a coupled node, and the
   // clamp of K's transverse term under compression), the same step must come out, and it is
   // closer to implicit Euler's step in A's energy norm than the filter's own (the line search
@@ -550,7 +550,7 @@ TEST(TensorFilter, CorrectionIsOneConjugateGradientStepOnImplicitEulersSystem) {
   check_correction(model_of<3>(kBox3), true);
   // At rest nothing departs: the 2D factor with no cover leaves the step as it is.
   const Model<2> m = model_of<2>(kPlate2);
-  WarpedFilter<2> filter(m, 0.01);
+  TensorFilter<2> filter(m, 0.01);
   const State<2> s = initial_state(m);
   filter.prepare(s.u);
   Nodal<2> force = Nodal<2>::Random(2, m.num_nodes());
@@ -577,7 +577,7 @@ TEST(TensorFilter, TheVCyclesCorrectionRunsEveryStep) {
   add_internal_forces(m.net, s.u, s.v, force, dt);
   const int nf = static_cast<int>(m.free_nodes.size());
   const CouplingSet<3> none(m.free_index);
-  WarpedFilter<3> filter(m, dt, true);
+  TensorFilter<3> filter(m, dt, true);
   filter.prepare(s.u);
   Nodal<3> dv0(3, nf);
   filter.solve(force, none, dt, dv0);
@@ -586,7 +586,7 @@ TEST(TensorFilter, TheVCyclesCorrectionRunsEveryStep) {
   const Eigen::VectorXd x0 = Eigen::Map<const Eigen::VectorXd>(dv0.data(), 3 * nf);
   const auto [r, zf] = residual_and_direction(m, filter, A, b, x0, none);
   const double gain = std::pow(r.dot(zf), 2) / (zf.dot(A * zf) * x0.dot(A * x0));
-  ASSERT_LT(gain, WarpedFilter<3>::kCorrectionGain) << "the test needs a gain below the threshold";
+  ASSERT_LT(gain, TensorFilter<3>::kCorrectionGain) << "the test needs a gain below the threshold";
   ASSERT_GT(gain, 1e-8);
   // Three calls on the same step: each moves it, by the same correction. The move is sqrt(gain)
   // of the step in A's energy norm (about 0.7 % here), so 1e-4 of the step's norm is a margin.
@@ -615,7 +615,7 @@ TEST(TensorFilter, TheCorrectionGoesOnWhereItsStepGainsMuch) {
   const double dt = 0.01;
   const State<3> s = random_state(m, 1.0, 5);
   const CouplingSet<3> none(m.free_index);
-  WarpedFilter<3> filter(m, dt, true);
+  TensorFilter<3> filter(m, dt, true);
   filter.prepare(s.u);
   Nodal<3> force = Nodal<3>::Zero(3, m.num_nodes());
   add_internal_forces(m.net, s.u, s.v, force, dt);
@@ -646,7 +646,7 @@ TEST(TensorFilter, TheCorrectionGoesOnWhereItsStepGainsMuch) {
     const double rz_next = r.dot(z);
     p = z + (rz_next / rz) * p;
     rz = rz_next;
-  } while (steps < WarpedFilter<3>::kCorrectionSteps && gain > WarpedFilter<3>::kCorrectionStepGain);
+  } while (steps < TensorFilter<3>::kCorrectionSteps && gain > TensorFilter<3>::kCorrectionStepGain);
   ASSERT_GT(steps, 1) << "the test needs a first gain above the threshold";
   Nodal<3> dv = dv0;
   filter.correct(s.u, s.v, force, none, dt, dv);
@@ -773,7 +773,7 @@ template <int dim> void check_footprint_solve(const Model<dim>& m) {
   CouplingSet<dim> coupling(m.free_index);
   coupling.set(k, Eigen::VectorXd(), group, dt);
   ASSERT_EQ(coupling.units(), 1);
-  WarpedFilter<dim> filter(m, dt);
+  TensorFilter<dim> filter(m, dt);
   const State<dim> s = initial_state(m);
   filter.prepare(s.u);
   Nodal<dim> force = Nodal<dim>::Random(dim, m.num_nodes()), dv(dim, nf);

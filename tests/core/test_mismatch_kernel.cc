@@ -1,7 +1,7 @@
-// The 2D tensor filter's mismatch kernel (core/solvers/src/mismatch_kernel.cc: four springs per
+// The 2D tensor filter's mismatch kernel (core/solvers/src/filtered/mismatch_kernel.cc: four springs per
 // vector, the ends' rotations gathered, the largest sin^2 kept as a fraction) against the
 // definition spring by spring, on every remainder of the spring count by the vector's width.
-#include "../../core/solvers/src/mismatch_kernel.hh"
+#include "../../core/solvers/src/filtered/mismatch_kernel.hh"
 
 #include <gtest/gtest.h>
 

@@ -7,7 +7,7 @@
 #include "vtb/linalg/multigrid.hh"
 #include "vtb/solvers/explicit_euler.hh"
 #include "vtb/solvers/filtered.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/Eigenvalues>

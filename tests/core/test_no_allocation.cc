@@ -8,7 +8,7 @@
 #include "vtb/haptics/force_shaping.hh"
 #include "vtb/haptics/local_model.hh"
 #include "vtb/meshes/generate.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include <gtest/gtest.h>
 #ifdef VTB_HAVE_LIVE_SIM
@@ -186,7 +186,7 @@ TEST(NoAllocation, TensorFilterRelinearisationAllocatesNothing) {
   Nodal<2> u(2, model.num_nodes());
   for (int i = 0; i < model.num_nodes(); ++i) u.col(i) = Vec<2>(0.4 * model.net.rest(0, i), 0.1 * model.net.rest(0, i));
   for (const bool multigrid : {false, true}) {
-    WarpedFilter<2> filter(model, 1e-2, multigrid);
+    TensorFilter<2> filter(model, 1e-2, multigrid);
     filter.prepare(Nodal<2>::Zero(2, model.num_nodes()));
     g_allocations = 0;
     g_counting = true;

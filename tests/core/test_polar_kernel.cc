@@ -1,8 +1,8 @@
-// The 3D tensor filter's polar kernel (core/solvers/src/polar_kernel.cc: four matrices per
+// The 3D tensor filter's polar kernel (core/solvers/src/filtered/polar_kernel.cc: four matrices per
 // vector, each lane iterating until all four have converged) against the SVD's U V^T, with
 // matrices that fail (det <= 0, NaN) among those that converge, on every remainder of the
 // count by the vector's width.
-#include "../../core/solvers/src/polar_kernel.hh"
+#include "../../core/solvers/src/filtered/polar_kernel.hh"
 
 #include <Eigen/Dense>
 #include <Eigen/SVD>

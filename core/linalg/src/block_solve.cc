@@ -181,7 +181,7 @@ template <>
 VTB_VECTOR_CLONES void BlockSolve<2>::solve_turned(const double* __restrict force, const double* __restrict turn,
                                                    const int* __restrict node, const int* __restrict slot, double scale,
                                                    double* __restrict y, double* __restrict out) const {
-  // As WarpedFilter::solve's loops did, operation for operation: R^T f = (c f0 + s f1, c f1 -
+  // As TensorFilter::solve's loops did, operation for operation: R^T f = (c f0 + s f1, c f1 -
   // s f0) in, scale (c y0 - s y1, s y0 + c y1) out.
   spread_solve(
       static_cast<int>(m_inv_diag.size() / 2),

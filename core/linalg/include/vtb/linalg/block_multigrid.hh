@@ -65,7 +65,7 @@ public:
   long offset(int r, int c) const;
   /// After values() changed: the diagonal inverses, coarse matrices and coarsest factor again.
   void refresh();
-  /// refresh() in parts, so that a time step can carry a share of it (warped_filter.hh):
+  /// refresh() in parts, so that a time step can carry a share of it (tensor_filter.hh):
   /// begin_refresh(), then refresh_part(share) until it returns true, each call doing about
   /// `share` of the whole (rows of the Galerkin products, counted in block products; at least
   /// one row). The same arithmetic as refresh(), so the same hierarchy to the bit. Not applied

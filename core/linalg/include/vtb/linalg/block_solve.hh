@@ -32,7 +32,7 @@ public:
   /// reentrant in 2D (a scratch vector held here).
   void solve_in_place(Eigen::Ref<Nodal<dim>> x) const;
 
-  /// 2D, with each tile's node turned (the tensor filter's solve, WarpedFilter::solve, in the
+  /// 2D, with each tile's node turned (the tensor filter's solve, TensorFilter::solve, in the
   /// sweeps instead of passes of their own): y <- A^-1 b, b_I = R_i^T f_i for i = node[I], R_i
   /// the rotation by (cos, sin) = turn's column i, f = force's column i (both 2 x nodes); and
   /// where out is given, out's column slot[I] = scale R_i y_I.

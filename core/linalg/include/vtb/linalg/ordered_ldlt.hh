@@ -42,7 +42,7 @@ public:
   /// Numeric factorisation of the current values; false if not positive definite.
   bool factorize();
   /// The same factorisation in parts, so that a time step can carry a share of it (a bounded
-  /// step, warped_filter.hh): begin_factorize(), then factorize_part(work) until it returns
+  /// step, tensor_filter.hh): begin_factorize(), then factorize_part(work) until it returns
   /// true, each call taking rows of L until about `work` multiply-adds are done (at least one
   /// row); factorized() then says what factorize() would have returned. The arithmetic is
   /// factorize()'s, row by row (Eigen's up-looking LDL^T), so the factor is the same to the

@@ -35,7 +35,7 @@
 #include "vtb/problem/solver_names.hh"
 #include "vtb/solvers/integrator.hh"
 #include "vtb/solvers/scalar_couplings.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include <Eigen/SparseCore>
 
@@ -62,13 +62,13 @@ public:
   bool coupling_compliance(int group, Eigen::Matrix<double, dim, dim>& out) const override;
   const std::string& filter() const { return m_filter; }
   /// Tensor filter: the steps taken by implicit Euler, its safety net for a state whose
-  /// distortion is not finite (past WarpedFilter::kTrustedMismatch the filter relinearises).
+  /// distortion is not finite (past TensorFilter::kTrustedMismatch the filter relinearises).
   long fallback_steps() const { return m_fallback_steps; }
   /// Tensor filters: the times the filter linearised again at the current shape, and the
   /// times its H was refactorised (relinearisations and covers); 0 otherwise.
   long relinearizations() const { return m_tensor ? m_tensor->relinearizations() : 0; }
   long refactorizations() const { return m_tensor ? m_tensor->refactorizations() : 0; }
-  /// The correction's conjugate-gradient steps beyond its first, over the run (WarpedFilter).
+  /// The correction's conjugate-gradient steps beyond its first, over the run (TensorFilter).
   long extra_corrections() const { return m_tensor ? m_tensor->extra_corrections() : 0; }
   /// Tensor filters: the steps that carried a whole refactorisation (past kHardMismatch)
   /// instead of a part of one.
@@ -86,7 +86,7 @@ private:
   const Model<dim>& m_model;
   std::string m_filter; ///< the filter it runs (auto resolved by chosen_filter)
   bool m_full;
-  std::unique_ptr<WarpedFilter<dim>> m_tensor;    ///< tensor: the rest Jacobian's factor, warped
+  std::unique_ptr<TensorFilter<dim>> m_tensor;    ///< tensor: the rest Jacobian's factor, warped
   std::unique_ptr<Integrator<dim>> m_fallback_ie; ///< tensor: implicit Euler, the safety net
   std::unique_ptr<CouplingSet<dim>> m_units;      ///< tensor, full: the couplings as their solve takes them
   bool m_fallback = false;                        ///< tensor: this step is implicit Euler's

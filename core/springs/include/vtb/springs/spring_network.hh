@@ -67,7 +67,7 @@ template <int dim>
 void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
                          double extra_damping_per_k = 0.0);
 
-/// What the 2D tensor filter's rotations read of the springs (warped_filter.cc), per spring
+/// What the 2D tensor filter's rotations read of the springs (tensor_filter.cc), per spring
 /// s = (i, j): p = d . D and q = D x d (d = x_j - x_i now, D = X_j - X_i at rest; both the
 /// same from either end; p^2 + q^2 = |d|^2 |D|^2, which the scan reads from them instead of a
 /// third array, docs/performance.md item 15); per node, (sum p, sum q) over its springs, whose

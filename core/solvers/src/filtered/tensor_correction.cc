@@ -1,9 +1,9 @@
-// WarpedFilter::correct: one step of conjugate gradients on implicit Euler's system,
+// TensorFilter::correct: one step of conjugate gradients on implicit Euler's system,
 // preconditioned by the tensor filter itself (docs/method.md, "The step corrected toward
 // implicit Euler's"). Its spring passes are laid out as the spring kernel's (spring_forces.cc):
 // a gather per chunk of springs, the per-spring arithmetic in one vector loop, a scatter that
 // sums each first node's run in registers.
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include "vtb/linalg/vector_clones.hh"
 #include "vtb/springs/spring_kernels.hh"
@@ -52,7 +52,7 @@ template <int dim> double mass_diagonal(const SpringNetwork<dim>& net, int i, do
 } // namespace
 
 template <int dim>
-void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force,
+void TensorFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const Nodal<dim>& force,
                                 const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv) {
   if (!(m_multigrid || m_beta_max > 0)) return; // H is the warped rest Jacobian: nothing to correct
   if (m_correction_rest > 0) {
@@ -156,7 +156,7 @@ void WarpedFilter<dim>::correct(const Nodal<dim>& u, const Nodal<dim>& v, const 
   }
 }
 
-template <int dim> double WarpedFilter<dim>::minus_product(const CouplingSet<dim>& couplings, double dt) {
+template <int dim> double TensorFilter<dim>::minus_product(const CouplingSet<dim>& couplings, double dt) {
   const auto& net = m_model.net;
   const auto& free = m_model.free_nodes;
   const auto* e = net.edge.data();
@@ -182,9 +182,9 @@ template <int dim> double WarpedFilter<dim>::minus_product(const CouplingSet<dim
   return pap;
 }
 
-template void WarpedFilter<2>::correct(const Nodal<2>&, const Nodal<2>&, const Nodal<2>&, const CouplingSet<2>&, double,
+template void TensorFilter<2>::correct(const Nodal<2>&, const Nodal<2>&, const Nodal<2>&, const CouplingSet<2>&, double,
                                        Nodal<2>&);
-template void WarpedFilter<3>::correct(const Nodal<3>&, const Nodal<3>&, const Nodal<3>&, const CouplingSet<3>&, double,
+template void TensorFilter<3>::correct(const Nodal<3>&, const Nodal<3>&, const Nodal<3>&, const CouplingSet<3>&, double,
                                        Nodal<3>&);
 
 } // namespace vtb

@@ -67,7 +67,7 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (m_filter == solvers::kFilterTensor || m_filter == solvers::kFilterTensorMultigrid) {
     const bool multigrid = m_filter == solvers::kFilterTensorMultigrid;
-    m_tensor = std::make_unique<WarpedFilter<dim>>(model, o.dt, multigrid);
+    m_tensor = std::make_unique<TensorFilter<dim>>(model, o.dt, multigrid);
     // Its fallback: implicit Euler with the current Jacobian, by the linear solver implicit
     // Euler itself runs (`linear_solver`, auto by default: the refactorised LDL^T in 2D, CG in
     // 3D, where the factor cost 1.5-1.6x the CG on held-out blocks: docs/method.md).
@@ -160,14 +160,14 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   // step and the run's watch then meet.
   if (m_tensor) {
     double mismatch = turns ? m_tensor->prepare_turned(s.u) : m_tensor->prepare(s.u);
-    if (std::isfinite(mismatch) && mismatch > WarpedFilter<dim>::kTrustedMismatch) {
+    if (std::isfinite(mismatch) && mismatch > TensorFilter<dim>::kTrustedMismatch) {
       if (!m_tensor->relinearizing()) m_tensor->relinearize(s.u, false);
-      if (mismatch > WarpedFilter<dim>::kHardMismatch) {
+      if (mismatch > TensorFilter<dim>::kHardMismatch) {
         m_tensor->finish_refresh();
         mismatch = m_tensor->prepare(s.u);
       }
     }
-    m_fallback = !(mismatch <= WarpedFilter<dim>::kHardMismatch);
+    m_fallback = !(mismatch <= TensorFilter<dim>::kHardMismatch);
     m_mismatch = mismatch;
     m_fallback_steps += m_fallback;
     if (m_fallback) {
@@ -199,7 +199,7 @@ template <int dim> void FilteredImplicit<dim>::step(State<dim>& s) {
   if (m_tensor && !m_fallback) {
     m_tensor->solve(m_force, *m_units, dt, m_dv);
     // Toward implicit Euler's step where a cover or the V-cycle makes H depart from the
-    // warped rest Jacobian (WarpedFilter::correct).
+    // warped rest Jacobian (TensorFilter::correct).
     m_tensor->correct(s.u, s.v, m_force, *m_units, dt, m_dv);
     m_tensor->advance_refresh(m_mismatch); // this step's part of a refactorisation under way
   } else if (m_mg) {

@@ -1,6 +1,6 @@
 #pragma once
 // The 3D tensor filter's rotations: the polar factors of the nodes' 3 x 3 matrices, four nodes
-// per vector (warped_filter.cc's rotations(); docs/performance.md item 16).
+// per vector (tensor_filter.cc's rotations(); docs/performance.md item 16).
 
 namespace vtb::detail {
 

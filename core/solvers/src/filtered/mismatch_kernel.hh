@@ -1,5 +1,5 @@
 #pragma once
-// The 2D tensor filter's per-spring direction mismatch, as one vector loop (warped_filter.cc's
+// The 2D tensor filter's per-spring direction mismatch, as one vector loop (tensor_filter.cc's
 // scan; docs/performance.md item 12).
 
 #include <array>

@@ -3,7 +3,7 @@
 /// `[solver] filter = "tensor"`: the filtered step with the full rest Jacobian instead of the
 /// paper's isotropic Laplacian, and stiffness warping (Mueller et al. 2002) for rotations.
 /// `filter = "tensor-multigrid"` is the same step with H_t^-1 applied by one symmetric block
-/// V-cycle instead of H_t's factor (WarpedSystem below; block_multigrid.hh): the step with the
+/// V-cycle instead of H_t's factor (TensorSystem below; block_multigrid.hh): the step with the
 /// cycle's extra mass Delta_t >= 0, for 3D meshes whose factor is too large.
 ///
 ///   H_t = M (1 + dt gamma) + dt D_0 + dt^2 K_0   (dim n x dim n on the free nodes: the spring
@@ -52,9 +52,9 @@ namespace vtb {
 /// How the tensor filter solves with H: its factor (`tensor`) or one block V-cycle B
 /// (`tensor-multigrid`: 0 < B <= H^-1, so B^-1 = H + Delta, the step with the extra mass Delta;
 /// block_multigrid.hh). Both keep H's values where the cover writes them (values(), offset()).
-template <int dim> class WarpedSystem {
+template <int dim> class TensorSystem {
 public:
-  virtual ~WarpedSystem() = default;
+  virtual ~TensorSystem() = default;
   /// Length of the solve's vector, and the position of dof r (dim a + p) in it: index(dim a)
   /// + p (a node's values consecutive, which the filter's gathers rely on).
   virtual Eigen::Index size() const = 0;
@@ -78,7 +78,7 @@ public:
   /// shares this one's prolongators and values() (block_multigrid.hh: only a refresh reads
   /// them), so values() are written only for the refresh that follows, and read back only
   /// after it.
-  virtual std::unique_ptr<WarpedSystem> twin(const Eigen::SparseMatrix<double>& H) const = 0;
+  virtual std::unique_ptr<TensorSystem> twin(const Eigen::SparseMatrix<double>& H) const = 0;
   /// y <- H^-1 y (the factor) or B y (the V-cycle); y laid out by index().
   virtual void solve(Eigen::Ref<Eigen::VectorXd> y) = 0;
   /// 2D, where the system can (the factor: BlockSolve::solve_turned): y <- H^-1 b with node
@@ -92,13 +92,13 @@ public:
 
 /// H's factor, or (multigrid) one block V-cycle on H with the rigid modes at positions x.
 template <int dim>
-std::unique_ptr<WarpedSystem<dim>> make_warped_system(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x,
+std::unique_ptr<TensorSystem<dim>> make_warped_system(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x,
                                                       bool multigrid);
 
-template <int dim> class WarpedFilter {
+template <int dim> class TensorFilter {
 public:
   /// multigrid: solve with one block V-cycle instead of H's factor (large 3D meshes).
-  WarpedFilter(const Model<dim>& model, double dt, bool multigrid = false);
+  TensorFilter(const Model<dim>& model, double dt, bool multigrid = false);
   /// The coupling units the filter solves implicitly at most; more are applied explicitly.
   static constexpr int kMaxCoupled = CouplingSet<dim>::kMaxUnits;
   /// Beyond this direction mismatch from the reference shape the warped reference Jacobian is
@@ -239,8 +239,8 @@ private:
   static constexpr double kLocalCoverLimit = 0.1;
 
   const Model<dim>& m_model;
-  std::unique_ptr<WarpedSystem<dim>> m_h;    ///< H's factor or V-cycle, in use
-  std::unique_ptr<WarpedSystem<dim>> m_next; ///< the same for the refresh under way (same pattern)
+  std::unique_ptr<TensorSystem<dim>> m_h;    ///< H's factor or V-cycle, in use
+  std::unique_ptr<TensorSystem<dim>> m_next; ///< the same for the refresh under way (same pattern)
   bool m_refreshing = false, m_next_relinearized = false;
   std::vector<int> m_index;              ///< per free dof (dim a + p): its position in the solve's vector
   std::vector<int> m_node_at, m_slot_at; ///< per node position in the solve's vector: the node, its free index

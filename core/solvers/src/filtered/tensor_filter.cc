@@ -1,4 +1,4 @@
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include "mismatch_kernel.hh"
 #include "polar_kernel.hh"
@@ -131,7 +131,7 @@ struct MismatchTracker {
 } // namespace
 
 template <int dim>
-WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigrid)
+TensorFilter<dim>::TensorFilter(const Model<dim>& model, double dt, bool multigrid)
     : m_model(model), m_rotation(dim == 3 ? static_cast<std::size_t>(model.num_nodes()) : 0, Mat<dim>::Identity()),
       m_capacitance(kMaxCoupled * dim) {
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
@@ -144,12 +144,12 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
   for (int r = 0; r < static_cast<int>(nf) * dim; ++r) {
     m_index[static_cast<std::size_t>(r)] = m_h->index(r);
     if (m_index[static_cast<std::size_t>(r)] != m_index[static_cast<std::size_t>(r - r % dim)] + r % dim)
-      throw std::logic_error("WarpedFilter: the system does not keep a node's values consecutive");
+      throw std::logic_error("TensorFilter: the system does not keep a node's values consecutive");
     if (m_next->index(r) != m_index[static_cast<std::size_t>(r)])
-      throw std::logic_error("WarpedFilter: the two systems order the dofs differently");
+      throw std::logic_error("TensorFilter: the two systems order the dofs differently");
   }
   if (m_next->value_count() != m_h->value_count())
-    throw std::logic_error("WarpedFilter: the two systems store different patterns");
+    throw std::logic_error("TensorFilter: the two systems store different patterns");
   // Per node position in the solve's vector, its node and free index (what solve_turned reads;
   // meaningful where the system keeps a node's values at a multiple of dim, as the factor does).
   m_node_at.assign(static_cast<std::size_t>(m_h->size() / dim), -1);
@@ -238,7 +238,7 @@ WarpedFilter<dim>::WarpedFilter(const Model<dim>& model, double dt, bool multigr
 
 template <int dim>
 template <class Tracker>
-[[gnu::always_inline]] inline bool WarpedFilter<dim>::add_spring(Tracker& tracker, int s, const Nodal<dim>& u,
+[[gnu::always_inline]] inline bool TensorFilter<dim>::add_spring(Tracker& tracker, int s, const Nodal<dim>& u,
                                                                  double trigger) const {
   const auto [i, j] = m_model.net.edge[static_cast<std::size_t>(s)];
   const Vec<dim> D = m_spring_ref.col(s);
@@ -254,7 +254,7 @@ template <class Tracker>
   return tracker.template add<dim>(m_spring_rest.col(s) + u.col(j) - u.col(i), t, trigger);
 }
 
-template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
+template <int dim> double TensorFilter<dim>::scan(const Nodal<dim>& u, bool* outgrown) const {
   MismatchTracker worst;
   bool out = false;
   const int ns = m_model.net.num_springs();
@@ -289,17 +289,17 @@ template <int dim> double WarpedFilter<dim>::scan(const Nodal<dim>& u, bool* out
   return worst.value();
 }
 
-template <int dim> double WarpedFilter<dim>::direction_mismatch(const Nodal<dim>& u) const {
+template <int dim> double TensorFilter<dim>::direction_mismatch(const Nodal<dim>& u) const {
   return scan(u, nullptr);
 }
 
-template <int dim> double WarpedFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
+template <int dim> double TensorFilter<dim>::spring_mismatch(int s, const Nodal<dim>& u) const {
   MismatchTracker one;
   add_spring(one, s, u, 2.0);
   return one.value();
 }
 
-template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mismatch, bool at_once) {
+template <int dim> void TensorFilter<dim>::cover(const Nodal<dim>& u, double mismatch, bool at_once) {
   // Each spring's beta is twice its own mismatch while the largest, M, is at most
   // kLocalCoverLimit; past it every spring gets the largest, 2 M. Kept until a spring outgrows
   // its beta or M falls 8x below the largest; no cover at all while M < kCoverFloor (the
@@ -322,7 +322,7 @@ template <int dim> void WarpedFilter<dim>::cover(const Nodal<dim>& u, double mis
   if (at_once) finish_refresh();
 }
 
-template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
+template <int dim> void TensorFilter<dim>::start_refresh(bool relinearized) {
   // H(beta) = H(0) + sum_s beta_s T_s into the second system's values, from the H(0) and T of
   // the reference shape it will have (a relinearisation's, or the one in use).
   const auto& net = m_model.net;
@@ -345,7 +345,7 @@ template <int dim> void WarpedFilter<dim>::start_refresh(bool relinearized) {
   m_next_relinearized = relinearized;
 }
 
-template <int dim> void WarpedFilter<dim>::advance_refresh(double mismatch) {
+template <int dim> void TensorFilter<dim>::advance_refresh(double mismatch) {
   if (!m_refreshing) return;
   // 1 / kRefreshParts of the work; more where a relinearisation would not be done before the
   // mismatch, growing as it did over the last step, reaches kHardMismatch: what is left spread
@@ -362,7 +362,7 @@ template <int dim> void WarpedFilter<dim>::advance_refresh(double mismatch) {
   if (m_next->refresh_part(share)) swap_systems();
 }
 
-template <int dim> void WarpedFilter<dim>::finish_refresh() {
+template <int dim> void TensorFilter<dim>::finish_refresh() {
   if (!m_refreshing) return;
   if (!m_next->refresh_part(1.0 / kRefreshParts)) { // more than one part left
     ++m_refreshes_at_once;
@@ -372,7 +372,7 @@ template <int dim> void WarpedFilter<dim>::finish_refresh() {
   swap_systems();
 }
 
-template <int dim> void WarpedFilter<dim>::swap_systems() {
+template <int dim> void TensorFilter<dim>::swap_systems() {
   std::swap(m_h, m_next);
   if (m_next_relinearized) { // the new reference shape, with no cover on it
     m_spring_ref.swap(m_spring_ref_next);
@@ -392,154 +392,7 @@ template <int dim> void WarpedFilter<dim>::swap_systems() {
   ++m_factor_version;
 }
 
-template <int dim> double WarpedFilter<dim>::coupling_entry(int u, int q, int p, int axis) const {
-  // U's column (u, p) in the solve's (rotated) frame at node q's axis `axis`: w_q R_q^T e_p. A
-  // unit of one node spans the same columns as e_p (its coupling is isotropic), so its columns
-  // stay e_p and need no new solve when the node turns; a footprint's nodes turn apart, and its
-  // w w^T in the world frame is R^T (w w^T) R in the rotated one.
-  const double w = m_set->weight(u, q);
-  if (m_set->size(u) == 1) return p == axis ? w : 0.0;
-  return w * rotation(m_set->node(u, q))(p, axis);
-}
-
-template <int dim> void WarpedFilter<dim>::couple(const CouplingSet<dim>& set) {
-  const int count = set.units();
-  std::array<double, kMaxCoupled> c{}; // dt^2 k + dt b per unit
-  bool groups = false;                 // units of several nodes: their columns turn with the nodes
-  for (int u = 0; u < count; ++u) {
-    c[static_cast<std::size_t>(u)] = set.coefficient(u);
-    groups = groups || set.size(u) > 1;
-  }
-  const bool new_z = count > 0 && (set.version() != m_set_version || m_z_version != m_factor_version ||
-                                   (groups && m_z_turns != m_turns));
-  const bool same_set = m_set == &set;
-  m_set = &set;
-  if (same_set && !new_z && count == m_coupled && c == m_coupled_k) return;
-  m_coupled = count;
-  m_coupled_k = c;
-  if (count == 0) return;
-  const int m = count * dim;
-  // Where unit u's node q sits in the solve's vector on axis `axis`.
-  const auto at = [&](int u, int q, int axis) {
-    return m_index[static_cast<std::size_t>(set.slot(u, q) * dim + axis)];
-  };
-  if (new_z || !same_set) { // Z = H^-1 U: one solve per unit and axis, in place in its column
-    for (int col = 0; col < m; ++col) {
-      auto z = m_z.col(col);
-      z.setZero();
-      for (int q = 0; q < set.size(col / dim); ++q)
-        for (int axis = 0; axis < dim; ++axis)
-          z[at(col / dim, q, axis)] += coupling_entry(col / dim, q, col % dim, axis);
-      m_h->solve(z);
-    }
-    m_z_version = m_factor_version;
-    m_set_version = set.version();
-    m_z_turns = m_turns;
-  }
-  Small C = Small::Zero(m, m);
-  for (int r = 0; r < m; ++r)
-    for (int q = 0; q < set.size(r / dim); ++q)
-      for (int axis = 0; axis < dim; ++axis)
-        C.row(r) += coupling_entry(r / dim, q, r % dim, axis) * m_z.row(at(r / dim, q, axis)).head(m);
-  for (int u = 0; u < count; ++u)
-    m_unit_response[static_cast<std::size_t>(u)] = C.template block<dim, dim>(u * dim, u * dim);
-  for (int r = 0; r < m; ++r) C(r, r) += 1.0 / m_coupled_k[static_cast<std::size_t>(r / dim)];
-  m_capacitance.compute(C);
-}
-
-template <int dim> void WarpedFilter<dim>::correct_for_couplings(Eigen::MatrixXd& y) const {
-  const int m = m_coupled * dim;
-  if (m == 0) return;
-  m_small.resize(m);
-  for (int r = 0; r < m; ++r) {
-    double sum = 0;
-    for (int q = 0; q < m_set->size(r / dim); ++q)
-      for (int axis = 0; axis < dim; ++axis)
-        sum += coupling_entry(r / dim, q, r % dim, axis) *
-               y(m_index[static_cast<std::size_t>(m_set->slot(r / dim, q) * dim + axis)], 0);
-    m_small[r] = sum;
-  }
-  m_small = m_capacitance.solve(m_small);
-  y.col(0).noalias() -= m_z.leftCols(m) * m_small;
-}
-
-template <int dim> void WarpedFilter<dim>::rotations(const Nodal<dim>& u) {
-  ++m_turns;
-  const auto& net = m_model.net;
-  // A_i = sum over i's springs (x_j - x_i)(X_j - X_i)^T, gathered node by node so that the
-  // sum stays in registers (scattered spring by spring, each add waited on the previous
-  // one's store to the same node); the rest vectors X_j - X_i are read in order (m_adj_rest).
-  // In 2D the rotation needs only a = A00 + A11 = sum d . D and b = A10 - A01 = sum D x d:
-  // summed spring by spring, then normalised in a pass of their own (turn_rotations).
-  if constexpr (dim == 2) {
-    // (d . D, D x d) is the same from both ends (d and D change sign together): made once per
-    // spring, with |d|^2 |D|^2 for the scan, and added to both ends' sums (spring_turns; the
-    // step makes them in its force pass instead, prepare_turned).
-    spring_turns(net, u, turns());
-    turn_rotations();
-  }
-  if constexpr (dim == 3) {
-    const int n = net.num_nodes();
-    for (int i = 0; i < n; ++i) {
-      const int begin = net.adj_ptr[static_cast<std::size_t>(i)];
-      const int end = net.adj_ptr[static_cast<std::size_t>(i) + 1];
-      const auto ui = u.col(i);
-      Mat<dim> A = Mat<dim>::Zero();
-      for (int p = begin; p < end; ++p) {
-        const Vec<dim> d = m_adj_rest.col(p) + u.col(net.adj_node[static_cast<std::size_t>(p)]) - ui;
-        A.noalias() += d * m_adj_ref.col(p).transpose();
-      }
-      Eigen::Map<Mat<dim>> scaled(&m_polar_a[9 * static_cast<std::size_t>(i)]);
-      scaled = A * m_adj_scale[static_cast<std::size_t>(i)];
-    }
-    // The polar factors, four nodes per vector (detail::polar_rotations).
-    detail::polar_rotations(n, m_polar_a.data(), m_rotation.data()->data(), m_polar_ok.data());
-    for (int i = 0; i < n; ++i) {
-      Mat<dim>& R = m_rotation[static_cast<std::size_t>(i)];
-      if (!m_polar_ok[static_cast<std::size_t>(i)]) { // an inverted or flat neighbourhood: the SVD decides
-        const Mat<dim> A = Eigen::Map<const Mat<dim>>(&m_polar_a[9 * static_cast<std::size_t>(i)]);
-        const Eigen::JacobiSVD<Mat<dim>> svd(A, Eigen::ComputeFullU | Eigen::ComputeFullV);
-        Mat<dim> U = svd.matrixU();
-        if ((U * svd.matrixV().transpose()).determinant() < 0) U.col(dim - 1) *= -1;
-        R = U * svd.matrixV().transpose();
-      }
-      if (!R.allFinite()) R.setIdentity(); // a non-finite state: the run's watch stops it
-    }
-  }
-}
-
-template <int dim> SpringTurns WarpedFilter<dim>::turns() {
-  static_assert(dim == 2 || dim == 3);
-  if constexpr (dim == 2) return SpringTurns{m_spring_ref.data(), &m_pq(0, 0), &m_pq(0, 1), &m_polar};
-  return SpringTurns{nullptr, nullptr, nullptr, nullptr};
-}
-
-template <int dim> void WarpedFilter<dim>::turn_rotations() {
-  ++m_turns;
-  if constexpr (dim == 2) {
-    const auto& net = m_model.net;
-    // The rotation nearest to A (polar part) in closed form: its angle is that of (a, b), so
-    // (cos, sin) = (a, b) / |(a, b)| (no atan2), in one vector loop without the divider;
-    // identity where (a, b) is zero or not finite (detail::unit_pairs).
-    const int n = net.num_nodes();
-    detail::unit_pairs(n, m_polar.data());
-  }
-}
-
-template <int dim>
-void WarpedFilter<dim>::scale_neighbourhoods(const Nodal<dim>& ref, std::vector<double>& scale) const {
-  if constexpr (dim == 3) {
-    const auto& net = m_model.net;
-    for (int i = 0; i < net.num_nodes(); ++i) {
-      double trace = 0;
-      for (int p = net.adj_ptr[static_cast<std::size_t>(i)]; p < net.adj_ptr[static_cast<std::size_t>(i) + 1]; ++p)
-        trace += ref.col(p).squaredNorm();
-      scale[static_cast<std::size_t>(i)] = trace > 0 ? 3 / trace : 1.0;
-    }
-  }
-}
-
-template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool at_once) {
+template <int dim> void TensorFilter<dim>::relinearize(const Nodal<dim>& u, bool at_once) {
   // H = M (1 + dt gamma) + dt D(u) + dt^2 K(u) at the shape X + u (K's transverse term clamped
   // at 0 under compression, as implicit Euler's, so that H stays positive definite), written
   // at the offsets the constructor kept; the transverse blocks and the reference vectors of
@@ -579,17 +432,17 @@ template <int dim> void WarpedFilter<dim>::relinearize(const Nodal<dim>& u, bool
   if (at_once) finish_refresh();
 }
 
-template <int dim> double WarpedFilter<dim>::prepare(const Nodal<dim>& u) {
+template <int dim> double TensorFilter<dim>::prepare(const Nodal<dim>& u) {
   rotations(u);
   return follow(u);
 }
 
-template <int dim> double WarpedFilter<dim>::prepare_turned(const Nodal<dim>& u) {
+template <int dim> double TensorFilter<dim>::prepare_turned(const Nodal<dim>& u) {
   turn_rotations();
   return follow(u);
 }
 
-template <int dim> double WarpedFilter<dim>::follow(const Nodal<dim>& u) {
+template <int dim> double TensorFilter<dim>::follow(const Nodal<dim>& u) {
   bool outgrown = false;
   const double mismatch = scan(u, &outgrown);
   if (!(mismatch <= kTrustedMismatch) || m_refreshing) return mismatch; // one refresh at a time
@@ -598,7 +451,7 @@ template <int dim> double WarpedFilter<dim>::follow(const Nodal<dim>& u) {
 }
 
 template <int dim>
-void WarpedFilter<dim>::solve(const Nodal<dim>& force, const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv) {
+void TensorFilter<dim>::solve(const Nodal<dim>& force, const CouplingSet<dim>& couplings, double dt, Nodal<dim>& dv) {
   couple(couplings);
   const auto& free = m_model.free_nodes;
   const auto nf = static_cast<int>(free.size());
@@ -628,20 +481,8 @@ void WarpedFilter<dim>::solve(const Nodal<dim>& force, const CouplingSet<dim>& c
   turn_out(dt, dv);
 }
 
-template <int dim> void WarpedFilter<dim>::turn_out(double dt, Nodal<dim>& dv) const {
-  const auto& free = m_model.free_nodes;
-  const auto nf = static_cast<int>(free.size());
-  const double* __restrict y = m_rhs.data();
-  const int* __restrict at = m_index.data();
-  double* __restrict out = dv.data();
-  for (int a = 0; a < nf; ++a) {
-    const Vec<dim> x = dt * (rotation(free[static_cast<std::size_t>(a)]) * Eigen::Map<const Vec<dim>>(y + at[a * dim]));
-    for (int p = 0; p < dim; ++p) out[a * dim + p] = x[p];
-  }
-}
-
-template class WarpedFilter<2>;
-template class WarpedFilter<3>;
+template class TensorFilter<2>;
+template class TensorFilter<3>;
 template Eigen::SparseMatrix<double> tensor_filter_matrix<2>(const Model<2>&, double, double);
 template Eigen::SparseMatrix<double> tensor_filter_matrix<3>(const Model<3>&, double, double);
 

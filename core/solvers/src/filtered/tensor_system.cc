@@ -1,9 +1,9 @@
-// The tensor filter's two solves with H (warped_filter.hh): the factor, tile by tile, and one
+// The tensor filter's two solves with H (tensor_filter.hh): the factor, tile by tile, and one
 // block V-cycle.
 #include "vtb/linalg/block_multigrid.hh"
 #include "vtb/linalg/block_solve.hh"
 #include "vtb/linalg/ordered_ldlt.hh"
-#include "vtb/solvers/warped_filter.hh"
+#include "vtb/solvers/tensor_filter.hh"
 
 #include <stdexcept>
 
@@ -19,7 +19,7 @@ const OrderedLDLT& factorised(OrderedLDLT& f) {
 
 /// H's sparse LDL^T, ordered by nodes (block = dim) so that L is made of dim x dim tiles and
 /// the step solves tile by tile; the upper triangle's values are stored.
-template <int dim> class FactorSystem final : public WarpedSystem<dim> {
+template <int dim> class FactorSystem final : public TensorSystem<dim> {
 public:
   explicit FactorSystem(const Eigen::SparseMatrix<double>& H) : m_h(H, dim), m_blocks(factorised(m_h)) {}
   Eigen::Index size() const override { return m_h.size(); }
@@ -42,7 +42,7 @@ public:
     m_blocks.refresh();
     return true;
   }
-  std::unique_ptr<WarpedSystem<dim>> twin(const Eigen::SparseMatrix<double>& H) const override {
+  std::unique_ptr<TensorSystem<dim>> twin(const Eigen::SparseMatrix<double>& H) const override {
     return std::make_unique<FactorSystem>(H);
   }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
@@ -63,7 +63,7 @@ private:
 };
 
 /// One block V-cycle B (0 < B <= H^-1); the vector holds kLanes values per free node.
-template <int dim> class MultigridSystem final : public WarpedSystem<dim> {
+template <int dim> class MultigridSystem final : public TensorSystem<dim> {
 public:
   static constexpr int W = BlockMultigrid<dim>::kLanes;
   MultigridSystem(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x)
@@ -76,7 +76,7 @@ public:
   void refresh() override { m_mg.refresh(); }
   void begin_refresh() override { m_mg.begin_refresh(); }
   bool refresh_part(double share) override { return m_mg.refresh_part(share); }
-  std::unique_ptr<WarpedSystem<dim>> twin(const Eigen::SparseMatrix<double>& /*H: this one's*/) const override {
+  std::unique_ptr<TensorSystem<dim>> twin(const Eigen::SparseMatrix<double>& /*H: this one's*/) const override {
     return std::make_unique<MultigridSystem>(*this);
   }
   void solve(Eigen::Ref<Eigen::VectorXd> y) override {
@@ -92,15 +92,15 @@ private:
 } // namespace
 
 template <int dim>
-std::unique_ptr<WarpedSystem<dim>> make_warped_system(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x,
+std::unique_ptr<TensorSystem<dim>> make_warped_system(const Eigen::SparseMatrix<double>& H, const Nodal<dim>& x,
                                                       bool multigrid) {
   if (multigrid) return std::make_unique<MultigridSystem<dim>>(H, x);
   return std::make_unique<FactorSystem<dim>>(H);
 }
 
-template std::unique_ptr<WarpedSystem<2>> make_warped_system<2>(const Eigen::SparseMatrix<double>&, const Nodal<2>&,
+template std::unique_ptr<TensorSystem<2>> make_warped_system<2>(const Eigen::SparseMatrix<double>&, const Nodal<2>&,
                                                                 bool);
-template std::unique_ptr<WarpedSystem<3>> make_warped_system<3>(const Eigen::SparseMatrix<double>&, const Nodal<3>&,
+template std::unique_ptr<TensorSystem<3>> make_warped_system<3>(const Eigen::SparseMatrix<double>&, const Nodal<3>&,
                                                                 bool);
 
 } // namespace vtb
