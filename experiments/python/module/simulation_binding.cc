@@ -100,30 +100,22 @@ SimControls with_args(SimControls c, const std::optional<std::string>& solver, c
   return c;
 }
 
-} // namespace
-
-void bind_simulation(py::module_& m) {
-  py::class_<Simulation>(m, "Simulation", R"(A scene you step yourself, one fixed step at a time.
-
-Simulation(scene, solver=None, filter=None, dt=None, springs=None, stiffness_scale=1.0):
-`scene` is a vtb.Scene, a path or a dict; the other arguments override its [solver]. The
-steppers are the fixed-step spring solvers (explicit, filtered and its filters,
-implicit-euler); CVODE and the FEM produce whole runs (vtb.run, vtb.compare). The GIL is
-released while it steps, so another Python thread (a device loop) runs meanwhile.)")
-      .def(py::init([](const py::object& scene, std::optional<std::string> solver, std::optional<std::string> filter,
-                       std::optional<double> dt, std::optional<std::string> springs, double stiffness_scale) {
-             const Scene s = to_scene(scene);
-             SimControls scene_controls; // the scene's [solver]
-             scene_controls.solver = s.solver.kind;
-             scene_controls.filter = s.solver.filter;
-             scene_controls.dt = s.solver.dt;
-             scene_controls.springs = s.solver.springs;
-             const SimControls c = with_args(scene_controls, solver, filter, dt, springs, stiffness_scale);
-             py::gil_scoped_release release; // a spring fit may take seconds
-             return std::make_unique<Simulation>(s, c);
-           }),
-           py::arg("scene"), py::arg("solver") = py::none(), py::arg("filter") = py::none(), py::arg("dt") = py::none(),
-           py::arg("springs") = py::none(), py::arg("stiffness_scale") = 1.0)
+/// Making, stepping and loading a simulation.
+void def_stepping(py::class_<Simulation>& cls) {
+  cls.def(py::init([](const py::object& scene, std::optional<std::string> solver, std::optional<std::string> filter,
+                      std::optional<double> dt, std::optional<std::string> springs, double stiffness_scale) {
+            const Scene s = to_scene(scene);
+            SimControls scene_controls; // the scene's [solver]
+            scene_controls.solver = s.solver.kind;
+            scene_controls.filter = s.solver.filter;
+            scene_controls.dt = s.solver.dt;
+            scene_controls.springs = s.solver.springs;
+            const SimControls c = with_args(scene_controls, solver, filter, dt, springs, stiffness_scale);
+            py::gil_scoped_release release; // a spring fit may take seconds
+            return std::make_unique<Simulation>(s, c);
+          }),
+          py::arg("scene"), py::arg("solver") = py::none(), py::arg("filter") = py::none(), py::arg("dt") = py::none(),
+          py::arg("springs") = py::none(), py::arg("stiffness_scale") = 1.0)
       .def(
           "step",
           [](Simulation& self, long n) {
@@ -184,8 +176,12 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
               return nearest_node(s.model().mesh, to_vec<dim>(point, "point"));
             });
           },
-          py::arg("point"))
-      .def_property_readonly("dim", &Simulation::dim)
+          py::arg("point"));
+}
+
+/// The state as views of the simulation's storage: sizes, time, displacements, velocities, forces.
+void def_state(py::class_<Simulation>& cls) {
+  cls.def_property_readonly("dim", &Simulation::dim)
       .def_property_readonly(
           "num_nodes",
           [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().num_nodes(); }); })
@@ -244,18 +240,22 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
             return self.visit(
                 [](const auto& s) { return Eigen::MatrixXd((s.model().net.rest + s.state().u).transpose()); });
           },
-          "X + u, (nodes, dim) m (computed: a copy)")
-      .def(
-          "internal_forces",
-          [](const Simulation& self) {
-            return self.visit([](const auto& s) {
-              auto f = s.state().u;
-              f.setZero();
-              add_internal_forces(s.model().net, s.state().u, s.state().v, f);
-              return Eigen::MatrixXd(f.transpose());
-            });
-          },
-          "The springs' and dashpots' forces on each node now, (nodes, dim) N")
+          "X + u, (nodes, dim) m (computed: a copy)");
+}
+
+/// What the state gives: internal forces, spring and cell strains.
+void def_fields(py::class_<Simulation>& cls) {
+  cls.def(
+         "internal_forces",
+         [](const Simulation& self) {
+           return self.visit([](const auto& s) {
+             auto f = s.state().u;
+             f.setZero();
+             add_internal_forces(s.model().net, s.state().u, s.state().v, f);
+             return Eigen::MatrixXd(f.transpose());
+           });
+         },
+         "The springs' and dashpots' forces on each node now, (nodes, dim) N")
       .def(
           "spring_strains",
           [](const Simulation& self) {
@@ -281,19 +281,23 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
               return py::array_t<float>(static_cast<py::ssize_t>(out.size()), out.data());
             });
           },
-          "max |eigenvalue| of the Green strain per cell, (cells,)")
-      .def_property_readonly(
-          "springs_nodes",
-          [](const Simulation& self) {
-            return self.visit([](const auto& s) {
-              const auto& e = s.model().net.edge;
-              py::array_t<int> a({static_cast<py::ssize_t>(e.size()), py::ssize_t(2)});
-              auto r = a.mutable_unchecked<2>();
-              for (std::size_t k = 0; k < e.size(); ++k) r(py::ssize_t(k), 0) = e[k][0], r(py::ssize_t(k), 1) = e[k][1];
-              return a;
-            });
-          },
-          "(springs, 2): the two nodes of each spring")
+          "max |eigenvalue| of the Green strain per cell, (cells,)");
+}
+
+/// The mesh and the run: springs, cells, probes, the stepper's statistics.
+void def_mesh(py::class_<Simulation>& cls) {
+  cls.def_property_readonly(
+         "springs_nodes",
+         [](const Simulation& self) {
+           return self.visit([](const auto& s) {
+             const auto& e = s.model().net.edge;
+             py::array_t<int> a({static_cast<py::ssize_t>(e.size()), py::ssize_t(2)});
+             auto r = a.mutable_unchecked<2>();
+             for (std::size_t k = 0; k < e.size(); ++k) r(py::ssize_t(k), 0) = e[k][0], r(py::ssize_t(k), 1) = e[k][1];
+             return a;
+           });
+         },
+         "(springs, 2): the two nodes of each spring")
       .def_property_readonly(
           "cells",
           [](const Simulation& self) {
@@ -351,6 +355,22 @@ released while it steps, so another Python thread (a device loop) runs meanwhile
                  ", t = " + std::to_string(s.state().t) + " s>";
         });
       });
+}
+
+} // namespace
+
+void bind_simulation(py::module_& m) {
+  py::class_<Simulation> cls(m, "Simulation", R"(A scene you step yourself, one fixed step at a time.
+
+Simulation(scene, solver=None, filter=None, dt=None, springs=None, stiffness_scale=1.0):
+`scene` is a vtb.Scene, a path or a dict; the other arguments override its [solver]. The
+steppers are the fixed-step spring solvers (explicit, filtered and its filters,
+implicit-euler); CVODE and the FEM produce whole runs (vtb.run, vtb.compare). The GIL is
+released while it steps, so another Python thread (a device loop) runs meanwhile.)");
+  def_stepping(cls);
+  def_state(cls);
+  def_fields(cls);
+  def_mesh(cls);
 }
 
 } // namespace vtb::python
