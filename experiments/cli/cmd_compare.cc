@@ -1,4 +1,5 @@
 #include "commands.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/compare.hh"
@@ -6,6 +7,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace vtb::cli {
 
@@ -13,7 +15,7 @@ Action add_compare(CLI::App& app) {
   struct Opts {
     std::string scene, reference = solvers::kFem, out, kinematics;
     std::vector<std::string> solvers;
-    double dt = 0;
+    std::optional<double> dt; ///< absent: the scene's
     bool frames = false;
   };
   auto o = std::make_shared<Opts>();
@@ -32,11 +34,11 @@ Action add_compare(CLI::App& app) {
     harness::RunOverrides ov;
     if (!o->kinematics.empty()) ov.kinematics = o->kinematics;
     const Scene scene = harness::with_overrides(read_scene(o->scene), ov);
-    if (o->dt < 0) throw InputError("--dt must be > 0");
+    const double dt = o->dt ? checked_dt(*o->dt) : 0.0; // 0: the scene's (run_compare)
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / (scene.name + "-compare") : std::filesystem::path(o->out);
     // Each solver's own run outputs (probes.csv, reactions.csv, summary.json) in OUT/<solver>/.
-    const auto res = harness::run_compare(scene, o->solvers, o->reference, o->dt, &std::cerr, {out, o->frames});
+    const auto res = harness::run_compare(scene, o->solvers, o->reference, dt, &std::cerr, {out, o->frames});
     harness::write_compare(res, out);
     std::cout << harness::format_compare(res) << "outputs in " << out.string() << "\n";
     return 0;

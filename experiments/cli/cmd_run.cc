@@ -12,6 +12,7 @@
 #include <iomanip>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <unistd.h>
 
@@ -20,7 +21,7 @@ namespace vtb::cli {
 Action add_run(CLI::App& app) {
   struct Opts {
     std::string scene, solver, out, kinematics;
-    double dt = 0, duration = 0;
+    std::optional<double> dt, duration; ///< absent: the scene's
     bool frames = false;
   };
   auto o = std::make_shared<Opts>();
@@ -38,8 +39,8 @@ Action add_run(CLI::App& app) {
     const Scene scene = read_scene(o->scene);
     RunOverrides ov;
     if (!o->solver.empty()) ov.solver = o->solver;
-    if (o->dt != 0) ov.dt = o->dt;
-    if (o->duration != 0) ov.duration = o->duration;
+    ov.dt = o->dt;
+    ov.duration = o->duration;
     if (!o->kinematics.empty()) ov.kinematics = o->kinematics;
     const std::filesystem::path out =
         o->out.empty() ? std::filesystem::path("vtb-out") / scene.name : std::filesystem::path(o->out);

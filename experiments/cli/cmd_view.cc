@@ -7,6 +7,7 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace vtb::cli {
 
@@ -15,7 +16,7 @@ Action add_view(CLI::App& app) {
     std::string scene, screenshot, drag, solver, filter;
     int frames = 0;
     bool device = false;
-    double dt = 0;
+    std::optional<double> dt; ///< absent: the scene's
   };
   auto o = std::make_shared<Opts>();
   CLI::App* cmd = app.add_subcommand(
@@ -42,7 +43,7 @@ Action add_view(CLI::App& app) {
     if (!o->drag.empty()) v.drag = viewer::parse_drag(o->drag);
     if (!o->solver.empty()) v.solver = o->solver;
     if (!o->filter.empty()) v.filter = o->filter;
-    if (o->dt != 0) v.dt = o->dt;
+    v.dt = o->dt;
     v.device = o->device;
     v.yardstick = harness::continuum_yardstick();
     try {

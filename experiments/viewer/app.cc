@@ -1,4 +1,5 @@
 #include "app.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_names.hh"
 #include "vtb/problem/solver_registry.hh"
 
@@ -34,12 +35,11 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
   SimControls c;
   c.solver = interactive ? scene.solver.kind : solvers::kFiltered;
   c.filter = scene.solver.filter;
+  c.dt = scene.solver.dt;
+  c.springs = scene.solver.springs;
   // --solver takes any registry name (filtered-tensor: filtered with the tensor filter); an
   // explicit --filter wins over the one a name implies.
-  if (options.solver) solvers::select(*options.solver, "--solver", c.solver, c.filter);
-  if (options.filter) c.filter = *options.filter;
-  c.dt = options.dt.value_or(scene.solver.dt);
-  c.springs = scene.solver.springs;
+  SolverOverrides{options.solver, options.filter, options.dt, {}}.apply(c.solver, c.filter, c.dt, c.springs);
   if (!interactive && !options.solver && note)
     *note = "the scene's solver \"" + scene.solver.kind + "\" is not interactive; running filtered";
   return c;

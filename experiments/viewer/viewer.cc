@@ -5,6 +5,7 @@
 #include "vtb/haptics/device_plane.hh"
 #include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/simulation.hh"
 #include "vtb/springs/model.hh"
@@ -203,7 +204,7 @@ std::pair<Eigen::Vector3d, Eigen::Vector3d> parse_drag(const std::string& text) 
 int run_viewer(const Scene& scene, const ViewOptions& o) {
   if (o.frames < 0) throw InputError("--frames must be >= 0");
   if (!o.screenshot.empty() && o.frames == 0) throw InputError("--screenshot needs --frames N (the frame to write)");
-  if (o.dt && !(*o.dt > 0)) throw InputError("--dt must be > 0");
+  if (o.dt) checked_dt(*o.dt);
   AnyMesh mesh = load_mesh(scene);
   return std::visit(
       [&](auto& m) {

@@ -25,6 +25,12 @@ check "typo writes nothing" '[ ! -e "$work/out_typo" ]'
 "$vtb" run "$src/experiments/scenes/plate_step.toml" --dt -1 --out "$work/out_dt" 2> "$work/err"; rc=$?
 check "negative dt exits 1 with a message" '[ $rc -eq 1 ] && grep -q "dt" "$work/err" && [ ! -e "$work/out_dt" ]'
 
+# One check of a step from outside the scene (vtb/problem/overrides.hh); 0 is not "the scene's".
+for args in "run --out $work/out_dt0" "compare --solvers filtered --out $work/out_dt0" "view --frames 1"; do
+  "$vtb" ${args%% *} "$src/experiments/scenes/plate_step.toml" ${args#* } --dt 0 2> "$work/err"; rc=$?
+  check "vtb ${args%% *} --dt 0: exit 1, the one line" '[ $rc -eq 1 ] && [ "$(cat "$work/err")" = "vtb: error: --dt must be a positive number" ] && [ ! -e "$work/out_dt0" ]'
+done
+
 "$vtb" run "$work/none.toml" 2> "$work/err"; rc=$?
 check "missing scene" '[ $rc -eq 1 ] && grep -q "none.toml: cannot open scene file" "$work/err"'
 

@@ -118,3 +118,20 @@ def test_readme_python_example_runs(source_dir, tmp_path):
     p = subprocess.run([sys.executable, "-c", code], cwd=source_dir, capture_output=True, text=True, timeout=600)
     assert p.returncode == 0, p.stderr
     assert p.stdout.strip()
+
+
+def test_an_override_is_applied_as_the_cli_applies_it(tmp_path, plate_scene, cli):
+    """vtb.Simulation's keywords and vtb run's flags go through one function
+    (vtb/problem/overrides.hh): the same solver, filter and step, and the same refusal."""
+    sim = vtb.Simulation(plate_scene, solver="filtered-tensor", dt=2e-3)
+    p = run_cli(cli, "run", plate_scene, "--solver", "filtered-tensor", "--dt", "2e-3", "--duration", "0.01",
+                "--out", tmp_path / "cli")
+    assert p.returncode == 0, p.stderr
+    summary = json.loads((tmp_path / "cli" / "summary.json").read_text())
+    assert (sim.solver, sim.filter, sim.dt) == (summary["solver"], summary["filter"], summary["dt"])
+    for bad in ("-1", "0", "nan"):
+        p = run_cli(cli, "run", plate_scene, "--dt", bad, "--out", tmp_path / "bad")
+        assert p.returncode == 1 and not (tmp_path / "bad").exists()
+        with pytest.raises(vtb.InputError) as refused:
+            vtb.Simulation(plate_scene, dt=float(bad))
+        assert str(refused.value) in p.stderr

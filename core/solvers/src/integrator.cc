@@ -1,4 +1,5 @@
 #include "vtb/solvers/integrator.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/solvers/explicit_euler.hh"
@@ -32,7 +33,7 @@ template <int dim> std::string chosen_filter(const Model<dim>& model, const std:
 
 template <int dim>
 std::unique_ptr<Integrator<dim>> make_integrator(const Model<dim>& model, const IntegratorOptions& o) {
-  if (!(o.dt > 0)) throw InputError("[solver].dt must be > 0");
+  checked_dt(o.dt);
   if (o.kind == solvers::kExplicit) return std::make_unique<ExplicitEuler<dim>>(model, o.dt);
   if (o.kind == solvers::kFiltered) return std::make_unique<FilteredImplicit<dim>>(model, o);
   if (o.kind == solvers::kImplicitEuler) {

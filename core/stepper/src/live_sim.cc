@@ -1,4 +1,5 @@
 #include "vtb/stepper/live_sim.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 #include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/filtered.hh"
@@ -33,7 +34,7 @@ template <int dim> void LiveSim<dim>::rebuild() {
   if (std::find(names.begin(), names.end(), m_controls.solver) == names.end())
     throw InputError("vtb view: solver \"" + m_controls.solver + "\" cannot run interactively (" +
                      solvers::list(solvers::is_stepper) + ")");
-  if (!(m_controls.dt > 0) || !std::isfinite(m_controls.dt)) throw InputError("vtb view: dt must be > 0");
+  checked_dt(m_controls.dt);
   if (!(m_controls.stiffness_scale > 0)) throw InputError("vtb view: the stiffness scale must be > 0");
   Scene s = m_scene;
   s.material.young_modulus *= m_controls.stiffness_scale;

@@ -1,5 +1,6 @@
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/bullet.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/fem/continuum.hh"
@@ -105,12 +106,9 @@ template std::optional<fem::ContinuumAnswer<3>> static_ladder<3>(const Problem<3
 
 Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;
-  if (ov.solver) solvers::select(*ov.solver, "--solver", scene.solver.kind, scene.solver.filter);
-  if (ov.dt) {
-    if (!(*ov.dt > 0) || !std::isfinite(*ov.dt)) throw InputError("--dt must be a positive number");
-    scene.solver.dt = *ov.dt;
-    scene.solver.dt_given = true;
-  }
+  SolverOverrides{ov.solver, {}, ov.dt, {}}.apply(scene.solver.kind, scene.solver.filter, scene.solver.dt,
+                                                  scene.solver.springs);
+  if (ov.dt) scene.solver.dt_given = true;
   if (ov.duration) {
     if (!(*ov.duration > 0) || !std::isfinite(*ov.duration)) throw InputError("--duration must be a positive number");
     scene.duration = *ov.duration;

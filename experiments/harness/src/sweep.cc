@@ -1,4 +1,5 @@
 #include "vtb/harness/sweep.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/meshes/atomic_file.hh"
@@ -118,8 +119,7 @@ std::vector<SweepCell> run_sweep(const Scene& scene_in, const std::vector<double
                                  const std::vector<double>& scales, const std::vector<std::string>& solvers,
                                  std::ostream* progress, bool across_ranks) {
   if (dts.empty() || scales.empty()) throw InputError("vtb sweep: --dt and --stiffness-scale need at least one value");
-  for (double dt : dts)
-    if (!(dt > 0) || !std::isfinite(dt)) throw InputError("vtb sweep: --dt values must be > 0");
+  for (double dt : dts) checked_dt(dt);
   for (double s : scales)
     if (!(s > 0) || !std::isfinite(s)) throw InputError("vtb sweep: --stiffness-scale values must be > 0");
   for (const auto& s : solvers) {

@@ -5,6 +5,7 @@
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
 #include "vtb/meshes/input_error.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include <pybind11/numpy.h>
@@ -183,7 +184,7 @@ void bind_harness(py::module_& m) {
       [](const py::object& scene, const std::vector<std::string>& solvers_, const std::string& reference, double dt,
          const std::filesystem::path& out) {
         const Scene s = to_scene(scene);
-        if (dt < 0) throw InputError("--dt must be > 0");
+        if (dt != 0) checked_dt(dt); // 0: the scene's
         harness::CompareResult r;
         {
           py::gil_scoped_release release;

@@ -4,6 +4,7 @@
 #include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/region.hh"
 #include "vtb/problem/cell_fields.hh"
+#include "vtb/problem/overrides.hh"
 #include "vtb/problem/problem.hh"
 #include "vtb/solvers/integrator.hh"
 #include "vtb/stepper/live_sim.hh"
@@ -92,10 +93,7 @@ template <int dim> int node_of(const LiveSim<dim>& s, const py::handle& where) {
 SimControls with_args(SimControls c, const std::optional<std::string>& solver, const std::optional<std::string>& filter,
                       std::optional<double> dt, const std::optional<std::string>& springs,
                       std::optional<double> stiffness_scale) {
-  if (solver) solvers::select(*solver, "solver", c.solver, c.filter);
-  if (filter) c.filter = *filter;
-  if (dt) c.dt = *dt;
-  if (springs) c.springs = *springs;
+  SolverOverrides{solver, filter, dt, springs}.apply(c.solver, c.filter, c.dt, c.springs);
   if (stiffness_scale) c.stiffness_scale = *stiffness_scale;
   return c;
 }
