@@ -1,8 +1,8 @@
 #include "commands.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh" // Refinement, refinement_error: declarations only without CGAL
 #include "vtb/meshes/generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/meshes/quality.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS

@@ -1,10 +1,10 @@
 /// vtb: the Voigt deformation testbed command line (README.md, docs/scenes.md, docs/harness.md).
 #include "commands.hh"
 
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/ranks.hh"
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
 
 #include <cstdio>
 #include <iostream>

@@ -1,7 +1,7 @@
 #include "overrides.hh"
 #include "commands.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include <algorithm>

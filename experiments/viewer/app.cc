@@ -7,7 +7,7 @@
 
 #include "vtb/problem/cell_fields.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <GLFW/glfw3.h>
 #include <imgui.h>

@@ -2,9 +2,9 @@
 
 #include "app.hh"
 
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/haptics/device_plane.hh"
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/overrides.hh"
 #include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/simulation.hh"

@@ -2,7 +2,7 @@
 // only file that includes gmsh.h.
 #include "gmsh_backend.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/mesh_serialize.hh"
 
 #include <gmsh.h>

@@ -1,6 +1,6 @@
 #include "vtb/meshes/isolated.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <fcntl.h>
 #include <poll.h>

@@ -1,6 +1,6 @@
 #include "vtb/meshes/mesh.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <Eigen/Dense>
 #include <algorithm>

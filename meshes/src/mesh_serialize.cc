@@ -1,6 +1,6 @@
 #include "vtb/meshes/mesh_serialize.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <cstring>
 

@@ -1,11 +1,11 @@
 #include "vtb/meshes/msh_io.hh"
 
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
+#include "vtb/base/module.hh"
 #include "vtb/meshes/isolated.hh"
 #include "vtb/meshes/mesh_serialize.hh"
-#include "vtb/meshes/module.hh"
 #include "vtb/meshes/msh_prescan.hh"
 
 #include "gmsh_backend.hh"

@@ -1,6 +1,6 @@
 #include "vtb/meshes/msh_prescan.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <charconv>
 #include <vector>

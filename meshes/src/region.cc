@@ -2,7 +2,7 @@
 
 #include <sstream>
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <algorithm>
 #include <limits>

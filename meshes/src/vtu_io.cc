@@ -1,7 +1,7 @@
 #include "vtb/meshes/vtu_io.hh"
 
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 
 #include <zlib.h>
 

@@ -1,10 +1,10 @@
 // The FEM's functions as the rest of vtb calls them (vtb/fem/*.hh): each loads the FEM plugin
 // (plugin.cc: vtb_fem and deal.II) for the call and forwards to it, so that deal.II enters a
-// process only when a FEM runs (vtb/meshes/module.hh: where it is looked for, and why it stays
+// process only when a FEM runs (vtb/base/module.hh: where it is looked for, and why it stays
 // loaded once in).
 #include "plugin_api.hh"
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/module.hh"
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/module.hh"
 
 #include <mpi.h>
 

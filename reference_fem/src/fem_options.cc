@@ -1,7 +1,7 @@
 // The FEM's options from a scene and their check: in the FEM's base library, which loads no
 // deal.II (the CLI checks a scene's options before the plugin is loaded; plugin/client.cc).
+#include "vtb/base/input_error.hh"
 #include "vtb/fem/kelvin_voigt.hh"
-#include "vtb/meshes/input_error.hh"
 
 namespace vtb::fem {
 

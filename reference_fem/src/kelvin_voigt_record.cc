@@ -1,7 +1,7 @@
 // The Kelvin-Voigt reference's outputs: probes, reactions, strain, the samples between steps and the frames.
 // Members of KelvinVoigtProblem (kelvin_voigt_problem.hh), instantiated for both backends.
 #include "kelvin_voigt_problem.hh"
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
 #include "vtb/problem/cell_fields.hh"
 

@@ -8,16 +8,17 @@ status=0
 
 # folder | the vtb include folders (vtb/<name>/) it may use
 rules=(
-  "meshes|meshes"
-  "core/linalg|linalg"
-  "core/problem|problem linalg meshes"
-  "core/springs|springs problem linalg meshes"
-  "core/solvers|solvers springs problem linalg meshes"
-  "core/stepper|stepper solvers springs problem linalg meshes"
-  "core/haptics|haptics solvers springs problem linalg meshes"
-  "reference_fem|fem problem meshes"
-  "experiments/harness|harness fem haptics solvers springs problem linalg meshes"
-  "experiments/reproduction|reproduction harness fem haptics solvers springs problem linalg meshes"
+  "core/base|base"
+  "meshes|meshes base"
+  "core/linalg|linalg base"
+  "core/problem|problem linalg meshes base"
+  "core/springs|springs problem linalg meshes base"
+  "core/solvers|solvers springs problem linalg meshes base"
+  "core/stepper|stepper solvers springs problem linalg meshes base"
+  "core/haptics|haptics solvers springs problem linalg meshes base"
+  "reference_fem|fem problem meshes base"
+  "experiments/harness|harness fem haptics solvers springs problem linalg meshes base"
+  "experiments/reproduction|reproduction harness fem haptics solvers springs problem linalg meshes base"
 )
 for rule in "${rules[@]}"; do
   dir=${rule%%|*}

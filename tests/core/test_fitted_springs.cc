@@ -4,8 +4,8 @@
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/springs/calibration.hh"
 #include "vtb/springs/fitted_cache.hh"

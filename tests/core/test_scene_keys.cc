@@ -1,7 +1,7 @@
 // docs/scenes.md lists every scene key: this test asks the parser for the keys it accepts,
 // table by table (an unknown key far from all of them makes it list them), and compares them
 // with the page's tables. A key added to the parser and not to the page fails here.
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/problem/scene.hh"
 
 #include <gtest/gtest.h>

@@ -4,8 +4,8 @@
 // and refuse a bad step with the same line. Python's keyword arguments take the same function
 // (tests/python/test_cli_parity.py holds them against the CLI).
 #include "../../experiments/viewer/app.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/solvers.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/overrides.hh"
 #include "vtb/problem/scene.hh"
 #include "vtb/stepper/live_sim.hh"

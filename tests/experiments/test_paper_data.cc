@@ -1,8 +1,8 @@
 // The paper's data step: LaTeX escaping, the CSV reader, numbers computed from the fixture
 // reproduction, and the figure list that report.md and build_paper.sh share.
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/csv_table.hh"
 #include "vtb/harness/tex.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/reproduction/paper_data.hh"
 #include "vtb/reproduction/reproduce.hh"
 

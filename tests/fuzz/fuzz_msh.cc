@@ -3,7 +3,7 @@
 // (input starting with 'M'). gmsh itself runs in a child process whose crashes become
 // refusals (tests/meshes/test_msh_io.cc holds a file that crashes it); it is not
 // instrumented, so it is not fuzzed here.
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/mesh_serialize.hh"
 #include "vtb/meshes/msh_prescan.hh"
 

@@ -7,7 +7,7 @@
 // crashes become refusals (isolated.hh), as gmsh's do; this target found that CGAL's PLY reader
 // takes a property before any element as an element's (now refused by the pre-scan), so they are
 // not fuzzed here.
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/surface.hh"
 
 #include <cstdint>

@@ -1,7 +1,7 @@
 // The one writer of every file vtb writes: all or nothing, and an IoError (not bad input)
 // naming the path when the folder or the disk refuses.
 #include "support/fresh_dir.hh"
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
 #include <gtest/gtest.h>
 

@@ -1,8 +1,8 @@
 // CGAL-generated meshes: the paper's plates (exact node counts, quality, bit-for-bit
 // regeneration of the committed files) and the Mesh_3 solids.
 #include "support/fresh_dir.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/meshes/quality.hh"
 

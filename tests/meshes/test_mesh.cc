@@ -1,6 +1,6 @@
 // Structured generators, mesh checks and region selection.
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/region.hh"
 
 #include <gtest/gtest.h>

@@ -1,7 +1,7 @@
 // .msh round trip through the gmsh API and refusal of broken files.
 #include "support/fresh_dir.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 
 #include <gtest/gtest.h>

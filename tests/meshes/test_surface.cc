@@ -1,8 +1,8 @@
 // A user's closed surface: read in every format, checked, meshed by CGAL to a node count with the
 // slab's quality bounds, graded toward a point; bad surfaces refused with one line.
 #include "support/fresh_dir.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/quality.hh"
 #include "vtb/meshes/surface.hh"
 

@@ -1,6 +1,6 @@
 #include "vtb/haptics/device.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "vtb/haptics/device_plane.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 namespace vtb {
 

@@ -1,6 +1,6 @@
 // `vtb haptics`'s output files (session.hh): haptics.csv and summary.json, all or nothing.
+#include "vtb/base/atomic_file.hh"
 #include "vtb/haptics/session.hh"
-#include "vtb/meshes/atomic_file.hh"
 
 #include <nlohmann/json.hpp>
 

@@ -1,6 +1,6 @@
 #include "vtb/problem/overrides.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include <cmath>

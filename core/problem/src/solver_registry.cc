@@ -1,7 +1,7 @@
 #include "vtb/problem/solver_registry.hh"
 
 #include "scene_reader.hh"
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 namespace vtb::solvers {
 

@@ -3,7 +3,7 @@
 /// What the spring fit trains on (fitted_springs.cc): the solver of the pinned FEM stiffness, and
 /// the training set of loads and the FEM's answers to them (fit_training.cc).
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/springs/fitted_springs.hh"
 
 #include <Eigen/CholmodSupport>

@@ -1,6 +1,6 @@
 #include "vtb/springs/fitted_cache.hh"
 
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 #include "vtb/springs/fitted_springs.hh"
 
 #include <cstdint>

@@ -2,8 +2,8 @@
 
 #include "fit_training.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/linalg/nodal.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/springs/calibration.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/spring_network.hh"

@@ -4,7 +4,7 @@
 #include "vtb/solvers/filter_pick.hh"
 #include "vtb/solvers/filtered.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/solvers/explicit_euler.hh"
 #include "vtb/solvers/simulation.hh"
 

@@ -1,6 +1,6 @@
 #include "vtb/harness/csv_table.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 #include "vtb/harness/ranks.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <mpi.h>
 #include <sched.h>

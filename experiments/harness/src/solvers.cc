@@ -3,9 +3,9 @@
 #include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/solvers/explicit_euler.hh"
 
 #include <algorithm>

@@ -1,8 +1,8 @@
 #include "study_json.hh"
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/study.hh"
 #include "vtb/harness/tex.hh"
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/solver_names.hh"
 
 #include <algorithm>

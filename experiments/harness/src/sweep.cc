@@ -2,7 +2,7 @@
 #include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
 #include "vtb/harness/solvers.hh"
 #include "vtb/solvers/explicit_euler.hh"

@@ -1,10 +1,10 @@
 #include "bindings.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/compare.hh"
 #include "vtb/harness/solvers.hh"
 #include "vtb/harness/study.hh"
 #include "vtb/harness/sweep.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/overrides.hh"
 #include "vtb/problem/solver_registry.hh"
 

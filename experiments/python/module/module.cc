@@ -1,7 +1,7 @@
 #include "bindings.hh"
 
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 
 PYBIND11_MODULE(_vtb, m) {
   namespace py = pybind11;

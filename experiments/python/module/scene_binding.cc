@@ -1,6 +1,6 @@
 #include "bindings.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 
 #include <pybind11/stl.h>
 #include <pybind11/stl/filesystem.h>

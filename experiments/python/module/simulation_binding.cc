@@ -1,7 +1,7 @@
 #include "bindings.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/solvers.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/region.hh"
 #include "vtb/problem/cell_fields.hh"
 #include "vtb/problem/overrides.hh"

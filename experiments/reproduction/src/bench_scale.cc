@@ -1,9 +1,9 @@
 #include "vtb/reproduction/bench_scale.hh"
 
 #include "reproduce_parts.hh"
+#include "vtb/base/atomic_file.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/csv_table.hh"
-#include "vtb/meshes/atomic_file.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/problem.hh"
 #include "vtb/reproduction/paper_data.hh"
 #include "vtb/springs/fitted_springs.hh"

@@ -3,8 +3,8 @@
 
 #include "paper_data_parts.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/harness/tex.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/output.hh"
 
 #include <algorithm>

@@ -7,7 +7,7 @@
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/problem/output.hh"
 #include "vtb/problem/problem.hh"

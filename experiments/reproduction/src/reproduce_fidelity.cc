@@ -6,10 +6,10 @@
 #include "reproduce_parts.hh"
 #include "vtb/problem/solver_names.hh"
 
+#include "vtb/base/atomic_file.hh"
 #include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"
 #include "vtb/harness/solvers.hh"
-#include "vtb/meshes/atomic_file.hh"
 #include "vtb/meshes/msh_io.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/load_check.hh"

@@ -2,7 +2,7 @@
 // the fitted exponents; CGAL Mesh_3 slabs of about 2k, 10k and 50k nodes, the meshes a user
 // brings), each with its precompute, median step, heap and error against the FEM.
 #include "reproduce_parts.hh"
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 #include "vtb/problem/solver_registry.hh"
 
 #include "vtb/harness/metrics.hh"

@@ -1,6 +1,6 @@
 // 2D unstructured plates: CGAL constrained Delaunay refinement with an exact node count.
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/quality.hh"
 
 #include <CGAL/Constrained_Delaunay_triangulation_2.h>

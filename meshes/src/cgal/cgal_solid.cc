@@ -1,6 +1,6 @@
 // 3D tetrahedral solids with CGAL Mesh_3: a slab with protected sharp edges and a sphere.
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 
 #include "mesh_3.hh"
 

@@ -1,7 +1,7 @@
 // A user's closed surface meshed into tetrahedra by CGAL Mesh_3, sharp edges protected, one
 // group per surface patch.
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/meshes/surface.hh"
 
 #include "mesh_3.hh"

@@ -2,8 +2,8 @@
 // Mesh_3's pipeline shared by the solids (cgal_solid.cc) and a user's surface (cgal_surface.cc):
 // the criteria (with a graded size field), the copy into a Mesh3, boundary groups, and the
 // node-count rule. Internal to vtb_mesh_generators.
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 
 #include <Eigen/LU>
 

@@ -1,7 +1,7 @@
 // Reading and checking a user's closed surface (surface.hh): pre-scan, CGAL's readers, checks.
 #include "vtb/meshes/surface.hh"
 
-#include "vtb/meshes/input_error.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/isolated.hh"
 
 #include <CGAL/IO/OBJ.h>

@@ -3,7 +3,7 @@
 /// Output files of `vtb run` (README.md, docs/scenes.md, docs/harness.md): probes.csv, reactions.csv, summary.json.
 /// Files are written under a temporary name and renamed only when all are complete.
 
-#include "vtb/meshes/atomic_file.hh" // write_files_atomically, IoError
+#include "vtb/base/atomic_file.hh" // write_files_atomically, IoError
 #include "vtb/problem/problem.hh"
 #include "vtb/problem/run_report.hh"
 

@@ -5,8 +5,8 @@
 /// whose length depends on the mesh dimension are checked when the mesh is known
 /// (see model_builder.hh).
 
+#include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
-#include "vtb/meshes/input_error.hh"
 #include "vtb/problem/solver_names.hh"
 
 #include <Eigen/Core>

@@ -1,6 +1,6 @@
-#include "vtb/meshes/module.hh"
+#include "vtb/base/module.hh"
 
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
 #include <dlfcn.h>
 

@@ -1,4 +1,4 @@
-#include "vtb/meshes/atomic_file.hh"
+#include "vtb/base/atomic_file.hh"
 
 #include <cerrno>
 #include <cstring>
