@@ -42,7 +42,7 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   m_dt = dt;
   m_model.valid = false;
   const Footprint& fp = m_footprint;
-  if (!m_touching || fp.count == 0) return;
+  if (fp.count == 0) return; // the last tick did not touch
   const bool slow = ticks_in(dt) > 1;
   const Vec<dim> at = footprint_mean<dim>(fp, model.net.rest) + footprint_mean<dim>(fp, s.u);
   const Vec<dim> f = slow && m_probe.history().cycles > 0
@@ -96,20 +96,14 @@ void DeviceMode<dim>::after_step(const Model<dim>& model, const State<dim>& s, c
     device.advance(h);
     m_t += h;
     ++m_ticks;
-    m_touching = c.touching;
     m_proxy = c.touching ? c.proxy : handle;
     m_footprint = c.touching ? c.footprint : Footprint{};
-    m_normal = c.normal;
-    m_trace[static_cast<std::size_t>(m_head)] = static_cast<float>(m_force_device.norm());
-    m_head = (m_head + 1) % kTrace;
-    m_count = std::min(m_count + 1, kTrace);
+    m_trace.push(static_cast<float>(m_force_device.norm()));
   }
 }
 
 template <int dim> int DeviceMode<dim>::force_trace(float* out) const {
-  for (int k = 0; k < m_count; ++k)
-    out[k] = m_trace[static_cast<std::size_t>((m_head - m_count + k + kTrace) % kTrace)];
-  return m_count;
+  return m_trace.copy_to(out);
 }
 
 template class DeviceMode<2>;

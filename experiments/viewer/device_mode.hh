@@ -14,6 +14,7 @@
 /// next step takes the spring to the anchor they held.
 
 #include "vtb/stepper/live_sim.hh"
+#include "vtb/stepper/trace_ring.hh"
 
 #include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/device.hh"
@@ -22,7 +23,6 @@
 #include "vtb/haptics/local_model.hh"
 #include "vtb/haptics/probe_coupling.hh"
 
-#include <array>
 #include <optional>
 
 namespace vtb::viewer {
@@ -46,11 +46,11 @@ public:
   Vec<dim> hand() const { return m_plane.to_world(m_hand_device); }
   Vec<dim> handle() const { return m_plane.to_world(m_device ? m_device->true_position() : m_hand_device); }
   const Vec<dim>& proxy() const { return m_proxy; }
-  bool touching() const { return m_touching; }
+  bool touching() const { return m_probe.contact().touching; }
   /// The tool tip's footprint at the last tick (nodes and weights; empty when not touching).
   const Footprint& footprint() const { return m_footprint; }
   /// The tip's face's outward normal at the last tick (when touching).
-  const Vec<dim>& tip_normal() const { return m_normal; }
+  const Vec<dim>& tip_normal() const { return m_probe.contact().normal; }
   /// The body's nodes as the last tick saw them (the footprint's nodes index them).
   const Nodal<dim>& positions() const { return m_x; }
   double tip_radius() const { return m_contact.tip().radius(); }
@@ -78,18 +78,15 @@ private:
   BasicForceShaper<dim> m_shaper;
   Nodal<dim> m_x;
   Vec<dim> m_proxy = Vec<dim>::Zero();
-  Footprint m_footprint;
-  Vec<dim> m_normal = Vec<dim>::Zero();
+  Footprint m_footprint; ///< the last tick's (empty when not touching)
   Eigen::Vector2d m_force_device = Eigen::Vector2d::Zero();
-  bool m_touching = false;
   long m_ticks = 0, m_saturated = 0;
   LocalModel<dim> m_model; ///< the last step's contact model (valid: it coupled the tip and has a compliance)
   Vec<dim> m_force_on_body = Vec<dim>::Zero(); ///< the last tick's
   double m_fallback;                           ///< m/N: the half-space's compliance under the tip (0: none)
   double m_dt = 0;                             ///< the step being taken
   double m_t = 0;
-  std::array<float, kTrace> m_trace{};
-  int m_head = 0, m_count = 0;
+  TraceRing<kTrace> m_trace; ///< |F| the device rendered, per tick
 };
 
 } // namespace vtb::viewer

@@ -106,7 +106,7 @@ template <int dim> void LiveSim<dim>::reset() {
   m_state.applied_damping.setZero();
   m_failure.clear();
   m_stats = SimStats{};
-  m_trace_count = m_trace_head = 0;
+  m_trace.clear();
   m_step_count = 0;
 }
 
@@ -151,9 +151,7 @@ template <int dim> void LiveSim<dim>::step_once() {
   ++m_stats.steps;
   check(false);
   if (m_probe_node >= 0) {
-    m_trace[static_cast<std::size_t>(m_trace_head)] = static_cast<float>(m_state.u.col(m_probe_node).norm());
-    m_trace_head = (m_trace_head + 1) % kTrace;
-    m_trace_count = std::min(m_trace_count + 1, kTrace);
+    m_trace.push(static_cast<float>(m_state.u.col(m_probe_node).norm()));
   }
 }
 
@@ -281,9 +279,7 @@ template <int dim> void LiveSim<dim>::clear_unpinned() {
 }
 
 template <int dim> int LiveSim<dim>::probe_trace(float* out) const {
-  for (int k = 0; k < m_trace_count; ++k)
-    out[k] = m_trace[static_cast<std::size_t>((m_trace_head - m_trace_count + k + kTrace) % kTrace)];
-  return m_trace_count;
+  return m_trace.copy_to(out);
 }
 
 template class LiveSim<2>;

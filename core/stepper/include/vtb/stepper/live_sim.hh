@@ -11,6 +11,7 @@
 #include "vtb/problem/scene.hh"
 #include "vtb/problem/solver_registry.hh"
 #include "vtb/solvers/integrator.hh"
+#include "vtb/stepper/trace_ring.hh"
 
 #include "vtb/solvers/coupling_set.hh"
 
@@ -184,8 +185,7 @@ private:
   std::string m_failure;
   std::array<double, 256> m_step_us{};
   int m_step_count = 0;
-  std::array<float, kTrace> m_trace{};
-  int m_trace_head = 0, m_trace_count = 0;
+  TraceRing<kTrace> m_trace; ///< the first probe's |u|
   int m_probe_node = -1;
   double m_courant_dt = 0;
   StepHook<dim>* m_hook = nullptr;
