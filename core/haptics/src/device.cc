@@ -23,11 +23,13 @@ Eigen::Vector2d HandScript::at(double t) const {
 SimulatedProCAT::SimulatedProCAT(const DeviceSpec& spec, HandScript hand, Physical physical)
     : m_spec(spec), m_hand(std::move(hand)), m_phys(physical),
       m_x(m_hand.at(0).cwiseMax(spec.workspace_min).cwiseMin(spec.workspace_max)), m_measured(m_x),
-      m_measured_prev(m_x) {}
+      m_velocity(physical.encoder) {
+  m_velocity.add(m_t, m_measured);
+}
 
 void SimulatedProCAT::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
   position = m_measured;
-  velocity = m_velocity_estimate;
+  velocity = m_velocity.velocity();
 }
 
 void SimulatedProCAT::command(const Eigen::Vector2d& force) {
@@ -63,12 +65,9 @@ void SimulatedProCAT::advance(double dt) {
     }
   }
   m_t += dt;
-  // Encoder: positions quantised to counts; velocity by a first-order filtered difference.
-  m_measured_prev = m_measured;
+  // Encoder: positions quantised to counts; velocity by adaptive windowing (velocity_window.hh).
   m_measured = (m_x / m_phys.encoder).array().round().matrix() * m_phys.encoder;
-  const Eigen::Vector2d raw = (m_measured - m_measured_prev) / dt;
-  const double alpha = std::min(1.0, dt * 2 * 3.14159265358979 * 100.0); // 100 Hz low-pass
-  m_velocity_estimate += alpha * (raw - m_velocity_estimate);
+  m_velocity.add(m_t, m_measured);
 }
 
 void SimulatedProCAT::move_hand_to(const Eigen::Vector2d& p, double over) {

@@ -3,6 +3,8 @@
 /// Haptic devices: the interface the servo loop talks to, the simulated 2-DOF ProCAT pushed by
 /// a scripted hand, and a device that replays a recorded handle trajectory.
 
+#include "vtb/haptics/velocity_window.hh"
+
 #include <Eigen/Core>
 
 #include <filesystem>
@@ -40,7 +42,8 @@ struct HandScript {
 };
 
 /// The ProCAT as a 2-DOF planar handle: mass, viscous and Coulomb friction, encoder
-/// quantisation, a force limit; the hand pulls it through the grip spring. Deterministic.
+/// quantisation (velocity by adaptive windowing), a force limit; the hand pulls it through the grip spring.
+/// Deterministic.
 class SimulatedProCAT final : public HapticDevice {
 public:
   struct Physical {
@@ -71,7 +74,8 @@ private:
   double m_t = 0;
   double m_hand_start = 0; ///< the script's time 0 on the device's clock
   Eigen::Vector2d m_x, m_v = Eigen::Vector2d::Zero(), m_force = Eigen::Vector2d::Zero();
-  Eigen::Vector2d m_measured, m_measured_prev, m_velocity_estimate = Eigen::Vector2d::Zero();
+  Eigen::Vector2d m_measured;
+  AdaptiveWindowVelocity m_velocity;
 };
 
 /// Replays a recorded handle trajectory (CSV with columns t,hx,hy, as haptics.csv has; probe
