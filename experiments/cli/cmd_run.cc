@@ -99,7 +99,7 @@ Action add_run(CLI::App& app) {
               << " steps; precompute " << r.precompute_seconds * 1e3 << " ms, step median "
               << r.step_seconds.median * 1e6 << " us, p99 " << r.step_seconds.p99 * 1e6 << " us; max strain "
               << r.max_strain << "; outputs in " << out.string() << "\n";
-    if (run.solver.kind != solvers::kFem || run.solver.kinematics == "linear")
+    if (run.solver.kind != solvers::kFem || !run.solver.fem.nonlinear())
       if (const std::string note = large_strain_run_note(r.max_rotation, r.max_strain, !load_check.empty());
           !note.empty())
         std::cout << "vtb run: " << note << "\n";

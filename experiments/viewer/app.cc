@@ -34,7 +34,7 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
   const bool interactive = std::find(names.begin(), names.end(), scene.solver.kind) != names.end();
   SimControls c;
   c.solver = interactive ? scene.solver.kind : solvers::kFiltered;
-  c.filter = scene.solver.filter;
+  c.filter = scene.solver.step.filter;
   c.dt = scene.solver.dt;
   c.springs = scene.solver.springs;
   // --solver takes any registry name (filtered-tensor: filtered with the tensor filter); an

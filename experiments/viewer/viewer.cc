@@ -140,7 +140,7 @@ int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live,
 
 /// A pull's grip must be on the body (the probe rule of scene files): its start farther than the
 /// longest edge from every node is a typo or the wrong units, not a pull (a start 700 m from a
-/// 0.2 m plate was once run as a 118,704 N pull). Bad input naming the point and the distance.
+/// 0.2 m plate would pull with 10^5 N). Bad input naming the point and the distance.
 template <int dim> void check_drag_start(const Model<dim>& model, const Eigen::Vector3d& from) {
   const Vec<dim> p = from.head<dim>();
   const Eigen::Index node = [&] {

@@ -131,7 +131,7 @@ HeldForce held_press_force(const std::string& solver, double dt) {
   Scene s = press_scene();
   s.solver.springs = "lloyd"; // the held forces below were measured on Lloyd's plate; the
                               // fitted one is softer and holds 0.039 N instead of 0.094 N
-  solvers::select(solver, "test", s.solver.kind, s.solver.filter);
+  solvers::select(solver, "test", s.solver.kind, s.solver.step.filter);
   s.solver.dt = dt;
   s.solver.dt_given = true; // the session steps its physics at it
   HapticsOptions o;
@@ -303,10 +303,10 @@ TEST(Haptics, VirtualWallIsPassiveBelowColgatesBoundAndNotAbove) {
 TEST(Haptics, TheDevicesStiffnessCapIsStableWithTheDefaultCouplingDamping) {
   // The device renders at most 2000 N/m (DeviceSpec::max_stiffness), twice Colgate's bound
   // for an undamped wall. What makes that stable is the coupling's virtual damping (2 N s/m
-  // by default) on the 100 Hz-filtered velocity estimate: the free handle at the cap must
-  // come to rest (amplitude below 1 % of the first second's; the damping's rate
-  // (b + B - K T / 2) / (2 m) = 5/s gives exp(-15) over 3 s, the filter's phase lag at the
-  // 18 Hz oscillation taking part of B). Without it the same stiffness grows (see above).
+  // by default) on the encoder's velocity estimate (adaptive windowing): the free handle at the
+  // cap must come to rest (amplitude below 1 % of the first second's; the damping's rate
+  // (b + B - K T / 2) / (2 m) = 5/s gives exp(-15) over 3 s, the estimate's lag at the 18 Hz
+  // oscillation taking part of B). Without it the same stiffness grows (see above).
   const auto [first, last] = bounce(DeviceSpec{}.max_stiffness, 0.5, 2.0);
   EXPECT_LT(last, 0.01 * first);
 }

@@ -55,8 +55,8 @@ std::string error_of(const std::string& text) {
 TEST(Scene, GoodSceneParses) {
   const Scene s = parse_scene(kGood, "good.toml", ".");
   EXPECT_EQ(s.name, "plate");
-  EXPECT_EQ(s.solver.filter, "auto"); // the design's default: the integrator picks the filter
-  EXPECT_EQ(s.solver.strain_limit, 0.0);
+  EXPECT_EQ(s.solver.step.filter, "auto"); // the design's default: the integrator picks the filter
+  EXPECT_EQ(s.solver.step.strain_limit, 0.0);
   EXPECT_EQ(error_of(kGood), "");
 }
 

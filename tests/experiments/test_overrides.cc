@@ -50,7 +50,7 @@ TEST(Overrides, TheCliAndTheViewerApplyAnOverrideAlike) {
     view.dt = k.dt;
     const SimControls c = viewer::initial_controls(scene, view);
     EXPECT_EQ(c.solver, cli.solver.kind) << k.solver.value_or("(none)");
-    EXPECT_EQ(c.filter, cli.solver.filter) << k.solver.value_or("(none)");
+    EXPECT_EQ(c.filter, cli.solver.step.filter) << k.solver.value_or("(none)");
     EXPECT_EQ(c.dt, cli.solver.dt) << k.solver.value_or("(none)");
   }
 }

@@ -226,7 +226,7 @@ TEST(KelvinVoigtFem, NonlinearKinematicsRefuseSchemesOtherThanBackwardEuler) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("backward-euler"), std::string::npos) << e.what();
   }
-  EXPECT_EQ(make(cantilever_scene(1e-3, "kinematics = \"nonlinear\"\n")).scene.solver.scheme, "backward-euler");
+  EXPECT_EQ(make(cantilever_scene(1e-3, "kinematics = \"nonlinear\"\n")).scene.solver.fem.scheme, "backward-euler");
 }
 
 #ifdef VTB_HAVE_CGAL_MESHERS // Cook's mesh comes from CGAL (VTB_WITH_CGAL=OFF skips it)

@@ -36,7 +36,7 @@ void rows_of(const RowSparse& S, std::vector<int>& ptr, std::vector<int>& col) {
 /// Ones where a dof-level matrix has an entry in a node block (outer / nr, inner / nc), and
 /// (diagonal) on every diagonal block: by rows for a row-major A, by columns (the transpose's
 /// pattern, the same for a symmetric one) for a column-major one. Built row by row in order,
-/// no triplets (a triplet per entry was the multigrid setup's largest transient).
+/// no triplets (a triplet per entry would be the multigrid setup's largest transient).
 template <class Sparse> RowSparse node_pattern(const Sparse& A, int nr, int nc, bool diagonal = false) {
   RowSparse S(A.outerSize() / nr, A.innerSize() / nc);
   S.reserve(A.nonZeros() / (static_cast<Eigen::Index>(nr) * nc) + S.rows());

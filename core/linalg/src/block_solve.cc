@@ -88,7 +88,7 @@ template <int dim> void BlockSolve<dim>::refresh() {
   m_inv_diag = m_factor.diagonal().cwiseInverse();
   // Each node's unit lower tile L_II folded into its row's tiles (L_II^-1 L_IJ, for the
   // forward sweep) and its column's (L_JJ^-T L_IJ^T, for the backward sweep), so that a node's
-  // values no longer wait on each other through L_II in the sweeps (spread_solve,
+  // values do not wait on each other through L_II in the sweeps (spread_solve,
   // solve_in_place in 3D): only the node's own b_I (known before its sum) meets L_II.
   for (int I = 0; I + 1 < static_cast<int>(m_row_ptr.size()); ++I) {
     const double* L = &m_diag_val[static_cast<std::size_t>(I) * kTile]; // L(p, q) = L[q dim + p]

@@ -39,9 +39,8 @@ template <int dim> double max_small_strain(const Mesh<dim>& mesh, const Nodal<di
     }
     const Mat<dim> g = Du * Dm.inverse();
     const Mat<dim> eps = 0.5 * (g + g.transpose());
-    // The closed form (computeDirect) rather than the iterative QR, which was a seventh of a
-    // 10k-node run's time at every sample: the largest |eigenvalue| is ||eps||'s to round-off
-    // of ||eps|| either way (tested against the QR).
+    // The closed form (computeDirect), several times cheaper than the iterative QR: the largest
+    // |eigenvalue| is ||eps||'s to round-off of ||eps|| either way (tested against the QR).
     Eigen::SelfAdjointEigenSolver<Mat<dim>> es;
     const double m = es.computeDirect(eps, Eigen::EigenvaluesOnly).eigenvalues().cwiseAbs().maxCoeff();
     if (!(m <= worst)) worst = m; // propagates NaN
@@ -61,8 +60,8 @@ template <int dim> Mat<dim> svd_rotation(const Mat<dim>& F) {
 
 /// The angle of F's polar rotation R (F = R S, S symmetric positive definite) where det F > 0:
 /// in 2D in closed form, R's (cos, sin) along (F00 + F11, F10 - F01); in 3D by Newton's iteration
-/// X <- (X + X^-T) / 2 from F (Higham), quadratic near R: 4-6 iterations where a JacobiSVD per
-/// cell at every sample was a quarter of a 10k-node run's time. The angle is atan2 of R's axial
+/// X <- (X + X^-T) / 2 from F (Higham), quadratic near R: 4-6 iterations, far cheaper than a
+/// JacobiSVD per cell at every sample. The angle is atan2 of R's axial
 /// vector's length and (tr R - 1) / 2 (acos of the trace alone loses half the digits near 0).
 /// An inverted cell, or an iteration that does not settle, takes the SVD's closest rotation.
 template <int dim> double rotation_angle(const Mat<dim>& F) {

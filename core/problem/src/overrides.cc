@@ -7,8 +7,8 @@
 
 namespace vtb {
 
-double checked_dt(double dt) {
-  if (!(dt > 0) || !std::isfinite(dt)) throw InputError("--dt must be a positive number");
+double checked_dt(double dt, const char* name) {
+  if (!(dt > 0) || !std::isfinite(dt)) throw InputError(std::string(name) + " must be a positive number");
   return dt;
 }
 

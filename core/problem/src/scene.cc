@@ -4,6 +4,7 @@
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/problem/solver_registry.hh"
 
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 
@@ -251,29 +252,33 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     std::vector<std::string_view> kinds;
     for (const auto& e : solvers::kEntries)
       if (e.scene_kind) kinds.emplace_back(e.name);
-    s.solver.kind = r.string("kind", solvers::kFiltered, kinds);
-    s.solver.dt = r.number("dt", 1e-3, positive);
-    s.solver.dt_given = r.node("dt") != nullptr;
-    s.solver.filter =
-        r.string("filter", solvers::kFilterAuto, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
-    s.solver.momentum_correction = r.boolean("momentum_correction", true);
-    s.solver.strain_limit = r.number("strain_limit", 0.0, non_negative);
-    s.solver.step_budget = r.number("step_budget", 0.0, non_negative);
-    s.solver.springs = r.string("springs", "auto", {"auto", "lloyd", "van-gelder", "fitted"});
-    s.solver.rtol = r.number("rtol", 1e-8, positive);
-    s.solver.atol = r.number("atol", 1e-12, positive);
-    s.solver.linear_solver = r.string("linear_solver", "auto", {"auto", "direct", "cg", "cg-multigrid"});
-    s.solver.cg_tolerance = r.number("cg_tolerance", 1e-8, positive);
-    if (s.solver.cg_tolerance >= 1) r.fail("cg_tolerance", "must be below 1");
-    s.solver.degree = r.integer("degree", 1, 1, 2);
-    s.solver.refinements = r.integer("refinements", 0, 0, 6);
-    s.solver.scheme = r.string("scheme", "generalized-alpha", {"generalized-alpha", "newmark", "backward-euler"});
-    s.solver.static_solve = r.boolean("static", false);
-    s.solver.static_path = r.boolean("static_path", false);
-    if (s.solver.static_path && !s.solver.static_solve) r.fail("static_path", "needs static = true");
-    s.solver.kinematics = r.string("kinematics", "linear", {kKinematics.begin(), kKinematics.end()});
+    const SolverDesc d; // the defaults
+    SolverDesc& o = s.solver;
+    o.kind = r.string("kind", d.kind, kinds);
+    o.dt = r.number("dt", d.dt, positive);
+    o.dt_given = r.node("dt") != nullptr;
+    o.springs = r.string("springs", d.springs, {"auto", "lloyd", "van-gelder", "fitted"});
+    o.step.filter = r.string("filter", d.step.filter, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
+    o.step.momentum_correction = r.boolean("momentum_correction", d.step.momentum_correction);
+    o.step.strain_limit = r.number("strain_limit", d.step.strain_limit, non_negative);
+    o.step.step_budget = r.number("step_budget", d.step.step_budget, non_negative);
+    o.step.linear_solver = r.string("linear_solver", d.step.linear_solver, {"auto", "direct", "cg", "cg-multigrid"});
+    o.step.cg_tolerance = r.number("cg_tolerance", d.step.cg_tolerance, positive);
+    if (o.step.cg_tolerance >= 1) r.fail("cg_tolerance", "must be below 1");
+    o.cvode.rtol = r.number("rtol", d.cvode.rtol, positive);
+    o.cvode.atol = r.number("atol", d.cvode.atol, positive);
+    o.fem.degree = r.integer("degree", d.fem.degree, 1, 2);
+    o.fem.refinements = r.integer("refinements", d.fem.refinements, 0, 6);
+    o.fem.scheme = r.string("scheme", d.fem.scheme, {"generalized-alpha", "newmark", "backward-euler"});
+    o.fem.static_solve = r.boolean("static", d.fem.static_solve);
+    o.fem.static_path = r.boolean("static_path", d.fem.static_path);
+    if (o.fem.static_path && !o.fem.static_solve) r.fail("static_path", "needs static = true");
+    const std::string law =
+        r.string("kinematics", kinematics_name(d.fem.kinematics), {kKinematics.begin(), kKinematics.end()});
+    o.fem.kinematics =
+        static_cast<Kinematics>(std::find(kKinematics.begin(), kKinematics.end(), law) - kKinematics.begin());
     // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
-    if (s.solver.kinematics != "linear" && !r.node("scheme")) s.solver.scheme = "backward-euler";
+    if (o.fem.nonlinear() && !r.node("scheme")) o.fem.scheme = "backward-euler";
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");
   }
 }

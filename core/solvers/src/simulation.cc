@@ -173,16 +173,10 @@ RunReport simulate_with(const Model<dim>& model, const IntegratorOptions& o, con
 
 IntegratorOptions integrator_options(const SolverDesc& s) {
   IntegratorOptions o;
+  static_cast<SpringStepSettings&>(o) = s.step;
+  static_cast<CvodeSettings&>(o) = s.cvode;
   o.kind = s.kind;
   o.dt = s.dt;
-  o.filter = s.filter;
-  o.momentum_correction = s.momentum_correction;
-  o.strain_limit = s.strain_limit;
-  o.rtol = s.rtol;
-  o.atol = s.atol;
-  o.linear_solver = s.linear_solver;
-  o.cg_tolerance = s.cg_tolerance;
-  o.step_budget = s.step_budget;
   return o;
 }
 

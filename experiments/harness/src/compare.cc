@@ -26,17 +26,18 @@ Scene fem_scene(const Scene& scene, const Model<dim>& model, const std::string& 
                 KeptLadders* kept) {
   Scene s = scene;
   if (name != solvers::kFem) {
-    note = "the scene's FEM: P" + std::to_string(s.solver.degree) + ", " + std::to_string(s.solver.refinements) +
-           " refinements, on the mesh" + (s.solver.kinematics == "linear" ? "" : ", " + s.solver.kinematics);
+    note = "the scene's FEM: P" + std::to_string(s.solver.fem.degree) + ", " +
+           std::to_string(s.solver.fem.refinements) + " refinements, on the mesh" +
+           (s.solver.fem.nonlinear() ? std::string(", ") + kinematics_name(s.solver.fem.kinematics) : "");
     return s;
   }
-  s.solver.degree = 2;
+  s.solver.fem.degree = 2;
   const auto ladder = static_ladder<dim>(model, scene.material, {}, kept); // the load check's
-  s.solver.refinements = ladder ? ladder->sufficient_refinements : 0;
-  note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.refinements) +
+  s.solver.fem.refinements = ladder ? ladder->sufficient_refinements : 0;
+  note = ladder ? "the continuum: P2 refined " + std::to_string(s.solver.fem.refinements) +
                       "x (static ladder: " + ladder->how + ")"
                 : "P2 on the mesh (the static ladder's first level is above its budget of dofs)";
-  if (s.solver.kinematics != "linear") note += ", " + s.solver.kinematics;
+  if (s.solver.fem.nonlinear()) note += std::string(", ") + kinematics_name(s.solver.fem.kinematics);
   return s;
 }
 
@@ -47,7 +48,7 @@ CompareResult compare_impl(const Scene& scene, const Model<dim>& model, const st
   CompareResult res;
   res.scene = scene.name;
   res.reference = reference;
-  res.geometrically_exact_fem = scene.solver.kinematics != "linear";
+  res.geometrically_exact_fem = scene.solver.fem.nonlinear();
   res.nodes = model.num_nodes();
   res.duration = model.duration;
   std::vector<std::string> all = solvers;

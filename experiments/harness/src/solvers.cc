@@ -106,7 +106,7 @@ template std::optional<fem::ContinuumAnswer<3>> static_ladder<3>(const Problem<3
 
 Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
   Scene scene = scene_in;
-  SolverOverrides{ov.solver, {}, ov.dt, {}}.apply(scene.solver.kind, scene.solver.filter, scene.solver.dt,
+  SolverOverrides{ov.solver, {}, ov.dt, {}}.apply(scene.solver.kind, scene.solver.step.filter, scene.solver.dt,
                                                   scene.solver.springs);
   if (ov.dt) scene.solver.dt_given = true;
   if (ov.duration) {
@@ -115,10 +115,11 @@ Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
   if (ov.kinematics) {
-    if (std::find(kKinematics.begin(), kKinematics.end(), *ov.kinematics) == kKinematics.end())
+    const auto named = std::find(kKinematics.begin(), kKinematics.end(), *ov.kinematics);
+    if (named == kKinematics.end())
       throw InputError("--kinematics must be linear, nonlinear or neo-hookean, not " + *ov.kinematics);
-    scene.solver.kinematics = *ov.kinematics;
-    if (*ov.kinematics != "linear") scene.solver.scheme = "backward-euler"; // the one it steps with
+    scene.solver.fem.kinematics = static_cast<Kinematics>(named - kKinematics.begin());
+    if (scene.solver.fem.nonlinear()) scene.solver.fem.scheme = "backward-euler"; // the one it steps with
   }
   if (scene.solver.dt > scene.duration)
     throw InputError("dt " + std::to_string(scene.solver.dt) + " exceeds the duration");

@@ -312,7 +312,7 @@ StudyResult study_impl(const Scene& scene, const Model<dim>& model, const StudyO
   StudyResult res;
   res.scene = scene.name;
   res.reference = o.reference;
-  res.filter = chosen_filter(model, scene.solver.filter); // what `filtered` runs (auto resolved)
+  res.filter = chosen_filter(model, scene.solver.step.filter); // what `filtered` runs (auto resolved)
   res.nodes = model.num_nodes();
   res.duration = model.duration;
   res.shard = o.shard;

@@ -105,7 +105,7 @@ void def_stepping(py::class_<Simulation>& cls) {
             const Scene s = to_scene(scene);
             SimControls scene_controls; // the scene's [solver]
             scene_controls.solver = s.solver.kind;
-            scene_controls.filter = s.solver.filter;
+            scene_controls.filter = s.solver.step.filter;
             scene_controls.dt = s.solver.dt;
             scene_controls.springs = s.solver.springs;
             const SimControls c = with_args(scene_controls, solver, filter, dt, springs, stiffness_scale);

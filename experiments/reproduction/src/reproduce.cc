@@ -232,8 +232,8 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
   const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb run builds them
   const Model<2> model = build_model<2>(scene, std::get<Mesh2>(load_mesh(scene)), {}, true, &yardstick);
   Scene tight = scene;
-  tight.solver.rtol = 1e-10;
-  tight.solver.atol = 1e-14;
+  tight.solver.cvode.rtol = 1e-10;
+  tight.solver.cvode.atol = 1e-14;
   Trajectory<2> ref_cvode, ref_fem;
   run_solver(tight, model, solvers::kCvode, 0, ref_cvode);
   run_solver(scene, model, solvers::kFem, scene.solver.dt / 4, ref_fem);
@@ -256,8 +256,8 @@ void write_accuracy(const ReproduceOptions& o, double duration) {
     for (double dt : ladder) row(s, scene, dt, 0);
   for (double rtol : o.quick ? std::vector<double>{1e-3, 1e-6} : std::vector<double>{1e-2, 1e-4, 1e-6, 1e-8}) {
     Scene sc = scene;
-    sc.solver.rtol = rtol;
-    sc.solver.atol = rtol * 1e-4;
+    sc.solver.cvode.rtol = rtol;
+    sc.solver.cvode.atol = rtol * 1e-4;
     row(solvers::kCvode, sc, 0, rtol);
   }
   row(solvers::kExplicit, scene, 0, 0); // half its stability limit

@@ -133,7 +133,7 @@ void write_haptics(const std::filesystem::path& out, const std::filesystem::path
   // The paper's filter (its W), named, so that a change of the default (auto) leaves the
   // reproduction's haptic trace as it is.
   Scene scene = read_scene(scenes_dir / "haptic_press.toml");
-  scene.solver.filter = solvers::kFilterFull;
+  scene.solver.step.filter = solvers::kFilterFull;
   HapticsOptions ho;
   const Yardstick yardstick = continuum_yardstick(); // the default springs, as vtb haptics builds them
   ho.yardstick = &yardstick;
@@ -194,8 +194,8 @@ void write_multirate(const std::filesystem::path& out, const std::filesystem::pa
   write_msh(slab, mesh);
   scene.mesh.file = mesh;
   scene.solver.springs = "lloyd"; // the comparison is of the loops on one model: no fit to wait for
-  scene.solver.filter = solvers::kFilterTensorMultigrid; // lag-free in both sessions
-  scene.duration = 2.2;                                  // the press reaches 5 mm at 1 s, holds to 2 s, and lifts
+  scene.solver.step.filter = solvers::kFilterTensorMultigrid; // lag-free in both sessions
+  scene.duration = 2.2;                                       // the press reaches 5 mm at 1 s, holds to 2 s, and lifts
   HapticsOptions ho;
   ho.lockstep = true;
   const HapticsReport lock = run_haptics(scene, ho);

@@ -154,9 +154,9 @@ std::string slab(const std::filesystem::path& meshes_dir) {
 template <int dim>
 void rows(const char* name, const Scene& base, const Mesh<dim>& mesh, std::ostream& os, std::ostream* log) {
   Scene fs = base;
-  fs.solver.static_solve = true;
-  fs.solver.degree = 1;
-  fs.solver.refinements = 0;
+  fs.solver.fem.static_solve = true;
+  fs.solver.fem.degree = 1;
+  fs.solver.fem.refinements = 0;
   const Model<dim> fem_model = build_model<dim>(fs, mesh);
   Trajectory<dim> fem;
   fem::FemOptions fo = fem::options_from(fs.solver); // the harness's run_solver steps in time; here: static

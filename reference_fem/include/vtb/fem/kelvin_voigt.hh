@@ -15,24 +15,11 @@
 
 namespace vtb::fem {
 
-/// `[solver] kinematics`: the linear law, or a geometrically exact one (total Lagrangian, Newton
-/// per step) with St. Venant-Kirchhoff's ("nonlinear") or the compressible neo-Hookean elastic
-/// law ("neo-hookean"), each with the Kelvin-Voigt rate term (docs/fem.md).
-enum class Kinematics { linear, svk, neo_hookean };
+using Kinematics = vtb::Kinematics;
 
-struct FemOptions {
-  int degree = 1;      ///< FE_SimplexP degree: 1 or 2
-  int refinements = 0; ///< uniform refinements of the scene's mesh
-  /// generalized-alpha (rho_inf = 0, order 2, annihilates the highest modes) | newmark (average
-  /// acceleration, order 2, no damping) | backward-euler (order 1)
-  std::string scheme = "generalized-alpha";
-  bool static_solve = false; ///< solve K u = f(t_end) once instead of stepping
-  /// With static_solve: the equilibrium at every sample time instead (the loads' and drives'
-  /// ramps as a load path), each continued from the last: a force-depth curve in one run.
-  bool static_path = false;
-  /// A geometrically exact law runs with backward Euler or the static solve only.
-  Kinematics kinematics = Kinematics::linear;
-  bool nonlinear() const { return kinematics != Kinematics::linear; }
+/// The FEM's options: the scene's [solver] FEM settings as they are, the step, and what a
+/// caller asks of a run.
+struct FemOptions : FemSettings {
   double dt = 1e-3;
   std::filesystem::path frames_dir; ///< if set: frames/frame_NNNN.vtu per sample (deal.II DataOut)
   /// If set: called after every step with the share of the duration done (0-1], so that a long
@@ -41,8 +28,6 @@ struct FemOptions {
 };
 
 FemOptions options_from(const SolverDesc& solver);
-/// The `[solver] kinematics` value that names a law (kKinematics in scene.hh).
-const char* kinematics_name(Kinematics kinematics);
 /// Throws InputError unless the degree is 1 or 2, dt > 0, and nonlinear kinematics come with
 /// backward Euler or the static solve.
 void check_options(const FemOptions& options);

@@ -10,9 +10,10 @@
 
 namespace vtb {
 
-/// A step from outside the scene file, checked: a positive finite number of seconds. Throws
-/// InputError "--dt must be a positive number" otherwise.
-double checked_dt(double dt);
+/// The one rule for a step: a positive finite number of seconds. Returns dt; throws InputError
+/// "<name> must be a positive number" otherwise. Every step from outside the scene file is
+/// checked by it (name "--dt"), and so are the integrators' and the FEM's options.
+double checked_dt(double dt, const char* name = "--dt");
 
 struct SolverOverrides {
   std::optional<std::string> solver; ///< any registry name: a kind, or a kind with its filter (filtered-tensor)

@@ -8,6 +8,7 @@
 #include "vtb/base/input_error.hh"
 #include "vtb/meshes/cgal_generate.hh"
 #include "vtb/problem/solver_names.hh"
+#include "vtb/problem/solver_settings.hh"
 
 #include <Eigen/Core>
 #include <array>
@@ -76,32 +77,17 @@ struct MeshDesc {
   bool generated() const { return !shape.empty(); }
 };
 
-/// The values of `[solver] kinematics` (and `--kinematics`): the FEM's law (docs/fem.md).
-inline constexpr std::array<std::string_view, 3> kKinematics{"linear", "nonlinear", "neo-hookean"};
-
+/// A scene's [solver], parsed once into its typed parts; every default is here.
 struct SolverDesc {
   std::string kind = solvers::kFiltered; ///< explicit | filtered | implicit-euler | cvode | fem
   double dt = 1e-3;
   /// The scene named `dt`: a haptics session then steps its physics at it; without it the
   /// session picks its physics' step from the body's measured cost (docs/haptics.md).
   bool dt_given = false;
-  /// auto (default: full, or multigrid on large 3D meshes) | full | neighbors (the paper,
-  /// conditionally stable) | tensor | multigrid
-  std::string filter = solvers::kFilterAuto;
-  bool momentum_correction = true;
-  double strain_limit = 0.0;    ///< 0 = off (the default: it changes the physics)
-  double step_budget = 0.0;     ///< s per step; 0 = none (filter_pick.hh)
   std::string springs = "auto"; ///< auto (fitted within its budget, else lloyd) | lloyd | van-gelder | fitted
-  double rtol = 1e-8;
-  std::string linear_solver = "auto"; ///< implicit-euler: auto (direct in 2D, cg in 3D) | direct | cg
-  double cg_tolerance = 1e-8;
-  double atol = 1e-12;
-  int degree = 1;
-  int refinements = 0;
-  std::string scheme = "generalized-alpha"; ///< fem: generalized-alpha (rho_inf 0) | newmark | backward-euler
-  bool static_solve = false;                ///< fem: `static = true` solves K u = f at the final load
-  bool static_path = false;          ///< fem: `static_path = true` (with static): the equilibrium at every sample
-  std::string kinematics = "linear"; ///< fem: linear | nonlinear (St. Venant-Kirchhoff) | neo-hookean
+  SpringStepSettings step;
+  CvodeSettings cvode;
+  FemSettings fem;
 };
 
 struct HandDesc {

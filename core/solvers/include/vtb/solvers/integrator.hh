@@ -4,6 +4,7 @@
 /// advances the state by the fixed dt and allocates nothing.
 
 #include "vtb/problem/solver_names.hh"
+#include "vtb/problem/solver_settings.hh"
 #include "vtb/springs/model.hh"
 
 #include <cstddef>
@@ -82,17 +83,11 @@ private:
 };
 
 /// Options that select and tune a spring solver (from [solver]).
-struct IntegratorOptions {
+/// What an integrator is built from: the scene's [solver] settings for the spring steppers and
+/// CVODE, as they are, plus the kind and the step.
+struct IntegratorOptions : SpringStepSettings, CvodeSettings {
   std::string kind = solvers::kFiltered;
   double dt = 1e-3;
-  std::string filter = solvers::kFilterAuto; ///< filtered: a filter of kFilterChoices
-  bool momentum_correction = true;
-  double strain_limit = 0.0;
-  double rtol = 1e-8, atol = 1e-12; ///< cvode
-  /// implicit-euler: auto (direct in 2D, cg in 3D) | direct (sparse LDL^T) | cg
-  std::string linear_solver = "auto";
-  double cg_tolerance = 1e-8; ///< implicit-euler with cg: |r| <= tol |b|
-  double step_budget = 0;     ///< s per step (0: none): steps over it are counted; auto's pick (filter_pick.hh)
   /// Set by with_budget_pick when it resolved `auto`: what was asked for and why the filter.
   std::string filter_requested, filter_reason;
 };

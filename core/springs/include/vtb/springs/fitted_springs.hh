@@ -69,18 +69,16 @@ struct FitOptions {
   /// default) every training answer holds the same strain energy, lambda_1 (phi_m^T K phi_m =
   /// lambda_m for unit phi_m, up to the mass): the low modes a static answer is mostly made of
   /// and the higher ones that carry a local load's near field count alike per unit energy. At 1
-  /// (equal load sizes, the earlier default) the higher modes' answers fall as 1/lambda_m and
-  /// the fit barely sees them: the clamped block under two strips of opposite traction was 7.1 %
-  /// off (4.5 % at 0.5); at 0 (equal displacement sizes) the higher modes, which a spring network
-  /// represents worst, crowd out the low ones (the structured Cook membrane: 15 % instead of 7 %).
+  /// (equal load sizes) the higher modes' answers fall as 1/lambda_m and the fit barely sees
+  /// them; at 0 (equal displacement sizes) the higher modes, which a spring network represents
+  /// worst, crowd out the low ones (docs/decisions/spring_fit_training.md).
   double weighting = 0.5;
   /// With supports that hold the body: the weight of the uniform stress answers in the
   /// training set (the FEM's answers, with the supports, to the boundary tractions of each
   /// uniform stress, as loads of the training modes' size). They are the loads of a tension or
-  /// shear test, which a clamped body's low modes barely contain: trained on modes alone the
-  /// clamped union-jack strip in tension was 10 % off (Lloyd 23 %). Chosen from 0, 0.3, 1, 2, 4
-  /// on the reproduction's fidelity cases: 1 leaves that strip at 4.1 %, 4 takes Cook's
-  /// membrane from 2.7 to 4.2 %. The free body's modes contain its stretching (weight unused).
+  /// shear test, which a clamped body's low modes barely contain. Chosen from 0, 0.3, 1, 2, 4 on
+  /// the reproduction's fidelity cases (docs/decisions/spring_fit_training.md). The free body's
+  /// modes contain its stretching (weight unused).
   double uniform_stress = 2;
   Eigen::VectorXd
       start; ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior

@@ -47,8 +47,7 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
 /// The pattern of the springs' Jacobian on the free dofs (free_index: node -> free index or -1,
 /// free_count of them): a full dim x dim block for each free node and for each spring between two
 /// free nodes, in both orders; values 0, compressed, a node's rows consecutive in each column.
-/// Built in place, without triplets (on the 9,864-node slab: 1.2M entries, 15 MB, where the
-/// triplets of force_jacobians' K and D were 73 MB at once). The solvers' systems (implicit
+/// Built in place, without triplets (a triplet list holds several times the matrix). The solvers' systems (implicit
 /// Euler, CVODE's preconditioner) and the load check share it. `Blocks::lower` keeps a block
 /// only where its row node is at or after its column node: the lower triangle a Cholesky
 /// factorisation reads (CHOLMOD ignores the diagonal blocks' upper entries), half the memory
