@@ -42,8 +42,12 @@ template <int dim> void DeviceMode<dim>::before_step(const Model<dim>& model, St
   m_dt = dt;
   m_model.valid = false;
   const Footprint& fp = m_footprint;
-  if (fp.count == 0) return; // the last tick did not touch
   const bool slow = ticks_in(dt) > 1;
+  if (fp.count == 0) { // the last tick did not touch: a contact that ended gives its force alone
+    const ForceHistory<dim>& h = m_probe.history();
+    if (slow && h.touched.count > 0) apply_force_to_body<dim>(h.touched, ended_contact_force<dim>(h), s);
+    return;
+  }
   const Vec<dim> at = footprint_mean<dim>(fp, model.net.rest) + footprint_mean<dim>(fp, s.u);
   const Vec<dim> f = slow && m_probe.history().cycles > 0
                          ? applied_force<dim>(m_probe.history(), at, tip_stiffness(m_k, fp))

@@ -2,8 +2,11 @@
 // step takes from the servo's cycles (applied_force), a physics stepping at several servo
 // periods against the 1 kHz session in lockstep, and a body too large to step every servo
 // period felt in real time.
+#include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/local_model.hh"
+#include "vtb/haptics/probe_coupling.hh"
 #include "vtb/haptics/session.hh"
+#include "vtb/meshes/generate.hh"
 
 #include <gtest/gtest.h>
 
@@ -76,6 +79,35 @@ TEST(AppliedForce, TheSpringToTheAnchorTheServoHeld) {
   EXPECT_NEAR(applied_force<3>(h, V3(0, 0, 0.0119), k).z(), -1.0 + k * 1e-4, 1e-12);
   // A body far below the anchor is not pulled.
   EXPECT_EQ(applied_force<3>(h, V3(0, 0, 0.0), k), V3::Zero());
+}
+
+TEST(EndedContact, AStepTakesTheImpulseOfATapThatEndedBeforeIt) {
+  // A tap shorter than a physics period: the servo's cycles press the top of a box with a 4 mm
+  // tip, then the handle leaves before the period ends. What the next step takes is the mean of
+  // every cycle's force on the body (0 out of contact) on the last footprint touched: the
+  // impulse the user gave, f_mean x period, not nothing because the last cycle did not touch.
+  const Mesh3 box = generate_box({0.02, 0.02, 0.02}, {4, 4, 4});
+  Contacts<3> contacts(box, 1, 0.004, MaterialDesc{});
+  ProbeCoupling<3> probe(400.0, 2.0, 10);
+  const Nodal<3> v = Nodal<3>::Zero(3, box.points.cols());
+  V3 impulse = V3::Zero();
+  const int period = 10;
+  for (int k = 0; k < period; ++k) {
+    const V3 handle(0.01, 0.01, k < 4 ? 0.019 : 0.03); // 1 mm deep for 4 cycles, then 1 cm above
+    const V3 raw =
+        probe.cycle(contacts, 0, handle, V3::Zero(), ProbeCoupling<3>::Body{box.points, v, 0.0, k == 0, true, nullptr});
+    EXPECT_EQ(probe.contact().touching, k < 4) << k;
+    probe.rendered(raw);
+    impulse -= raw; // the force on the body is the reaction
+  }
+  const ForceHistory<3>& h = probe.history();
+  ASSERT_GT(h.touched.count, 0) << "the footprint the tap touched is kept";
+  EXPECT_LT(impulse.z(), 0.0) << "the tap pushed the body down";
+  EXPECT_NEAR((ended_contact_force<3>(h) - impulse / period).norm(), 0.0, 1e-12 * impulse.norm());
+  // A new physics step's first cycle starts a new history.
+  probe.cycle(contacts, 0, V3(0.01, 0.01, 0.03), V3::Zero(),
+              ProbeCoupling<3>::Body{box.points, v, 0.0, true, true, nullptr});
+  EXPECT_EQ(probe.history().touched.count, 0);
 }
 
 Eigen::VectorXi divisions(int x, int y, int z) {

@@ -69,6 +69,11 @@ public:
     Snapshot<dim>& s = m_snap.back();
     int group = 0;
     for (const ContactCommand<dim>& c : m_cmd.front()) {
+      if (m_slow && c.footprint.count == 0 && c.history.touched.count > 0) { // a contact that ended
+        apply_force_to_body<dim>(c.history.touched, ended_contact_force<dim>(c.history), m_state);
+        s.models[static_cast<std::size_t>(group++)].valid = false;
+        continue;
+      }
       const Vec<dim> f = m_slow && c.history.cycles > 0 ? applied_force<dim>(c.history, footprint_position(c.footprint),
                                                                              tip_stiffness(m_k, c.footprint))
                                                         : Vec<dim>(c.force_on_body);

@@ -66,6 +66,7 @@ template <int dim> void ProbeCoupling<dim>::rendered(const Vec& f) {
   m_history.sum -= f;
   m_history.proxy_sum += m_proxy;
   ++m_history.cycles;
+  if (m_contact.touching) m_history.touched = m_contact.footprint;
 }
 
 template class ProbeCoupling<2>;

@@ -58,4 +58,10 @@ void apply_to_body(const Footprint& fp, const Vec<dim>& force_on_body, double k,
   }
 }
 
+/// A force alone on the footprint's nodes by their weights (no coupling for the solver).
+template <int dim> void apply_force_to_body(const Footprint& fp, const Vec<dim>& force_on_body, State<dim>& s) {
+  for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p)
+    s.applied.col(fp.node[p]) += fp.weight[p] * force_on_body;
+}
+
 } // namespace vtb

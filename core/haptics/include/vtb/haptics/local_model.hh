@@ -26,6 +26,8 @@
 /// of the coupling spring anchored where the servo held it (applied_force). Pure and
 /// allocation-free (fixed-size Eigen).
 
+#include "vtb/haptics/contact_result.hh"
+
 #include <Eigen/Core>
 #include <Eigen/LU>
 
@@ -64,11 +66,14 @@ Eigen::Matrix<double, dim, 1> solve_against_local_model(const Eigen::Matrix<doub
 }
 
 /// What a probe's servo did since it last saw a new snapshot: over `cycles` servo cycles, the
-/// forces on the body it applied and where its local model put the proxy, summed.
+/// forces on the body it applied and where its local model put the proxy, summed, and the last
+/// footprint it touched (count 0: none), where a contact that ended before the step's end left
+/// its force (ended_contact_force).
 template <int dim> struct ForceHistory {
   using Vec = Eigen::Matrix<double, dim, 1>;
   Vec sum = Vec::Zero(), proxy_sum = Vec::Zero();
   long cycles = 0;
+  Footprint touched;
 };
 
 /// The force a physics step takes from the servo's cycles, at the footprint's position `proxy`
@@ -93,6 +98,15 @@ Eigen::Matrix<double, dim, 1> applied_force(const ForceHistory<dim>& h, const Ei
   const Vec mean = h.sum / n;
   const Vec f = mean + k * (h.proxy_sum / n - proxy);
   return f.dot(mean) > 0 ? f : Vec::Zero();
+}
+
+/// The force a physics step takes from a contact that ended among the servo's cycles since the
+/// last publish: the mean of the forces the cycles applied (0 for those out of contact), so
+/// that the body receives the impulse the user gave it, on the last footprint touched and as a
+/// force alone (the coupling no longer holds the body at the step's end).
+template <int dim> Eigen::Matrix<double, dim, 1> ended_contact_force(const ForceHistory<dim>& h) {
+  return h.cycles > 0 ? Eigen::Matrix<double, dim, 1>(h.sum / static_cast<double>(h.cycles))
+                      : Eigen::Matrix<double, dim, 1>::Zero();
 }
 
 /// The half-space's mean compliance under a uniform disc of radius r (3D), isotropic: what the
