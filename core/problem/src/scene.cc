@@ -275,8 +275,7 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     if (o.fem.static_path && !o.fem.static_solve) r.fail("static_path", "needs static = true");
     const std::string law =
         r.string("kinematics", kinematics_name(d.fem.kinematics), {kKinematics.begin(), kKinematics.end()});
-    o.fem.kinematics =
-        static_cast<Kinematics>(std::find(kKinematics.begin(), kKinematics.end(), law) - kKinematics.begin());
+    o.fem.kinematics = *kinematics_named(law); // r.string admitted only kKinematics' names
     // Nonlinear kinematics step with backward Euler: its default when no scheme is named.
     if (o.fem.nonlinear() && !r.node("scheme")) o.fem.scheme = "backward-euler";
     if (s.solver.dt > s.duration) r.fail("dt", "must not exceed [scene].duration");

@@ -95,7 +95,8 @@ void fail(RunReport& rep, const std::string& why, const IntegratorOptions& o, do
 
 template <int dim>
 RunReport simulate(const Model<dim>& model, const IntegratorOptions& o, Trajectory<dim>& traj, bool record_field) {
-  if (o.kind == solvers::kCvode) return simulate_cvode(model, CvodeOptions{o.rtol, o.atol}, traj, record_field);
+  if (o.kind == solvers::kCvode)
+    return simulate_cvode(model, CvodeOptions{static_cast<const CvodeSettings&>(o)}, traj, record_field);
   const IntegratorOptions picked = with_budget_pick(model, o); // auto within a step budget
   return simulate_with<dim>(
       model, picked, [&] { return make_integrator(model, picked); }, traj, record_field);

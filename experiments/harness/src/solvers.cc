@@ -115,10 +115,9 @@ Scene with_overrides(const Scene& scene_in, const RunOverrides& ov) {
     scene.output_interval = std::min(scene.output_interval, scene.duration);
   }
   if (ov.kinematics) {
-    const auto named = std::find(kKinematics.begin(), kKinematics.end(), *ov.kinematics);
-    if (named == kKinematics.end())
-      throw InputError("--kinematics must be linear, nonlinear or neo-hookean, not " + *ov.kinematics);
-    scene.solver.fem.kinematics = static_cast<Kinematics>(named - kKinematics.begin());
+    const std::optional<Kinematics> named = kinematics_named(*ov.kinematics);
+    if (!named) throw InputError("--kinematics must be linear, nonlinear or neo-hookean, not " + *ov.kinematics);
+    scene.solver.fem.kinematics = *named;
     if (scene.solver.fem.nonlinear()) scene.solver.fem.scheme = "backward-euler"; // the one it steps with
   }
   if (scene.solver.dt > scene.duration)

@@ -39,6 +39,12 @@ Vec<dim> virtual_coupling(const ContactResult<dim>& c, const Vec<dim>& handle, c
   return f;
 }
 
+/// A force alone on the footprint's nodes by their weights (no coupling for the solver).
+template <int dim> void apply_force_to_body(const Footprint& fp, const Vec<dim>& force_on_body, State<dim>& s) {
+  for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p)
+    s.applied.col(fp.node[p]) += fp.weight[p] * force_on_body;
+}
+
 /// A contact's force on the body at its footprint's nodes, by their weights w, and the
 /// coupling's stiffness k (in series with the footprint's compliance) and damping b as w_i k
 /// and w_i b in one coupling group (its
@@ -47,21 +53,15 @@ Vec<dim> virtual_coupling(const ContactResult<dim>& c, const Vec<dim>& handle, c
 /// the caller.
 template <int dim>
 void apply_to_body(const Footprint& fp, const Vec<dim>& force_on_body, double k, double b, int group, State<dim>& s) {
+  apply_force_to_body<dim>(fp, force_on_body, s);
   k = tip_stiffness(k, fp);
   for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p) {
     const int node = fp.node[p];
     const double w = fp.weight[p];
-    s.applied.col(node) += w * force_on_body;
     if (node < s.applied_stiffness.size()) s.applied_stiffness[node] += w * k;
     if (node < s.applied_damping.size()) s.applied_damping[node] += w * b;
     if (node < s.applied_group.size()) s.applied_group[node] = group;
   }
-}
-
-/// A force alone on the footprint's nodes by their weights (no coupling for the solver).
-template <int dim> void apply_force_to_body(const Footprint& fp, const Vec<dim>& force_on_body, State<dim>& s) {
-  for (std::size_t p = 0; p < static_cast<std::size_t>(fp.count); ++p)
-    s.applied.col(fp.node[p]) += fp.weight[p] * force_on_body;
 }
 
 } // namespace vtb

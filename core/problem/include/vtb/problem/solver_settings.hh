@@ -7,6 +7,7 @@
 #include "vtb/problem/solver_names.hh"
 
 #include <array>
+#include <optional>
 #include <string>
 #include <string_view>
 
@@ -20,6 +21,12 @@ enum class Kinematics { linear, svk, neo_hookean };
 inline constexpr std::array<std::string_view, 3> kKinematics{"linear", "nonlinear", "neo-hookean"};
 inline const char* kinematics_name(Kinematics k) {
   return kKinematics[static_cast<std::size_t>(k)].data();
+}
+/// The law a name of kKinematics names; nullopt for any other text.
+inline std::optional<Kinematics> kinematics_named(std::string_view name) {
+  for (std::size_t i = 0; i < kKinematics.size(); ++i)
+    if (kKinematics[i] == name) return static_cast<Kinematics>(i);
+  return std::nullopt;
 }
 
 /// The spring steppers' settings (explicit, filtered, implicit-euler): the integrators take
@@ -35,7 +42,7 @@ struct SpringStepSettings {
   double cg_tolerance = 1e-8;         ///< implicit-euler with cg: |r| <= tol |b|
 };
 
-/// CVODE's settings (cvode_solver.hh takes them as they are).
+/// CVODE's settings (cvode_solver.hh's CvodeOptions is one).
 struct CvodeSettings {
   double rtol = 1e-8, atol = 1e-12;
 };

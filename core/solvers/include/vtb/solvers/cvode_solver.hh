@@ -15,9 +15,8 @@
 
 namespace vtb {
 
-struct CvodeOptions {
-  double rtol = 1e-8;
-  double atol = 1e-12;
+/// The scene's CVODE settings (rtol, atol) as they are, and what a caller may ask beyond them.
+struct CvodeOptions : CvodeSettings {
   long max_steps = 2'000'000; ///< CVODE steps in the whole run before it gives up
   /// Newton's linear solver: "auto" (klu in 2D, gmres in 3D), "klu" (the 2n x 2n system by
   /// sparse LU) or "gmres" (GMRES preconditioned by the reduced system's Cholesky factor). KLU's
