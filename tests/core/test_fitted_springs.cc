@@ -23,6 +23,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <random>
@@ -428,8 +429,8 @@ TEST(FittedSprings, HoldTheClampedBlockInShearWithinFivePercentFromNuPointTwoToP
 TEST(FittedSprings, AreCachedPerMeshPoissonRatioAndSupports) {
   // The first fit writes the cache, a second call on the same mesh and material reads the same
   // constants back; another stiffness reads them scaled, another Poisson ratio or other
-  // supports miss; a damaged file is refitted and replaced; an empty VTB_CACHE_DIR turns the
-  // cache off.
+  // supports miss; a damaged file, or one another version of the fit wrote, is refitted and
+  // replaced; an empty VTB_CACHE_DIR turns the cache off.
   const test::FreshDir dir;
   ::setenv("VTB_CACHE_DIR", dir.path().c_str(), 1);
   const Mesh2 m = generate_rectangle({0.1, 0.02}, {10, 2});
@@ -456,6 +457,19 @@ TEST(FittedSprings, AreCachedPerMeshPoissonRatioAndSupports) {
   for (const auto& f : std::filesystem::directory_iterator(dir.path())) std::filesystem::resize_file(f.path(), 20);
   EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
   EXPECT_FALSE(info.hit) << "a damaged file is refitted";
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
+  EXPECT_TRUE(info.hit) << "and replaced";
+  // A fit cached by another version of the fit's code (its hash after the 8-byte magic).
+  const std::string version = fit_code_version();
+  ASSERT_EQ(version.size(), 64u);
+  EXPECT_EQ(version.find_first_not_of("0123456789abcdef"), std::string::npos) << version;
+  for (const auto& f : std::filesystem::directory_iterator(dir.path())) {
+    std::fstream io(f.path(), std::ios::in | std::ios::out | std::ios::binary);
+    io.seekp(8);
+    io.write(std::string(64, '0').c_str(), 64);
+  }
+  EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
+  EXPECT_FALSE(info.hit) << "a fit cached by another version of the fit's code is refitted";
   EXPECT_EQ(cached_fitted_stiffness(m, 1.0e4, 0.3, 0.01, {}, &info), a);
   EXPECT_TRUE(info.hit) << "and replaced";
   ::setenv("VTB_CACHE_DIR", "", 1);

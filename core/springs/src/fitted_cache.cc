@@ -13,7 +13,13 @@
 namespace vtb {
 namespace {
 
-constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', 'B', '\n'}; // the version: bump when the fit changes
+constexpr char kMagic[8] = {'V', 'T', 'B', 'F', 'I', 'T', 'B', '\n'}; // the file's format: bump when it changes
+
+/// The SHA-256 of the fit's sources (CMake hashes them, core/springs/CMakeLists.txt): a fit
+/// cached by another version of the code that computes it is not read back.
+constexpr char kCode[] = VTB_FIT_CODE_SHA256;
+constexpr std::size_t kCodeSize = sizeof kCode - 1;
+static_assert(kCodeSize == 64, "VTB_FIT_CODE_SHA256 is 64 hex digits");
 
 struct Fnv {
   std::uint64_t h = 1469598103934665603ULL;
@@ -57,17 +63,19 @@ int chosen_index(const std::string& chosen) {
   return 0;
 }
 
-/// The file: the magic, which constants were chosen (an index into kChosen) and their
-/// validation error (two doubles), then the constants.
+/// The file: the magic, the fit's code version (kCode), which constants were chosen (an index
+/// into kChosen) and their validation error (two doubles), then the constants.
 bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k, CachedFit& info) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return false;
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  const std::size_t head = sizeof kMagic + 2 * sizeof(double);
+  const std::size_t head = sizeof kMagic + kCodeSize + 2 * sizeof(double);
   const std::size_t want = head + sizeof(double) * static_cast<std::size_t>(k.size());
-  if (bytes.size() != want || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) return false;
+  if (bytes.size() != want || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0 ||
+      std::memcmp(bytes.data() + sizeof kMagic, kCode, kCodeSize) != 0)
+    return false;
   double meta[2];
-  std::memcpy(meta, bytes.data() + sizeof kMagic, sizeof meta);
+  std::memcpy(meta, bytes.data() + sizeof kMagic + kCodeSize, sizeof meta);
   std::memcpy(k.data(), bytes.data() + head, want - head);
   if (!(meta[0] == 0 || meta[0] == 1 || meta[0] == 2)) return false;
   info.chosen = kChosen[static_cast<int>(meta[0])];
@@ -76,6 +84,10 @@ bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k, CachedFit
 }
 
 } // namespace
+
+std::string fit_code_version() {
+  return kCode;
+}
 
 std::filesystem::path fit_cache_dir() {
   if (const char* v = std::getenv("VTB_CACHE_DIR")) return v; // empty: off
@@ -109,6 +121,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
         const double meta[2] = {static_cast<double>(chosen_index(report.chosen)), got.validation};
         write_file_atomically(dir / name, [&](std::ostream& os) {
           os.write(kMagic, sizeof kMagic);
+          os.write(kCode, kCodeSize);
           os.write(reinterpret_cast<const char*>(meta), sizeof meta);
           os.write(reinterpret_cast<const char*>(k.data()), static_cast<std::streamsize>(sizeof(double) * k.size()));
         });

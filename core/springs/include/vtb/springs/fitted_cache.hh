@@ -21,6 +21,11 @@ namespace vtb {
 /// empty (no cache) when VTB_CACHE_DIR is set but empty, or none of them is set.
 std::filesystem::path fit_cache_dir();
 
+/// The version of the code that computes a fit: the SHA-256 of its sources (the fit, its
+/// training, the priors, the network, the continuum's answers), 64 hex digits. A cached fit
+/// holds it and is read back only by the same version.
+std::string fit_code_version();
+
 /// What a fit, fresh or cached, returned besides its constants (fitted_springs.hh FitReport).
 struct CachedFit {
   bool hit = false;      ///< the constants came from the cache
@@ -33,7 +38,8 @@ struct CachedFit {
 /// them, so this equals the direct fit to rounding), kept in the file fitted-<key>.bin, key a
 /// 64-bit FNV-1a hash of the format version, the points, the cells, nu, the supports, the
 /// fit's options and its target's key (FitTarget: the continuum or P1). A file of the wrong
-/// size or header is refitted and replaced (atomically).
+/// size or header, or written by another fit_code_version(), is refitted and replaced
+/// (atomically).
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
