@@ -1,12 +1,16 @@
 // Multirate haptics: the servo's local contact model (local_model.hh), the force a slow physics
 // step takes from the servo's cycles (applied_force), a physics stepping at several servo
-// periods against the 1 kHz session in lockstep, and a body too large to step every servo
-// period felt in real time.
+// periods against the 1 kHz session in lockstep, a contact that ended within a physics step
+// (the servo's history and the step's impulse), and a body too large to step every servo period
+// felt in real time.
+#include "../../core/haptics/src/physics_side.hh"
 #include "vtb/haptics/contacts.hh"
 #include "vtb/haptics/local_model.hh"
 #include "vtb/haptics/probe_coupling.hh"
 #include "vtb/haptics/session.hh"
 #include "vtb/meshes/generate.hh"
+#include "vtb/problem/problem.hh"
+#include "vtb/springs/model.hh"
 
 #include <gtest/gtest.h>
 
@@ -108,6 +112,64 @@ TEST(EndedContact, AStepTakesTheImpulseOfATapThatEndedBeforeIt) {
   probe.cycle(contacts, 0, V3(0.01, 0.01, 0.03), V3::Zero(),
               ProbeCoupling<3>::Body{box.points, v, 0.0, true, true, nullptr});
   EXPECT_EQ(probe.history().touched.count, 0);
+}
+
+TEST(EndedContact, ThePhysicsStepGivesTheBodyTheImpulse) {
+  // The physics side of the same tap: a free box (no supports), a physics stepping every 10
+  // servo periods, and the servo's command for the step: the contact has ended (no footprint
+  // now), its cycles' forces summing to 10 f on the last footprint touched. The step applies
+  // their mean f for its dt, so the body's momentum after it is f dt: the full filter keeps the
+  // total momentum (1^T M W = 1^T M, since K and C are symmetric with the rigid translations in
+  // their null spaces), and so does the torque correction; equal to round-off. Without the
+  // footprint touched (before the history kept it) the body got nothing.
+  const Scene scene = parse_scene(R"(
+[scene]
+duration = 1.0
+output_interval = 0.1
+[mesh]
+generate = { shape = "box", size = [0.02, 0.02, 0.02], divisions = [3, 3, 3] }
+[material]
+young_modulus = 2.0e4
+poisson_ratio = 0.3
+density = 1000.0
+retardation_time = 0.05
+[solver]
+springs = "lloyd"
+)",
+                                  "free_box.toml", ".");
+  const Model<3> model = build_model<3>(scene, std::get<Mesh3>(load_mesh(scene)));
+  IntegratorOptions o;
+  o.filter = "full";
+  o.dt = 0.01;
+  const double period = 1e-3;
+  const V3 f(0.01, 0.0, -0.2);
+  for (const bool kept : {true, false}) {
+    Snapshot<3> init;
+    init.x = model.net.rest;
+    init.v = Nodal<3>::Zero(3, model.num_nodes());
+    init.models.resize(1);
+    TripleBuffer<Snapshot<3>> snap(init);
+    TripleBuffer<Commands<3>> cmd(Commands<3>(1));
+    Physics<3> physics(model, o, snap, cmd, HapticsDesc{}, HapticsOptions{}, period, 0.0);
+    ContactCommand<3>& c = cmd.back()[0];
+    c.history.cycles = 10;
+    c.history.sum = 10 * f;
+    if (kept) {
+      c.history.touched.count = 3;
+      for (int p = 0; p < 3; ++p) c.history.touched.node[static_cast<std::size_t>(p)] = model.num_nodes() - 1 - p;
+      c.history.touched.weight = {0.5, 0.3, 0.2};
+    }
+    cmd.publish();
+    ASSERT_TRUE(physics.step());
+    ASSERT_TRUE(snap.fetch());
+    const Snapshot<3>& s = snap.front();
+    const V3 momentum = s.v * model.net.mass;
+    if (kept)
+      EXPECT_NEAR((momentum - f * o.dt).norm(), 0.0, 1e-12 * f.norm() * o.dt) << momentum.transpose();
+    else
+      EXPECT_LT(momentum.norm(), 1e-12 * f.norm() * o.dt);
+    EXPECT_FALSE(s.models[0].valid) << "an ended contact hands the servo no local model";
+  }
 }
 
 Eigen::VectorXi divisions(int x, int y, int z) {
