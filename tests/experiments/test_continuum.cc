@@ -205,6 +205,41 @@ TEST(FittedSprings, TrainedOnTheContinuumAreCloserToANearlyIncompressibleBlockTh
   EXPECT_LT(trained.springs, 0.5 * trained.mesh_fem);
 }
 
+TEST(FittedSprings, TrainOnP2OnTheMeshPastTheLaddersBudgetUpToTheFitsOwn) {
+  // The fit's target (harness::continuum_target, docs/fidelity.md): the ladder within
+  // kContinuumDofs3D; past it P2 on the mesh itself, unrefined, up to kContinuumFitDofs3D (so
+  // a graded and a uniform mesh of one body train on the same answers); past that P1 on the
+  // mesh. Decided from the mesh's counted dofs before any solve, so nothing is solved here.
+  const Yardstick yardstick = harness::continuum_yardstick();
+  const MaterialDesc material{5.0e4, 0.3, 1000.0, 1.0, 0.0, 0.0};
+  auto target_for = [&](int n) {
+    const Scene box = parse_scene(
+        "[scene]\nname = \"box\"\nduration = 1.0\noutput_interval = 1.0\n[mesh]\ngenerate = { shape = \"box\", size "
+        "= [0.04, 0.04, 0.04], divisions = [" +
+            std::to_string(n) + ", " + std::to_string(n) + ", " + std::to_string(n) +
+            "] }\n[material]\nyoung_modulus = 5.0e4\npoisson_ratio = 0.3\ndensity = 1000.0\n[[fix]]\ngroup = "
+            "\"bottom\"\n",
+        "box.toml", ".");
+    const Problem<3> p = build_problem<3>(box, std::get<Mesh<3>>(load_mesh(box)));
+    return std::make_pair(fem::continuum_first_dofs(p.mesh), yardstick.target<3>()(p, material));
+  };
+  const auto [small_dofs, small] = target_for(8);
+  ASSERT_LE(small_dofs, fem::kContinuumDofs3D);
+  EXPECT_TRUE(small.answers);
+  EXPECT_NE(small.how.find("refined until"), std::string::npos) << small.how;
+  const auto [mid_dofs, mid] = target_for(14);
+  ASSERT_GT(mid_dofs, fem::kContinuumDofs3D);
+  ASSERT_LE(mid_dofs, fem::kContinuumFitDofs3D);
+  EXPECT_TRUE(mid.answers);
+  EXPECT_EQ(mid.key, small.key) << "the same source of answers";
+  EXPECT_NE(mid.how.find("P2 on the mesh"), std::string::npos) << mid.how;
+  const auto [big_dofs, big] = target_for(17);
+  ASSERT_GT(big_dofs, fem::kContinuumFitDofs3D);
+  EXPECT_FALSE(big.answers);
+  EXPECT_TRUE(big.key.empty());
+  EXPECT_EQ(big.how.rfind("P1 FEM on the mesh", 0), 0u) << big.how;
+}
+
 TEST(Compare, TheFemReferenceIsTheContinuumAndFemMeshTheScenesOwn) {
   Scene scene = strip(10, 2, "lloyd");
   scene.duration = 0.05;
