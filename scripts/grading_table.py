@@ -5,8 +5,9 @@ acts"): is the mesh that is fine only where the scene acts as good as one fine e
 SCENE is a haptics scene whose [mesh] generates a surface with a refine table (as
 experiments/scenes/bean_press.toml). Meshes: the scene's graded one, and a uniform one at the
 refine size. Runs on both: (1) a disc load of the tool tip's radius at the first refine centre
-(--force, N), the displacement of the node there at rest along the load: linear P1 FEM (static)
-and the springs (--springs, default the fit; filtered, run to rest); (2) the scene's own haptic
+(--force, N), the displacement at rest along the load, read twice: under the disc (a load probe:
+the load-weighted mean of its nodes, what the load works through) and at the node nearest its
+centre; linear P1 FEM (static) and the springs (--springs, default the fit; filtered, run to rest); (2) the scene's own haptic
 session in lockstep with the lag-free tensor-multigrid filter, the mean force while the hand
 holds (--hold, s). Prints one markdown table with each spring step's median. Fits are cached
 as any run's.
@@ -88,8 +89,10 @@ def main():
         disc += table("mesh", {"file": str(msh)}) + table("material", sc["material"])
         for f in sc.get("fix", []):
             disc += table("fix", f, array=True)
-        disc += table("load", {"disc": {"center": centre, "radius": tip}, "total_force": force, "ramp": 0.3}, True)
-        disc += table("probe", {"name": "load", "point": centre}, True)
+        disc += table("load", {"name": "tool", "disc": {"center": centre, "radius": tip}, "total_force": force,
+                               "ramp": 0.3}, True)
+        disc += table("probe", {"name": "centre", "point": centre}, True)
+        disc += table("probe", {"name": "under", "load": "tool"}, True)
         answers = {}
         for model, solver in (("fem", {"kind": "fem", "static": True, "dt": 0.05}),
                               ("springs", {"kind": "filtered", "dt": 0.005, "springs": a.springs})):
@@ -97,9 +100,11 @@ def main():
             path.write_text(disc + table("solver", solver))
             out = work / f"disc_{name}_{model}"
             run([vtb, "run", path, "--out", out])
-            last = list(csv.DictReader(open(out / "probes.csv")))[-1]
-            along = sum(float(last[k]) * f for k, f in zip(("ux", "uy", "uz"), force)) / math.hypot(*force)
-            answers[model] = along
+            rows_out = list(csv.DictReader(open(out / "probes.csv")))
+            for probe in ("centre", "under"):
+                last = [r for r in rows_out if r["probe"] == probe][-1]
+                along = sum(float(last[k]) * f for k, f in zip(("ux", "uy", "uz"), force)) / math.hypot(*force)
+                answers[f"{model}_{probe}"] = along
             if model == "springs":
                 answers["step_us"] = 1e6 * json.load(open(out / "summary.json"))["step_seconds"]["median"]
         text = scene_path.read_text()
@@ -122,10 +127,16 @@ def main():
           f"{g['nodes'] / u['nodes']:.2f} of the nodes")
     print("| answer | uniform | graded | graded vs uniform | step, uniform / graded |")
     print("|---|---|---|---|---|")
-    print(f"| disc load, P1 FEM static | {u['fem'] * 1e3:.4f} mm | {g['fem'] * 1e3:.4f} mm | {pct('fem'):+.1f} % | |")
-    print(f"| disc load, springs ({a.springs}) at rest | {u['springs'] * 1e3:.4f} mm | {g['springs'] * 1e3:.4f} mm "
-          f"| {pct('springs'):+.1f} % | {u['step_us'] / 1e3:.2f} / {g['step_us'] / 1e3:.2f} ms "
-          f"({u['step_us'] / g['step_us']:.1f}x) |")
+    where = {"under": "under the disc (the load probe)", "centre": "at the disc's centre node"}
+    for probe in ("under", "centre"):
+        key = f"fem_{probe}"
+        print(f"| disc load, P1 FEM static, {where[probe]} | {u[key] * 1e3:.4f} mm | {g[key] * 1e3:.4f} mm "
+              f"| {pct(key):+.1f} % | |")
+    for probe in ("under", "centre"):
+        key = f"springs_{probe}"
+        print(f"| disc load, springs ({a.springs}) at rest, {where[probe]} | {u[key] * 1e3:.4f} mm "
+              f"| {g[key] * 1e3:.4f} mm | {pct(key):+.1f} % | {u['step_us'] / 1e3:.2f} / {g['step_us'] / 1e3:.2f} ms "
+              f"({u['step_us'] / g['step_us']:.1f}x) |")
     print(f"| tool tip's held force, lockstep | {u['held']:.4f} N | {g['held']:.4f} N | {pct('held'):+.1f} % "
           f"| {u['haptic_step_us'] / 1e3:.2f} / {g['haptic_step_us'] / 1e3:.2f} ms "
           f"({u['haptic_step_us'] / g['haptic_step_us']:.1f}x) |")

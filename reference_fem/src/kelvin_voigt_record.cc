@@ -19,9 +19,9 @@ void KelvinVoigtProblem<dim, Backend>::record(double t, Trajectory<dim>& out, bo
   for (std::size_t k = 0; k < field.size(); ++k)
     if (m_node[k] != kUnseen && m_owned.is_element(m_node[k])) field[k] = m_u[m_node[k]];
   m_backend.sum(field);
+  const Eigen::Map<const Nodal<dim>> nodal(field.data(), dim, m_model.num_nodes());
   std::vector<Vec<dim>> pu;
-  for (const auto& [name, node] : m_model.probes)
-    pu.push_back(Eigen::Map<const Vec<dim>>(field.data() + static_cast<std::size_t>(node) * dim));
+  for (std::size_t p = 0; p < m_model.probes.size(); ++p) pu.push_back(m_model.probe_displacement(p, nodal));
   out.probe_u.push_back(pu);
   load_vector(t, m_f);
   if (m_opt.nonlinear()) {
@@ -48,7 +48,6 @@ void KelvinVoigtProblem<dim, Backend>::record(double t, Trajectory<dim>& out, bo
   std::vector<Vec<dim>> r(m_model.supports.size());
   for (std::size_t s = 0; s < r.size(); ++s) r[s] = Eigen::Map<const Vec<dim>>(reac.data() + s * dim);
   out.reaction.push_back(r);
-  const Eigen::Map<const Nodal<dim>> nodal(field.data(), dim, m_model.num_nodes());
   if (record_field) out.field.push_back(nodal);
   // Rotation from the field at the scene's nodes on the scene's cells (the P1 interpolant:
   // the same measure as the spring solvers; every rank holds the summed field).

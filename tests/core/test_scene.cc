@@ -96,6 +96,9 @@ INSTANTIATE_TEST_SUITE_P(
         BadCase{"duration = 1.0", "duration = 1.0\nduration = 2.0", "TOML syntax"},
         BadCase{"[[probe]]", "[[probe]]\nname = \"tip\"\npoint = [0.0, 0.0]\n[[probe]]",
                 "probe name \"tip\" is used twice"},
+        BadCase{"point = [0.2, 0.025]", "point = [0.2, 0.025]\nload = \"push\"",
+                "[[probe]] #1: needs exactly one of point, load"},
+        BadCase{"point = [0.2, 0.025]", "load = \"psuh\"", "probe \"tip\".load: no [[load]] is named \"psuh\""},
         BadCase{"group = \"left\"", "group = \"left\"\npoint = [0.0, 0.0]", "needs exactly one of box, group, point"},
         BadCase{"generate = {", "file = \"missing.msh\"\n#", "missing.msh: cannot open mesh file"},
         BadCase{"[[fix]]\ngroup = \"left\"",
@@ -282,6 +285,42 @@ total_force = [0.3, -1.0]
     moment += r.x() * l.force(1, static_cast<Eigen::Index>(k)) - r.y() * l.force(0, static_cast<Eigen::Index>(k));
   }
   EXPECT_NEAR(moment, 0.0, 1e-15);
+}
+
+TEST(Scene, ALoadProbeRecordsTheDisplacementTheLoadWorksThrough) {
+  // The disc of the test above: nodes at x = 0.075 ... 0.125 on the top edge carry 1/8, 1/4,
+  // 1/4, 1/4, 1/8 of the force (four segments lumped on their ends). The probe's weights are
+  // those shares, so for any field u the load's work sum_i f_i . u_i equals F . u_probe (the
+  // forces are parallel), up to round-off.
+  const Model<2> m = test::model_from(test::plate_scene(16, 4, R"(
+[[fix]]
+group = "left"
+[[load]]
+name = "tool"
+disc = { center = [0.1, 0.05], radius = 0.02 }
+total_force = [0.3, -1.0]
+[[probe]]
+name = "under"
+load = "tool"
+)"));
+  ASSERT_EQ(m.probes.size(), 1u);
+  const auto& w = m.probe_weights.at(0);
+  ASSERT_EQ(w.size(), 5u);
+  double sum = 0;
+  for (const auto& [node, share] : w) {
+    const double x = m.mesh.points(0, node);
+    EXPECT_NEAR(share, std::abs(x - 0.1) > 0.02 ? 0.125 : 0.25, 1e-14) << "node at x = " << x;
+    sum += share;
+  }
+  EXPECT_NEAR(sum, 1.0, 1e-15);
+  EXPECT_NEAR(m.mesh.points(0, m.probes[0].second), 0.1, 1e-12) << "marked at the load's centre";
+  EXPECT_EQ(m.probe_distance.at(0), 0.0);
+  const Nodal<2> u = Nodal<2>::Random(2, m.num_nodes());
+  const Load<2>& l = m.loads[0];
+  double work = 0;
+  for (std::size_t k = 0; k < l.nodes.size(); ++k)
+    work += l.force.col(static_cast<Eigen::Index>(k)).dot(u.col(l.nodes[k]));
+  EXPECT_NEAR(Eigen::Vector2d(0.3, -1.0).dot(m.probe_displacement(0, u)), work, 1e-14);
 }
 
 TEST(Scene, RampAndStepProfiles) {

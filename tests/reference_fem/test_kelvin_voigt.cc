@@ -397,8 +397,12 @@ density = 1000.0
 [[fix]]
 group = "left"
 [[load]]
+name = "pull"
 group = "right"
 total_force = [1.0, 0.0, 0.0]
+[[probe]]
+name = "end"
+load = "pull"
 [solver]
 static = true
 )",
@@ -424,6 +428,8 @@ static = true
       area += A;
     }
     tip /= area;
+    // The load probe records the same mean (its weights are the lumped traction's shares).
+    EXPECT_NEAR(tr.probe_u.back().at(0)(0), tip, 1e-12 * std::abs(tip));
     std::cout << "P" << degree << ": mean end displacement / (F L / E A) = " << tip / uniaxial << "\n";
     tips.push_back(tip);
   }

@@ -266,15 +266,44 @@ void initial_velocity(const Scene& scene, const Mesh<dim>& mesh, const std::stri
   }
 }
 
-/// Probes: each snapped to its nearest node, at most the longest edge away.
+/// Probes: a point probe snapped to its nearest node, at most the longest edge away; a load
+/// probe on the named load's nodes, each weighted by its share of the load's force.
 template <int dim>
 void resolve_probes(const Scene& scene, const Mesh<dim>& mesh, double longest, const std::string& file,
                     Problem<dim>& model) {
   for (const auto& p : scene.probes) {
-    const Vec<dim> x = as_vec<dim>(p.point, "probe \"" + p.name + "\".point", file);
-    const int node = nearest_node(mesh, x);
+    const std::string what = "probe \"" + p.name + "\"";
+    if (p.load.empty()) {
+      const Vec<dim> x = as_vec<dim>(p.point, what + ".point", file);
+      const int node = nearest_node(mesh, x);
+      model.probes.push_back({p.name, node});
+      model.probe_distance.push_back(snap_distance(mesh, longest, x, node, what, file));
+      model.probe_weights.push_back({{node, 1.0}});
+      continue;
+    }
+    const auto load =
+        std::find_if(model.loads.begin(), model.loads.end(), [&](const Load<dim>& l) { return l.name == p.load; });
+    if (load == model.loads.end())
+      throw InputError(file + ": " + what + ".load: no [[load]] is named \"" + p.load + "\"");
+    std::vector<std::pair<int, double>> weights;
+    double total = 0;
+    Vec<dim> centre = Vec<dim>::Zero();
+    for (std::size_t k = 0; k < load->nodes.size(); ++k) {
+      const double share = load->force.col(static_cast<Eigen::Index>(k)).norm();
+      weights.push_back({load->nodes[k], share});
+      total += share;
+      centre += share * mesh.points.col(load->nodes[k]);
+    }
+    if (!(total > 0)) throw InputError(file + ": " + what + ".load: the load \"" + p.load + "\" has no force");
+    centre /= total;
+    int node = weights.front().first;
+    for (auto& [n, w] : weights) {
+      w /= total;
+      if ((mesh.points.col(n) - centre).norm() < (mesh.points.col(node) - centre).norm()) node = n;
+    }
     model.probes.push_back({p.name, node});
-    model.probe_distance.push_back(snap_distance(mesh, longest, x, node, "probe \"" + p.name + "\"", file));
+    model.probe_distance.push_back(0.0);
+    model.probe_weights.push_back(std::move(weights));
   }
 }
 

@@ -233,10 +233,14 @@ void read_initial(const TableReader& top, const std::string& name, Scene& s) {
 void read_probes(const TableReader& top, const std::string& name, Scene& s) {
   const auto probes = top.tables("probe");
   for (std::size_t i = 0; i < probes.size(); ++i) {
-    const TableReader r(*probes[i], "[[probe]] #" + std::to_string(i + 1), name, {"name", "point"});
+    const TableReader r(*probes[i], "[[probe]] #" + std::to_string(i + 1), name, {"name", "point", "load"});
     ProbeDesc p;
     p.name = r.string("name", "probe" + std::to_string(i));
-    p.point = r.vector("point", 2, 3);
+    if (r.has("point") == r.has("load")) r.fail("", "needs exactly one of point, load");
+    if (r.has("load"))
+      p.load = r.string("load", std::nullopt);
+    else
+      p.point = r.vector("point", 2, 3);
     for (const auto& q : s.probes)
       if (q.name == p.name) r.fail("name", "probe name \"" + p.name + "\" is used twice");
     s.probes.push_back(std::move(p));

@@ -39,7 +39,7 @@ void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>
                    RunReport& rep) {
   traj.t.push_back(s.t);
   std::vector<Vec<dim>> pu;
-  for (const auto& [name, node] : model.probes) pu.push_back(s.u.col(node));
+  for (std::size_t p = 0; p < model.probes.size(); ++p) pu.push_back(model.probe_displacement(p, s.u));
   traj.probe_u.push_back(std::move(pu));
   Nodal<dim> scratch(dim, model.num_nodes()), ext(dim, model.num_nodes());
   std::vector<Vec<dim>> reactions;

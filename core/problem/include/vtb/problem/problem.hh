@@ -57,16 +57,27 @@ template <int dim> struct Problem {
   Mesh<dim> mesh;
   std::vector<Support<dim>> supports;
   std::vector<Load<dim>> loads;
-  std::vector<char> constrained;                   ///< per node: fixed or driven
-  std::vector<int> free_nodes;                     ///< sorted
-  std::vector<int> free_index;                     ///< node -> index in free_nodes, or -1
-  Nodal<dim> initial_velocity;                     ///< the scene's translation and spin (about the centre of mass)
-  std::vector<std::pair<std::string, int>> probes; ///< name, node
-  std::vector<double> probe_distance;              ///< per probe: from its scene point to its node, m
+  std::vector<char> constrained; ///< per node: fixed or driven
+  std::vector<int> free_nodes;   ///< sorted
+  std::vector<int> free_index;   ///< node -> index in free_nodes, or -1
+  Nodal<dim> initial_velocity;   ///< the scene's translation and spin (about the centre of mass)
+  /// name, node: a point probe's node; a load probe's node nearest the load's centre (where a
+  /// viewer marks it)
+  std::vector<std::pair<std::string, int>> probes;
+  std::vector<double> probe_distance; ///< per probe: from its scene point to its node, m (0 for a load probe)
+  /// Per probe: the nodes whose displacements it averages and their weights (summing to 1): a
+  /// point probe's node alone, a load probe's nodes by their share of the load (ProbeDesc).
+  std::vector<std::vector<std::pair<int, double>>> probe_weights;
   double duration = 0, output_interval = 0;
 
   int num_nodes() const { return mesh.num_nodes(); }
   bool has_constraints() const { return free_nodes.size() != constrained.size(); }
+  /// Probe p's displacement in the field u (dim x nodes; allocates nothing).
+  template <class Field> Vec<dim> probe_displacement(std::size_t p, const Field& u) const {
+    Vec<dim> x = Vec<dim>::Zero();
+    for (const auto& [node, w] : probe_weights[p]) x += w * u.col(node);
+    return x;
+  }
 
   /// f = external load at time t (f is overwritten; allocates nothing).
   void external_forces(double t, Nodal<dim>& f) const;

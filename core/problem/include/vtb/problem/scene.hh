@@ -49,9 +49,13 @@ struct DriveDesc {
   double ramp = 0.0;
 };
 
+/// A probe records the displacement of the node nearest `point`, or with `load` set the
+/// displacement under that load: its nodes' mean, each weighted by its share of the load's
+/// force (for a uniform traction, by area), which is the displacement the load works through.
 struct ProbeDesc {
   std::string name;
-  Eigen::VectorXd point;
+  Eigen::VectorXd point; ///< empty with `load`
+  std::string load;      ///< a [[load]]'s name, or empty
 };
 
 struct MaterialDesc {
