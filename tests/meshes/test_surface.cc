@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <cstring>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <sstream>
 
@@ -36,6 +37,41 @@ void torus(std::vector<Eigen::Vector3d>& v, std::vector<Tri>& f, int n = 48, int
       f.push_back({a, b, c});
       f.push_back({a, c, d});
     }
+}
+
+/// A dome: the unit icosphere subdivided `levels` times (midpoints pushed out to the sphere),
+/// mapped onto the superellipsoid |x/a|^3 + |y/b|^3 + |z/c|^3 = 1 (60 x 44 x 32 mm) and cut flat
+/// at z = -10 mm: a smooth top over a sharp rim, made here (not a file of the repository).
+void dome(std::vector<Eigen::Vector3d>& v, std::vector<Tri>& f, int levels = 5) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+       {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  for (auto& p : v) p /= p.norm();
+  f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+       {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+       {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<int, int>, int> mid;
+    auto at = [&](int a, int b) {
+      const auto [it, fresh] = mid.try_emplace({std::min(a, b), std::max(a, b)}, static_cast<int>(v.size()));
+      if (fresh) {
+        const Eigen::Vector3d m = v[static_cast<std::size_t>(a)] + v[static_cast<std::size_t>(b)];
+        v.push_back(m / m.norm());
+      }
+      return it->second;
+    };
+    std::vector<Tri> finer;
+    for (const auto& [a, b, c] : f) {
+      const int ab = at(a, b), bc = at(b, c), ca = at(c, a);
+      finer.insert(finer.end(), {Tri{a, ab, ca}, Tri{b, bc, ab}, Tri{c, ca, bc}, Tri{ab, bc, ca}});
+    }
+    f = std::move(finer);
+  }
+  for (auto& p : v) {
+    p = p / std::pow(p.cwiseAbs().array().cube().sum(), 1.0 / 3.0);
+    p = p.cwiseProduct(Eigen::Vector3d(0.030, 0.022, 0.016));
+    p.z() = std::max(p.z(), -0.010);
+  }
 }
 
 /// The unit cube's 8 corners and 12 outward triangles.
@@ -178,6 +214,22 @@ TEST(Surface, MeshesToANodeCountWithTheSlabsQuality) {
   const double h = 1.5 * 1.6 * std::cbrt(enclosed_volume(s) * std::sqrt(2.0) / 3000);
   EXPECT_NEAR(volume(m), enclosed_volume(s), area(s) * h / 10);
   EXPECT_EQ(m.groups.at("surface").facets.size(), boundary_facets(m).size());
+}
+
+TEST(Surface, ACellThatExudationLeavesAboveTheRadiusEdgeBoundIsRemeshed) {
+  // On this dome (binary STL) Mesh_3 meets the radius-edge criterion 2 while it refines, and
+  // the perturbation and exudation after it left one cell at 2.017; run_mesh_3 then remakes the
+  // mesh with the criterion tightened (docs/meshes.md). The bounds are the slab's, as above.
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Tri> f;
+  dome(v, f);
+  const test::FreshDir dir;
+  const Mesh3 m = mesh_surface(read_surface(write(dir, "dome.stl", stl_binary(v, f))), 3000, 0);
+  EXPECT_NEAR(m.num_nodes(), 3000, 0.15 * 3000) << "the node-count rule: within 15 %";
+  const MeshQuality q = mesh_quality(m);
+  EXPECT_GE(q.min_angle, 10.0) << "exudation's sliver bound";
+  EXPECT_LE(q.max_radius_edge, 2.0) << "the cell criterion";
+  EXPECT_EQ(q.inverted, 0);
 }
 
 TEST(Surface, SharpEdgesBoundOnePatchGroupPerFace) {
