@@ -80,6 +80,8 @@ def main():
     for r in gen["refine"] if isinstance(gen["refine"], list) else [gen["refine"]]:
         refine_args += ["--refine-near", ",".join(map(str, r["center"])), "--refine-radius", r["radius"],
                         "--refine-size", r["size"]]
+        if "growth" in r:
+            refine_args += ["--refine-growth", r["growth"]]
     run([vtb, "mesh", "generate", "surface", surface, "--size", gen["cell_size"], *refine_args, "-o", meshes["graded"]])
 
     rows = {}

@@ -56,6 +56,7 @@ struct MeshOpts {
   std::string surface;
   double scale = 1;
   std::vector<double> refine_near, refine_radius, refine_size;
+  double refine_growth = kRefineGrowth;
 };
 
 /// The --refine-near/--refine-radius/--refine-size triples (each option once per refinement).
@@ -69,6 +70,7 @@ std::vector<Refinement> refinements(const MeshOpts& o) {
     out[i].center = Eigen::Vector3d(o.refine_near[3 * i], o.refine_near[3 * i + 1], o.refine_near[3 * i + 2]);
     out[i].radius = o.refine_radius[i];
     out[i].size = o.refine_size[i];
+    out[i].growth = o.refine_growth;
     if (const std::string why = refinement_error(out[i]); !why.empty())
       throw InputError("vtb mesh generate " + o.shape + ": refinement " + std::to_string(i) + ": " + why);
   }
@@ -186,8 +188,12 @@ Action add_mesh(CLI::App& app) {
   gen->add_option("--refine-radius", o->refine_radius, "R (m): element size --refine-size within R of the point")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   gen->add_option("--refine-size", o->refine_size,
-                  "h (m): the element size near the point; it grows by 0.4 m per m beyond R to the body's")
+                  "h (m): the element size near the point; it grows by --refine-growth m per m beyond R to the "
+                  "body's")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  gen->add_option("--refine-growth", o->refine_growth,
+                  "m of element size per m of distance beyond R, in (0, 1], every refinement (default 0.4; slower "
+                  "costs nodes, moves the answers less: docs/meshes.md)");
   gen->add_option("--divisions", o->divisions, "Cells per axis, rectangle and box");
   gen->add_option("--nodes", o->nodes,
                   "Node count: exact for plate and an unstructured rectangle, approximate (15 %) for slab, sphere "

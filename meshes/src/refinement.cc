@@ -10,7 +10,7 @@ namespace vtb {
 double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refinement>& refine) {
   double h = body;
   for (const Refinement& r : refine)
-    h = std::min(h, r.size + kRefineGrowth * std::max(0.0, (x - r.center).norm() - r.radius));
+    h = std::min(h, r.size + r.growth * std::max(0.0, (x - r.center).norm() - r.radius));
   return h;
 }
 
@@ -18,6 +18,7 @@ std::string refinement_error(const Refinement& r) {
   if (!r.center.allFinite()) return "center must be finite";
   if (!(r.radius >= 0) || !std::isfinite(r.radius)) return "radius must be >= 0";
   if (!(r.size > 0) || !std::isfinite(r.size)) return "size must be > 0";
+  if (!(r.growth > 0 && r.growth <= 1)) return "growth must be in (0, 1]";
   return {};
 }
 

@@ -392,6 +392,7 @@ TEST(Scene, ASurfaceIsMeshedFromTheScenesFolderAndGradedWhereAsked) {
                               "bean.toml", data);
   ASSERT_EQ(g.mesh.refine.size(), 1u);
   EXPECT_EQ(g.mesh.refine[0].size, 0.0015);
+  EXPECT_EQ(g.mesh.refine[0].growth, kRefineGrowth) << "the default growth";
   const Mesh3 graded = std::get<Mesh3>(load_mesh(g));
   const Mesh3 coarse = std::get<Mesh3>(load_mesh(parse_scene(bean_scene(", cell_size = 0.006"), "bean.toml", data)));
   EXPECT_GT(graded.num_nodes(), coarse.num_nodes()) << "the refinement adds nodes under the load";
@@ -403,6 +404,8 @@ TEST(Scene, ASurfaceIsMeshedFromTheScenesFolderAndGradedWhereAsked) {
       {", nodes = 600, scale = 0.0", "[mesh].generate.scale: = 0: must be > 0"},
       {", nodes = 600, refine = { center = [0.0, 0.0], radius = 0.01, size = 0.001 }", "refine[0].center"},
       {", nodes = 600, refine = { center = [0.0, 0.0, 0.0], radius = 0.01, size = 0.0 }", "refine[0].size"},
+      {", nodes = 600, refine = { center = [0.0, 0.0, 0.0], radius = 0.01, size = 0.001, growth = 2.0 }",
+       "refine[0].growth: = 2: must be in (0, 1]"},
       {", nodes = 600, refine = { centre = [0.0, 0.0, 0.0], radius = 0.01, size = 0.001 }", "did you mean 'center'"},
       {", nodes = 600, refine = 3", "[mesh].generate.refine"}};
   for (const auto& [keys, expect] : bad) {

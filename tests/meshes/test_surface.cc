@@ -327,6 +327,13 @@ TEST(Grading, TheSizeGrowsFromTheRefinementToTheBodys) {
   EXPECT_EQ(graded_size(Eigen::Vector3d(1, 0, 0), 0.01, r), 0.01);
   EXPECT_FALSE(refinement_error({Eigen::Vector3d(0, 0, 0), -1, 0.001}).empty());
   EXPECT_FALSE(refinement_error({Eigen::Vector3d(0, 0, 0), 1, 0}).empty());
+  // A refinement's own growth: 0.2 reaches the body's size twice as far out as the default.
+  const std::vector<Refinement> slow{{Eigen::Vector3d(0, 0, 0), 0.01, 0.001, 0.2}};
+  EXPECT_DOUBLE_EQ(graded_size(Eigen::Vector3d(0.02, 0, 0), 0.01, slow), 0.001 + 0.2 * 0.01);
+  EXPECT_EQ(graded_size(Eigen::Vector3d(0.01 + 0.009 / 0.2 + 1e-9, 0, 0), 0.01, slow), 0.01);
+  EXPECT_LT(graded_size(Eigen::Vector3d(0.01 + 0.009 / 0.2 - 1e-4, 0, 0), 0.01, slow), 0.01);
+  EXPECT_FALSE(refinement_error({Eigen::Vector3d(0, 0, 0), 1, 0.001, 0}).empty());
+  EXPECT_FALSE(refinement_error({Eigen::Vector3d(0, 0, 0), 1, 0.001, 1.5}).empty());
 }
 
 /// The mean edge length of the cells whose centroid lies within `r` of `c` (or beyond, `inside` false).

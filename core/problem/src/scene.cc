@@ -66,6 +66,10 @@ std::string check_poisson(double v) {
   return (v >= 0.0 && v < 0.5) ? "" : "must be in [0, 0.5)";
 }
 
+std::string check_growth(double v) {
+  return (v > 0.0 && v <= 1.0) ? "" : "must be in (0, 1]";
+}
+
 } // namespace
 
 namespace {
@@ -94,11 +98,12 @@ std::vector<Refinement> read_refine(const TableReader& gr, const std::string& na
   std::vector<Refinement> out;
   for (std::size_t i = 0; i < list.size(); ++i) {
     const TableReader rr(*list[i], "[mesh].generate.refine[" + std::to_string(i) + "]", name,
-                         {"center", "radius", "size"});
+                         {"center", "radius", "size", "growth"});
     Refinement ref;
     ref.center = rr.vector("center", 3, 3);
     ref.radius = rr.number("radius", std::nullopt, non_negative);
     ref.size = rr.number("size", std::nullopt, positive);
+    ref.growth = rr.number("growth", kRefineGrowth, check_growth);
     out.push_back(ref);
   }
   return out;

@@ -63,19 +63,20 @@ inline std::string hole_error(double radius, double shorter) {
 /// kMaxHoleRadius x the shorter side is an InputError.
 Mesh2 mesh_rectangle(const Eigen::Vector2d& size, int nodes, double hole_radius = 0);
 
+/// How fast a refinement's size grows with distance beyond its radius (dimensionless), by
+/// default: a neighbour's size differs from a cell's by at most about 40 % of the cell, so the
+/// grading keeps the slab's quality bounds (docs/meshes.md).
+inline constexpr double kRefineGrowth = 0.4;
+
 /// Grading toward where a scene acts: the element size is `size` within `radius` of `center`
-/// and grows with distance beyond it at kRefineGrowth (m of size per m of distance) until it
+/// and grows with distance beyond it at `growth` (m of size per m of distance) until it
 /// reaches the body's size. Several refinements take the smallest size at each point.
 struct Refinement {
   Eigen::Vector3d center = Eigen::Vector3d::Zero();
-  double radius = 0; ///< m, >= 0
-  double size = 0;   ///< m, > 0
+  double radius = 0;             ///< m, >= 0
+  double size = 0;               ///< m, > 0
+  double growth = kRefineGrowth; ///< in (0, 1]: slower grading costs nodes and moves the answers less (docs/meshes.md)
 };
-
-/// How fast a refinement's size grows with distance beyond its radius (dimensionless): a
-/// neighbour's size differs from a cell's by at most about 40 % of the cell, so the grading
-/// keeps the slab's quality bounds (docs/meshes.md).
-inline constexpr double kRefineGrowth = 0.4;
 
 /// The element size at a point: `body` away from every refinement, graded toward each.
 double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refinement>& refine);
