@@ -249,6 +249,22 @@ TEST(Scene, TractionIsLumpedByBoundaryLengthAndPointLoadIsNodal) {
   EXPECT_NEAR(p.loads[0].force(0, 0), 1.0, 1e-14);
 }
 
+/// A 16 x 4 plate clamped on its left, a disc load "tool" on its top edge around x = 0.1
+/// (radius 0.02, total force (0.3, -1)) and a probe "under" that load.
+Model<2> disc_on_plate() {
+  return test::model_from(test::plate_scene(16, 4, R"(
+[[fix]]
+group = "left"
+[[load]]
+name = "tool"
+disc = { center = [0.1, 0.05], radius = 0.02 }
+total_force = [0.3, -1.0]
+[[probe]]
+name = "under"
+load = "tool"
+)"));
+}
+
 TEST(Scene, ADiscLoadIsAUniformTractionOnThePatchWithTheTotalForceAndItsMoment) {
   // A disc on the top edge of a 16 x 4 plate (segments of 0.0125 m) around x = 0.1 with radius
   // 0.02 holds the segments whose centres lie within 0.02 m: the four centred at 0.08125,
@@ -256,14 +272,7 @@ TEST(Scene, ADiscLoadIsAUniformTractionOnThePatchWithTheTotalForceAndItsMoment) 
   // linear facets gives nodal forces that sum to the total (to round-off) and whose moment
   // about the patch's centre (the facets' length-weighted centroid) is zero: the resultant
   // acts at the patch centre.
-  const Model<2> m = test::model_from(test::plate_scene(16, 4, R"(
-[[fix]]
-group = "left"
-[[load]]
-name = "tool"
-disc = { center = [0.1, 0.05], radius = 0.02 }
-total_force = [0.3, -1.0]
-)"));
+  const Model<2> m = disc_on_plate();
   ASSERT_EQ(m.loads.size(), 1u);
   const Load<2>& l = m.loads[0];
   ASSERT_FALSE(l.facets.empty());
@@ -292,17 +301,7 @@ TEST(Scene, ALoadProbeRecordsTheDisplacementTheLoadWorksThrough) {
   // 1/4, 1/4, 1/8 of the force (four segments lumped on their ends). The probe's weights are
   // those shares, so for any field u the load's work sum_i f_i . u_i equals F . u_probe (the
   // forces are parallel), up to round-off.
-  const Model<2> m = test::model_from(test::plate_scene(16, 4, R"(
-[[fix]]
-group = "left"
-[[load]]
-name = "tool"
-disc = { center = [0.1, 0.05], radius = 0.02 }
-total_force = [0.3, -1.0]
-[[probe]]
-name = "under"
-load = "tool"
-)"));
+  const Model<2> m = disc_on_plate();
   ASSERT_EQ(m.probes.size(), 1u);
   const auto& w = m.probe_weights.at(0);
   ASSERT_EQ(w.size(), 5u);
