@@ -111,10 +111,12 @@ C3t3 run_mesh_3(const Domain& domain, double size, const std::vector<Refinement>
                                   : Criteria(params::edge_size = field, params::facet_angle = 25.0,
                                              params::facet_size = field, params::facet_distance = size / 10,
                                              params::cell_radius_edge_ratio = ratio, params::cell_size = field);
-    // No time limits anywhere: the result must be reproducible.
+    // No time limits: the result must not depend on the machine's speed. Unset, CGAL bounds the
+    // perturbation and the exudation by the time the refinement took, which cut the graded
+    // bean's perturbation at a different point on each run; 0 is no limit.
     return CGAL::make_mesh_3<C3t3>(domain, criteria, params::no_lloyd(), params::no_odt(),
-                                   params::perturb(params::sliver_bound = 10.0),
-                                   params::exude(params::sliver_bound = 10.0));
+                                   params::perturb(params::time_limit = 0, params::sliver_bound = 10.0),
+                                   params::exude(params::time_limit = 0, params::sliver_bound = 10.0));
   };
   C3t3 best = make(kRadiusEdge);
   double worst = mesh_quality(to_mesh(best)).max_radius_edge;
