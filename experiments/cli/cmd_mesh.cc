@@ -192,7 +192,7 @@ Action add_mesh(CLI::App& app) {
                   "body's")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
   gen->add_option("--refine-growth", o->refine_growth,
-                  "m of element size per m of distance beyond R, in (0, 1], every refinement (default 0.4; slower "
+                  "m of element size per m of distance beyond R, in (0, 1], every refinement (default 0.25; slower "
                   "costs nodes, moves the answers less: docs/meshes.md)");
   gen->add_option("--divisions", o->divisions, "Cells per axis, rectangle and box");
   gen->add_option("--nodes", o->nodes,
