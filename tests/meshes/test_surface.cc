@@ -41,6 +41,25 @@ void torus(std::vector<Eigen::Vector3d>& v, std::vector<Tri>& f, int n = 48, int
     }
 }
 
+/// A cylinder (R 25 mm, H 30 mm) with n sides and its side in m rows of quads split in two; top
+/// and bottom are fans. Each side strip is one exact plane, so a row's triangles and the next
+/// row's lie in one plane and share a vertex: a valid surface that only exact predicates pass.
+void cylinder(std::vector<Eigen::Vector3d>& v, std::vector<Tri>& f, int n = 72, int m = 12) {
+  const double R = 0.025, H = 0.03, tau = 2 * std::numbers::pi;
+  v = {{0, 0, 0}, {0, 0, H}};
+  for (int k = 0; k <= m; ++k)
+    for (int i = 0; i < n; ++i) v.emplace_back(R * std::cos(tau * i / n), R * std::sin(tau * i / n), H * k / m);
+  const auto ring = [&](int k, int i) { return 2 + k * n + i % n; };
+  for (int i = 0; i < n; ++i) {
+    f.push_back({0, ring(0, i + 1), ring(0, i)});
+    f.push_back({1, ring(m, i), ring(m, i + 1)});
+    for (int k = 0; k < m; ++k) {
+      f.push_back({ring(k, i), ring(k, i + 1), ring(k + 1, i + 1)});
+      f.push_back({ring(k, i), ring(k + 1, i + 1), ring(k + 1, i)});
+    }
+  }
+}
+
 /// A dome: the unit icosphere subdivided `levels` times (midpoints pushed out to the sphere),
 /// mapped onto the superellipsoid |x/a|^3 + |y/b|^3 + |z/c|^3 = 1 (60 x 44 x 32 mm) and cut flat
 /// at z = -10 mm: a smooth top over a sharp rim, made here (not a file of the repository).
@@ -258,6 +277,24 @@ TEST(Surface, SharpEdgesBoundOnePatchGroupPerFace) {
   }
   EXPECT_EQ(patches, 6);
   EXPECT_NEAR(volume(m), 8e-6, 1e-15) << "a polyhedron with its edges kept is meshed exactly";
+}
+
+TEST(Surface, CoplanarTrianglesThatShareAVertexAreNotACrossing) {
+  // A CAD-style cylinder: with floating-point predicates the self-intersection test refused it
+  // ("faces 916 and 914 cross", two stacked triangles of one side strip); it is closed and
+  // simple, so it reads, in either format, and meshes with one patch per face its rims bound.
+  std::vector<Eigen::Vector3d> v;
+  std::vector<Tri> f;
+  cylinder(v, f);
+  const test::FreshDir dir;
+  const Surface a = read_surface(write(dir, "cyl.stl", stl_binary(v, f)));
+  const Surface b = read_surface(write(dir, "cyl.off", off(v, f)));
+  EXPECT_EQ(a.triangles.size(), f.size());
+  EXPECT_EQ(b.triangles.size(), f.size());
+  const Mesh3 m = mesh_surface(b, 0, 0.006);
+  int patches = 0;
+  for (const auto& g : m.groups) patches += g.first.rfind("patch_", 0) == 0;
+  EXPECT_EQ(patches, 3) << "top, bottom and side";
 }
 
 TEST(Surface, InwardAndInconsistentFacesAreReoriented) {

@@ -4,6 +4,7 @@
 #include "vtb/base/input_error.hh"
 #include "vtb/meshes/isolated.hh"
 
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/IO/OBJ.h>
 #include <CGAL/IO/OFF.h>
 #include <CGAL/IO/PLY.h>
@@ -14,7 +15,6 @@
 #include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
-#include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <algorithm>
@@ -29,9 +29,10 @@
 namespace vtb {
 namespace {
 
-// Inexact constructions suffice for reading; the self-intersection test uses its own exact
-// predicates internally.
-using K = CGAL::Simple_cartesian<double>;
+// Exact predicates: the self-intersection test decides with the kernel's predicates, and with
+// floating-point ones (Simple_cartesian) it took two coplanar triangles of a cylinder's side,
+// stacked and sharing one vertex, for crossing. Constructions stay inexact.
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
 using Point = K::Point_3;
 using Polygons = std::vector<std::vector<std::size_t>>;
 using SurfaceMesh = CGAL::Surface_mesh<Point>;
