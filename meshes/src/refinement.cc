@@ -18,8 +18,12 @@ std::string refinement_error(const Refinement& r) {
   if (!r.center.allFinite()) return "center must be finite";
   if (!(r.radius >= 0) || !std::isfinite(r.radius)) return "radius must be >= 0";
   if (!(r.size > 0) || !std::isfinite(r.size)) return "size must be > 0";
-  if (!(r.growth > 0 && r.growth <= 1)) return "growth must be in (0, 1]";
+  if (const std::string why = growth_error(r.growth); !why.empty()) return "growth " + why;
   return {};
+}
+
+std::string growth_error(double growth) {
+  return (growth > 0 && growth <= 1) ? "" : "must be in (0, 1]";
 }
 
 } // namespace vtb

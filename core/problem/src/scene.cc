@@ -66,10 +66,6 @@ std::string check_poisson(double v) {
   return (v >= 0.0 && v < 0.5) ? "" : "must be in [0, 0.5)";
 }
 
-std::string check_growth(double v) {
-  return (v > 0.0 && v <= 1.0) ? "" : "must be in (0, 1]";
-}
-
 } // namespace
 
 namespace {
@@ -86,7 +82,7 @@ void read_scene_table(const TableReader& top, const std::string& name, Scene& s)
   }
 }
 
-/// `refine = { center, radius, size }` or an array of them (cgal_generate.hh, Refinement).
+/// `refine = { center, radius, size, growth }` or an array of them (cgal_generate.hh, Refinement).
 std::vector<Refinement> read_refine(const TableReader& gr, const std::string& name) {
   std::vector<const toml::table*> list;
   if (!gr.has("refine")) return {};
@@ -103,7 +99,7 @@ std::vector<Refinement> read_refine(const TableReader& gr, const std::string& na
     ref.center = rr.vector("center", 3, 3);
     ref.radius = rr.number("radius", std::nullopt, non_negative);
     ref.size = rr.number("size", std::nullopt, positive);
-    ref.growth = rr.number("growth", kRefineGrowth, check_growth);
+    ref.growth = rr.number("growth", kRefineGrowth, growth_error);
     out.push_back(ref);
   }
   return out;

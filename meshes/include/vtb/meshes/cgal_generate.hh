@@ -86,6 +86,10 @@ double graded_size(const Eigen::Vector3d& x, double body, const std::vector<Refi
 /// Why a refinement is not usable (one phrase), or empty.
 std::string refinement_error(const Refinement& r);
 
+/// Why a growth is not usable ("must be in (0, 1]"), or empty: refinement_error's and the
+/// scene reader's one check.
+std::string growth_error(double growth);
+
 /// An unstructured box [0, size] meshed by CGAL Mesh_3 to about `nodes` nodes (within 15 %),
 /// sharp edges protected; groups left/right/bottom/top/front/back. Deterministic. With
 /// refinements the body's size is what the node count sets, the refinements' sizes are kept.
