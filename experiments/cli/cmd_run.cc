@@ -3,6 +3,7 @@
 #include "overrides.hh"
 #include "vtb/problem/cell_fields.hh"
 #include "vtb/problem/solver_registry.hh"
+#include "vtb/problem/support_notes.hh"
 
 #include "vtb/harness/ranks.hh"
 #include "vtb/harness/solvers.hh"
@@ -47,6 +48,7 @@ Action add_run(CLI::App& app) {
     const Scene run = with_overrides(scene, ov);
     // Under mpirun the FEM spreads its mesh over the ranks; a spring solver runs on rank 0 alone.
     if (run.solver.kind != solvers::kFem && !harness::world().root()) return 0;
+    for (const auto& note : support_face_notes(run)) std::cout << "vtb run: note: " << note << "\n";
     const RunReport r = harness::run(run, out, o->frames, fit_progress_line(std::cerr, isatty(2) != 0)).report;
     std::string filter; // what a filtered run ran, and whether auto picked it
     if (!r.filter.empty())

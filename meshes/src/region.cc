@@ -34,6 +34,37 @@ template <int dim> int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<d
   return best;
 }
 
+std::optional<AxisFace> axis_face_of(const std::string& name, int dim) {
+  if (name.size() != 5 || name[1] != '_' || (name.compare(2, 3, "min") != 0 && name.compare(2, 3, "max") != 0))
+    return std::nullopt;
+  const int axis = name[0] - 'x';
+  if (axis < 0 || axis >= dim) return std::nullopt;
+  return AxisFace{axis, name.compare(2, 3, "max") == 0};
+}
+
+template <int dim> Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what) {
+  const auto row = mesh.points.row(face.axis);
+  const double plane = face.max_side ? row.maxCoeff() : row.minCoeff();
+  // The generators place a face's nodes on the plane exactly; a mesh file's round trip keeps
+  // them within its printed digits, far inside 1e-9 of the body's diagonal.
+  const double tol = 1e-9 * bounding_diagonal(mesh);
+  const auto on = [&](int v) { return std::abs(mesh.points(face.axis, v) - plane) <= tol; };
+  Selection<dim> s;
+  for (int i = 0; i < mesh.num_nodes(); ++i)
+    if (on(i)) s.nodes.push_back(i);
+  for (const auto& f : boundary_facets(mesh))
+    if (std::all_of(f.begin(), f.end(), on)) s.facets.push_back(f);
+  if (s.facets.empty()) {
+    const std::string name = std::string(1, static_cast<char>('x' + face.axis)) + (face.max_side ? "_max" : "_min");
+    std::ostringstream os;
+    os << what << ": group \"" << name << "\": mesh " << mesh.source << " has no flat face at its "
+       << (face.max_side ? "largest " : "smallest ") << static_cast<char>('x' + face.axis) << " (" << plane
+       << " m), only " << s.nodes.size() << " node(s) there; name a group of the mesh or a box";
+    throw InputError(os.str());
+  }
+  return s;
+}
+
 template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what) {
   Selection<dim> s;
   if (spec.box) {
@@ -45,14 +76,18 @@ template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec
         s.facets.push_back(f);
   } else if (!spec.group.empty()) {
     const auto it = mesh.groups.find(spec.group);
-    if (it == mesh.groups.end()) {
+    if (it != mesh.groups.end()) {
+      s.nodes = it->second.nodes;
+      s.facets = it->second.facets;
+    } else if (const auto face = axis_face_of(spec.group, dim)) {
+      s = select_axis_face(mesh, *face, what);
+    } else {
       std::string known;
       for (const auto& [name, g] : mesh.groups) known += (known.empty() ? "" : ", ") + name;
       throw InputError(what + ": group \"" + spec.group + "\" is not in mesh " + mesh.source +
-                       " (groups: " + (known.empty() ? "none" : known) + ")");
+                       " (groups: " + (known.empty() ? "none" : known) + "; and the faces by axis, " +
+                       (dim == 3 ? "x_min, x_max, y_min, y_max, z_min, z_max" : "x_min, x_max, y_min, y_max") + ")");
     }
-    s.nodes = it->second.nodes;
-    s.facets = it->second.facets;
   } else if (spec.point) {
     s.nodes = {nearest_node(mesh, *spec.point)};
   } else if (spec.disc) {
@@ -82,7 +117,8 @@ template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec
 #define VTB_INSTANTIATE(D)                                                                                             \
   template std::vector<int> nodes_in_box<D>(const Mesh<D>&, const Box<D>&);                                            \
   template int nearest_node<D>(const Mesh<D>&, const Eigen::Matrix<double, D, 1>&);                                    \
-  template Selection<D> select<D>(const Mesh<D>&, const RegionSpec<D>&, const std::string&);
+  template Selection<D> select<D>(const Mesh<D>&, const RegionSpec<D>&, const std::string&);                           \
+  template Selection<D> select_axis_face<D>(const Mesh<D>&, const AxisFace&, const std::string&);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -42,9 +42,27 @@ template <int dim> std::vector<int> nodes_in_box(const Mesh<dim>& mesh, const Bo
 /// The node nearest to p (lowest index on ties).
 template <int dim> int nearest_node(const Mesh<dim>& mesh, const Eigen::Matrix<double, dim, 1>& p);
 
+/// A face of the body named by its axis: `x_min`, `x_max`, `y_min`, ... (`z_min` is the face at
+/// the smallest z, the base of a body whose up is z).
+struct AxisFace {
+  int axis = 0;
+  bool max_side = false;
+};
+
+/// The face `name` names ("x_min" ... "z_max", the axis below `dim`), or nothing.
+std::optional<AxisFace> axis_face_of(const std::string& name, int dim);
+
+/// The nodes at the body's smallest (largest) coordinate on the face's axis, within 1e-9 of the
+/// body's diagonal, and the boundary facets all of whose vertices lie there. On a generated box,
+/// slab or rectangle it is the named face (`z_min` = `front`, `y_min` = `bottom`, ...). Throws
+/// InputError (naming `what`) where no boundary facet lies there (a curved body's extreme).
+template <int dim> Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what);
+
 /// Resolves a region against a mesh. A box selects nodes inside it and the boundary facets
 /// whose vertices all lie inside it; a group selects its nodes and facets; a point selects
-/// its nearest node and no facet. Throws InputError (naming `what`) if the group is unknown.
+/// its nearest node and no facet. A group the mesh does not hold that names a face by axis
+/// (`z_min`, ...) selects that face (select_axis_face). Throws InputError (naming `what`) if the
+/// group is unknown.
 template <int dim> Selection<dim> select(const Mesh<dim>& mesh, const RegionSpec<dim>& spec, const std::string& what);
 
 } // namespace vtb
