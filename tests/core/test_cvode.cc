@@ -279,7 +279,7 @@ TEST(Cvode, TensorFilterTracksASlabPressAndThePapersPlateAsWellAsImplicitEuler) 
   // Off the cantilever: the 3D slab pressed by a driven point (over its 0.5 s ramp and after)
   // and the paper's 517-node plate under its step pull, against CVODE (rtol 1e-8, far below
   // both fixed-step errors, which are first order: 0.05 % and 0.4 % at dt = 1 and 10 ms on the
-  // slab). Goal (issue 26): at most 1.5x implicit Euler's error. With one transverse cover for
+  // slab). Goal: at most 1.5x implicit Euler's error. With one transverse cover for
   // the whole mesh (the largest mismatch's, set by the driven point's neighbourhood) the slab
   // was at 4.0x (the plate 1.6-1.7x): the cover's transverse damping slowed every spring's
   // rotation. With each spring's own cover (tensor_filter.hh) measured 1.1x and 1.02x.
@@ -298,10 +298,10 @@ double extra(const RunReport& r, const std::string& key) {
   return it == r.extra.end() ? -1.0 : it->second;
 }
 
-/// The tensor filters on a case past the rest Jacobian's trusted distortion (issue 44): every
+/// The tensor filters on a case past the rest Jacobian's trusted distortion: every
 /// step the filter's (no implicit Euler fallback), every refactorisation spread over
 /// kRefreshParts steps (none carried whole by one step), and the error against CVODE (rtol 1e-8,
-/// far below the fixed-step errors) within 1.5x implicit Euler's, the goal of issue 26.
+/// far below the fixed-step errors) within 1.5x implicit Euler's (docs/performance.md's goal).
 template <int dim>
 void expect_bounded_tensor_steps(const std::string& text, std::initializer_list<const char*> filters,
                                  bool relinearizes) {
@@ -370,7 +370,7 @@ springs = "lloyd"
 }
 
 TEST(Cvode, TensorFiltersTrackATwistedBarAsWellAsImplicitEuler) {
-  // Torsion in 3D (issue 26's item 2): a square bar clamped at one end and twisted at the other
+  // Torsion in 3D: a square bar clamped at one end and twisted at the other
   // by a couple applied as a step, over its transient (tau = 20 ms, 0.6 s), against CVODE at
   // dt = 1, 10 and 40 ms. Twisting turns each cross-section, so the warped rest Jacobian is
   // what the filter relies on here. Measured here (CVODE at rtol 1e-8; largest relative

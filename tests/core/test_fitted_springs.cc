@@ -282,7 +282,7 @@ Eigen::VectorXd strip_traction(const Mesh3& m) {
 }
 
 TEST(FittedSprings, TrainOnTheScenesSupportsAndBeatLloydOnAClampedBlock) {
-  // The held-out case of issue #25: a CGAL Mesh_3 block clamped at its bottom, its top sheared,
+  // A held-out case: a CGAL Mesh_3 block clamped at its bottom, its top sheared,
   // pressed and twisted, nu 0.3 (off the Cauchy value, so no network is exact). The free-body
   // fit was worse than Lloyd here; trained on the clamped body's modes (the scene's supports)
   // the fitted network is held to the issue's 5 % goal on each load and to half Lloyd's error.

@@ -1,4 +1,4 @@
-// The continuum as the yardstick (issue 45): the ladder of P2 refinements, the load check of a
+// The continuum as the yardstick: the ladder of P2 refinements, the load check of a
 // run against it, compare's continuum reference, and springs trained on it.
 #include "vtb/fem/continuum.hh"
 #include "vtb/fem/kelvin_voigt.hh"

@@ -202,14 +202,14 @@ void write_fidelity(const std::filesystem::path& out, const std::filesystem::pat
   const std::vector<Case> cases = {{"cook", cook()},
                                    {"strip-tension", strip("strip-tension", "[1.0e-4, 0.0]")},
                                    {"strip-bending", strip("strip-bending", "[0.0, 1.0e-6]")},
-                                   // Bending of parts two cells thick (issue 45), where P1 on
+                                   // Bending of parts two cells thick, where P1 on
                                    // the mesh locks: the repository's cantilever and a 3D bar.
                                    {"cantilever-2-cells", from_file(scenes_dir, "cantilever_step.toml")},
                                    {"bar-bending-3d", bar_bending("bar-bending-3d")},
                                    {"plate517-one-force", from_file(scenes_dir, "plate517_step.toml")},
                                    {"plate517-four-forces", from_file(scenes_dir, "plate517_four_forces.toml")},
                                    {"slab-cantilever", slab(meshes_dir)},
-                                   // Held-out families (issue 25): a clamped block in shear,
+                                   // Held-out families: a clamped block in shear,
                                    // compression and torsion, and Poisson ratios off the
                                    // lattice's own (1/3 in 2D, 1/4 in 3D) in both dimensions.
                                    {"block-shear", block("block-shear", top_shear())},

@@ -71,13 +71,13 @@ struct FitOptions {
   /// and the higher ones that carry a local load's near field count alike per unit energy. At 1
   /// (equal load sizes) the higher modes' answers fall as 1/lambda_m and the fit barely sees
   /// them; at 0 (equal displacement sizes) the higher modes, which a spring network represents
-  /// worst, crowd out the low ones (docs/decisions/spring_fit_training.md).
+  /// worst, crowd out the low ones (docs/decisions/spring_fit_trains_on_supports_stress_states_equal_energy.md).
   double weighting = 0.5;
   /// With supports that hold the body: the weight of the uniform stress answers in the
   /// training set (the FEM's answers, with the supports, to the boundary tractions of each
   /// uniform stress, as loads of the training modes' size). They are the loads of a tension or
   /// shear test, which a clamped body's low modes barely contain. Chosen from 0, 0.3, 1, 2, 4 on
-  /// the reproduction's fidelity cases (docs/decisions/spring_fit_training.md). The free body's
+  /// the reproduction's fidelity cases (docs/decisions/spring_fit_trains_on_supports_stress_states_equal_energy.md). The free body's
   /// modes contain its stretching (weight unused).
   double uniform_stress = 2;
   Eigen::VectorXd
