@@ -3,6 +3,7 @@
 
 #include "vtb/haptics/session.hh"
 #include "vtb/harness/solvers.hh"
+#include "vtb/problem/support_notes.hh"
 
 #include <algorithm>
 #include <iostream>
@@ -13,7 +14,7 @@ namespace vtb::cli {
 
 Action add_haptics(CLI::App& app) {
   struct Opts {
-    std::string scene, fault, out, replay;
+    std::string scene, fault, out, replay, device;
     bool lockstep = false, lock_memory = false, no_priority = false, no_local_model = false;
     int pin_cpu = -1;
     double physics_dt = 0;
@@ -23,6 +24,9 @@ Action add_haptics(CLI::App& app) {
       "haptics", "The simulated ProCAT's servo loop against the scene's body (haptics.csv, summary.json)");
   cmd->add_option("scene", o->scene, "Scene file with [haptics] (.toml)")->required();
   cmd->add_option("--fault", o->fault, "Inject a fault: stall@T (physics stops) or nan@T (physics returns NaN)");
+  cmd->add_option("--device", o->device,
+                  "The device, overriding [haptics].device: procat-sim, replay, null, plugin:PATH (a driver's shared "
+                  "library, docs/haptics.md) or udp:HOST:PORT (a device in another process)");
   cmd->add_option("--replay", o->replay, "Recorded handle trajectory (t,hx,hy CSV) for device = \"replay\"");
   cmd->add_flag("--lockstep", o->lockstep, "Interleave servo and physics in simulated time (deterministic)");
   cmd->add_flag("--lock-memory", o->lock_memory, "mlockall for the session (no page faults in the servo loop)");
@@ -53,8 +57,10 @@ Action add_haptics(CLI::App& app) {
     ho.pin_cpu = o->pin_cpu;
     ho.realtime_priority = !o->no_priority;
     ho.replay = o->replay;
+    ho.device = o->device;
     const Yardstick yardstick = harness::continuum_yardstick(); // the default springs, as vtb run's
     ho.yardstick = &yardstick;
+    for (const auto& note : support_face_notes(scene)) std::cerr << "note: " << note << '\n';
     const HapticsReport r = run_haptics(scene, ho);
     for (const auto& note : r.notes) std::cerr << "note: " << note << '\n';
     const std::filesystem::path out =
@@ -83,7 +89,17 @@ Action add_haptics(CLI::App& app) {
     if (r.local_model != "none")
       std::cout << "; the servo's local contact model (" << r.local_model << " compliance) predicted the next step's "
                 << "force within " << r.local_model_error_rms << " N rms, " << r.local_model_error_max << " N at most";
+    std::cout << "; device " << r.device;
+    if (r.link.received > 0)
+      std::cout << ": " << r.link.received << " packets taken, " << r.link.stale << " stale, " << r.link.lost
+                << " lost, " << r.link.malformed << " malformed, round trip p50 " << r.link.rtt_p50_us << " us, p99 "
+                << r.link.rtt_p99_us << " us";
+    if (r.link.faults > 0) std::cout << ", " << r.link.faults << " faults (0 N from the first)";
     std::cout << "; outputs in " << out.string() << "\n";
+    if (r.link.silent_cycles > 0)
+      std::cerr << "vtb haptics: the device's link fell silent at t = " << r.link.first_silent_time
+                << " s: 0 N was sent for " << r.link.silent_cycles << " servo cycles (no state packet for longer than "
+                << "the watchdog's " << with_device(scene, o->device).haptics->link_watchdog * 1e3 << " ms)\n";
     if (r.physics_time_ratio < 0.95)
       std::cerr << "vtb haptics: warning: the body ran at " << r.physics_time_ratio
                 << "x wall time: its physics step (median " << r.physics_step_median_us

@@ -22,6 +22,16 @@ void write_haptics(const HapticsReport& r, const std::filesystem::path& dir, con
   }
   nlohmann::ordered_json j;
   j["scene"] = scene_name;
+  j["device"] = r.device;
+  j["device_packets"] = r.link.received;
+  j["device_packets_stale"] = r.link.stale;
+  j["device_packets_lost"] = r.link.lost;
+  j["device_packets_malformed"] = r.link.malformed;
+  j["device_faults"] = r.link.faults;
+  j["device_silent_cycles"] = r.link.silent_cycles;
+  j["device_silent_time"] = r.link.first_silent_time;
+  j["device_rtt_us_p50"] = r.link.rtt_p50_us;
+  j["device_rtt_us_p99"] = r.link.rtt_p99_us;
   j["samples"] = r.samples;
   j["rate_hz_mean"] = r.rate_hz_mean;
   j["period_p99_us"] = r.period_p99_us;

@@ -89,7 +89,8 @@ public:
       // rest is taken by its mechanism), the body receives the whole reaction.
       const Vec f = m_shapers[i].shape(raw, t, m_arrival, finite);
       const Eigen::Vector2d fd = m_plane.axes.transpose() * f;
-      m_devices[i]->command(fd);
+      // With the local model about the handle, for a device that renders between cycles.
+      m_devices[i]->command(fd, c.touching ? m_h.coupling_stiffness : 0.0, pos, t);
       probe.rendered(f);
       out[i].footprint = c.touching ? c.footprint : Footprint{};
       out[i].force_on_body = -f;

@@ -4,6 +4,9 @@
 #include "vtb/solvers/filter_pick.hh"
 
 #include "physics_side.hh"
+#include "vtb/haptics/devices/builtin_devices.hh"
+#include "vtb/haptics/devices/plugin_device.hh"
+#include "vtb/haptics/devices/udp_device.hh"
 #include "realtime_thread.hh"
 #include "servo.hh"
 #include "vtb/problem/output.hh"
@@ -28,11 +31,12 @@ using steady = std::chrono::steady_clock;
 
 namespace {
 
-/// The devices: one per probe, all simulated ProCATs held by scripted hands, or all replays.
-/// 3D waypoints are world points, taken to the device's plane.
+/// The devices: one per probe, each behind the device ABI (plugin_device.hh) but the UDP
+/// bridge's: simulated ProCATs held by scripted hands, replays or null devices (vtb's own), or a
+/// plug-in or a UDP device (one probe). 3D waypoints are world points, taken to the device's plane.
 template <int dim>
 std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, const HapticsOptions& opt,
-                                                        const DevicePlane<dim>& plane) {
+                                                        const DevicePlane<dim>& plane, long ticks) {
   const std::string file = scene.file.string();
   const HapticsDesc& h = *scene.haptics;
   DeviceSpec spec;
@@ -40,9 +44,34 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
   spec.rate_hz = h.rate;
   std::vector<std::unique_ptr<HapticDevice>> devices;
   const int probes = 1 + static_cast<int>(h.probes.size());
+  const auto builtin = [&](const char* name, const std::string& config) {
+    devices.push_back(std::make_unique<PluginDevice>(builtin_device_api(name), name, config, spec));
+  };
+  if ((h.device == "plugin" || h.device == "udp") && probes > 1)
+    throw InputError(file + ": [haptics].device = \"" + h.device +
+                     "\" drives one probe; [[haptics.probe]] adds simulated devices only");
+  if (h.device == "plugin") {
+    devices.push_back(PluginDevice::load(h.plugin, h.plugin_config, spec));
+    return devices;
+  }
+  if (h.device == "udp") {
+    if (opt.lockstep)
+      throw InputError(file + ": [haptics].device = \"udp\" runs in real time (a device in another process has its "
+                              "own clock); drop --lockstep");
+    UdpDevice::Options o;
+    o.endpoint = parse_endpoint(h.address, file + ": [haptics].address");
+    o.watchdog = h.link_watchdog;
+    o.max_samples = ticks + 2;
+    devices.push_back(std::make_unique<UdpDevice>(spec, o));
+    return devices;
+  }
+  if (h.device == "null") {
+    for (int i = 0; i < probes; ++i) builtin("null", null_config(spec.workspace_max)); // out of reach
+    return devices;
+  }
   if (h.device == "replay") {
     if (opt.replay.empty()) throw InputError(file + ": [haptics].device = \"replay\" needs --replay FILE");
-    for (int i = 0; i < probes; ++i) devices.push_back(std::make_unique<ReplayDevice>(spec, opt.replay, i));
+    for (int i = 0; i < probes; ++i) builtin("replay", replay_config(spec, opt.replay, i));
     return devices;
   }
   if (!h.hand) throw InputError(file + ": [haptics.hand] is missing: the simulated ProCAT needs a scripted hand");
@@ -62,7 +91,7 @@ std::vector<std::unique_ptr<HapticDevice>> make_devices(const Scene& scene, cons
     }
     hand.duration = desc.duration;
     hand.grip_stiffness = desc.grip_stiffness;
-    devices.push_back(std::make_unique<SimulatedProCAT>(spec, hand));
+    builtin("procat-sim", procat_sim_config(spec, hand));
   }
   return devices;
 }
@@ -208,7 +237,8 @@ HapticsReport finish_report(HapticsReport rep, LoopTiming lt, const Physics<dim>
 
 template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOptions& opt, const Model<dim>& model) {
   const DevicePlane<dim> plane = device_plane(scene, model.mesh);
-  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane);
+  const long ticks = std::lround(scene.duration / (1.0 / scene.haptics->rate));
+  std::vector<std::unique_ptr<HapticDevice>> devices = make_devices(scene, opt, plane, ticks);
   std::vector<std::string> notes;
   const HapticsDesc h = limited_coupling(scene, devices.front()->spec().max_stiffness, notes);
   // The physics of a session steps at a fixed dt, one step between servo updates.
@@ -225,7 +255,6 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   init.models.resize(devices.size());
   TripleBuffer<Snapshot<dim>> snap(init);
   TripleBuffer<Commands<dim>> cmd(Commands<dim>(devices.size()));
-  const long ticks = std::lround(scene.duration / period);
   Servo<dim> servo(devices, model.mesh, scene.material, h, plane, ticks + 2, o.dt, snap, cmd);
   const double fallback =
       half_space_tip_compliance(dim, scene.material.young_modulus, scene.material.poisson_ratio, h.tip_radius_for(dim));
@@ -245,6 +274,20 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
   if constexpr (dim == 3) {
     rep.contact_tree_builds_physics = servo.contacts().tree().prepared();
     rep.contact_tree_builds_servo = servo.contacts().tree().builds();
+  }
+  rep.device = devices.front()->name();
+  for (const auto& d : devices) {
+    const DeviceLinkStats l = d->link_stats();
+    rep.link.received += l.received;
+    rep.link.stale += l.stale;
+    rep.link.lost += l.lost;
+    rep.link.malformed += l.malformed;
+    rep.link.faults += l.faults;
+    rep.link.silent_cycles += l.silent_cycles;
+    if (l.first_silent_time >= 0 && (rep.link.first_silent_time < 0 || l.first_silent_time < rep.link.first_silent_time))
+      rep.link.first_silent_time = l.first_silent_time;
+    rep.link.rtt_p50_us = std::max(rep.link.rtt_p50_us, l.rtt_p50_us);
+    rep.link.rtt_p99_us = std::max(rep.link.rtt_p99_us, l.rtt_p99_us);
   }
   rep.coupling_stiffness = h.coupling_stiffness;
   rep.tip_radius = h.tip_radius_for(dim);
@@ -279,11 +322,31 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
 
 } // namespace
 
+Scene with_device(const Scene& scene, const std::string& device) {
+  if (device.empty()) return scene;
+  Scene s = scene;
+  HapticsDesc& h = *s.haptics;
+  if (device.rfind("plugin:", 0) == 0) {
+    h.device = "plugin";
+    h.plugin = device.substr(7);
+    if (h.plugin.empty()) throw InputError("--device plugin:PATH: the path is empty");
+  } else if (device.rfind("udp:", 0) == 0) {
+    h.device = "udp";
+    h.address = device.substr(4);
+  } else if (device == "procat-sim" || device == "replay" || device == "null") {
+    h.device = device;
+  } else {
+    throw InputError("--device " + device + ": expected procat-sim, replay, null, plugin:PATH or udp:HOST:PORT");
+  }
+  return s;
+}
+
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& opt) {
   if (!scene.haptics)
     throw InputError(scene.file.string() + ": [haptics] is missing: this scene does not use the device");
+  const Scene s = with_device(scene, opt.device);
   return with_model(
-      scene, [&](const auto& model) { return run_session(scene, opt, model); }, {}, opt.yardstick);
+      s, [&](const auto& model) { return run_session(s, opt, model); }, {}, opt.yardstick);
 }
 
 } // namespace vtb

@@ -335,15 +335,21 @@ DevicePlaneDesc read_plane(const toml::table& pt, const std::string& name) {
   return plane;
 }
 
-void read_haptics(const TableReader& top, const std::string& name, Scene& s) {
+void read_haptics(const TableReader& top, const std::string& name, const std::filesystem::path& base_dir, Scene& s) {
   const toml::table* t = top.table("haptics");
   if (!t) return;
   {
     const TableReader r(*t, "[haptics]", name,
-                        {"device", "rate", "coupling_stiffness", "coupling_damping", "max_force", "tip_radius", "hand",
-                         "probe", "plane"});
+                        {"device", "plugin", "plugin_config", "address", "link_watchdog", "rate", "coupling_stiffness",
+                         "coupling_damping", "max_force", "tip_radius", "hand", "probe", "plane"});
     HapticsDesc h;
-    h.device = r.string("device", "procat-sim", {"procat-sim", "replay"});
+    h.device = r.string("device", "procat-sim", {"procat-sim", "replay", "null", "plugin", "udp"});
+    if (r.has("plugin")) h.plugin = base_dir / r.string("plugin", std::nullopt);
+    if (h.device == "plugin" && h.plugin.empty())
+      r.fail("plugin", "device = \"plugin\" needs plugin = \"PATH\" (the driver's shared library)");
+    h.plugin_config = r.string("plugin_config", "");
+    h.address = r.string("address", "127.0.0.1:47000");
+    h.link_watchdog = r.number("link_watchdog", 0.05, positive);
     h.rate = r.number("rate", 1000.0, positive);
     h.coupling_stiffness = r.number("coupling_stiffness", 400.0, positive);
     h.coupling_damping = r.number("coupling_damping", 2.0, non_negative);
@@ -381,7 +387,7 @@ Scene parse_scene(std::string_view text, const std::string& name, const std::fil
   read_initial(top, name, s);
   read_probes(top, name, s);
   read_solver(top, name, s); // after [scene]: dt is checked against the duration
-  read_haptics(top, name, s);
+  read_haptics(top, name, base_dir, s);
   return s;
 }
 

@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 
 #include <filesystem>
+#include <string>
 #include <vector>
 
 namespace vtb {
@@ -19,7 +20,21 @@ struct DeviceSpec {
   double rate_hz = 1000.0;                                            ///< nominal servo rate
 };
 
+/// A device's link to vtb, for the run line and summary.json: what a device in another process
+/// (udp_device.hh) sent and lost, or what a plug-in's read reported. Zero for an in-process one.
+struct DeviceLinkStats {
+  long received = 0;  ///< packets taken (each the newest so far)
+  long stale = 0;     ///< packets older than one already taken (out of order), dropped
+  long lost = 0;      ///< sequence numbers never seen
+  long malformed = 0; ///< packets of the wrong size, magic, version or kind, dropped
+  long faults = 0;    ///< reads or writes the device failed (0 N is rendered from the first)
+  long silent_cycles = 0;        ///< servo cycles commanded 0 N because the link was silent past its watchdog
+  double first_silent_time = -1; ///< s of servo time when the link first fell silent (-1: never)
+  double rtt_p50_us = 0, rtt_p99_us = 0; ///< the link's round trip, without the time a packet waited to be read
+};
+
 /// What the servo loop needs from a device. Implementations own their state; none is shared.
+/// read and command are called from the servo thread alone, once per cycle, and allocate nothing.
 class HapticDevice {
 public:
   virtual ~HapticDevice() = default;
@@ -28,8 +43,17 @@ public:
   virtual void read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const = 0;
   /// The force to render on the handle (N); devices clamp it to their own limit as well.
   virtual void command(const Eigen::Vector2d& force) = 0;
+  /// The force with the local model about it, F(x) = force - stiffness (x - anchor), for a
+  /// device that renders between servo cycles; by default the force alone.
+  virtual void command(const Eigen::Vector2d& force, double /*stiffness*/, const Eigen::Vector2d& /*anchor*/,
+                       double /*t*/) {
+    command(force);
+  }
   /// Advances a simulated device's own physics by dt (a real device does nothing).
   virtual void advance(double dt) = 0;
+  /// What the run line and summary.json call it.
+  virtual std::string name() const { return "device"; }
+  virtual DeviceLinkStats link_stats() const { return {}; }
 };
 
 /// The scripted user: a hand that moves along waypoints (piecewise linear over `duration`)
@@ -58,6 +82,7 @@ public:
   void read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const override;
   void command(const Eigen::Vector2d& force) override;
   void advance(double dt) override;
+  std::string name() const override { return "procat-sim"; }
   double time() const { return m_t; }
   const Eigen::Vector2d& true_position() const { return m_x; }
   /// A live user (the viewer's mouse) instead of the script: the hand goes from where it is now
@@ -87,6 +112,7 @@ public:
   void read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const override;
   void command(const Eigen::Vector2d&) override {}
   void advance(double dt) override { m_t += dt; }
+  std::string name() const override { return "replay"; }
 
 private:
   DeviceSpec m_spec;

@@ -6,6 +6,7 @@
 /// model each physics step hands it), with saturation, ramp-in and a watchdog. One or several
 /// probes (devices), whose contact forces act on the body in the same physics step.
 
+#include "vtb/haptics/device.hh"
 #include "vtb/problem/scene.hh"
 
 #include <filesystem>
@@ -33,6 +34,8 @@ struct HapticsOptions {
   /// A physics stepping slower than the servo hands it a local contact model (local_model.hh);
   /// false: the servo couples against the free motion alone (to measure what the model buys).
   bool local_model = true;
+  /// Overrides [haptics].device: procat-sim, replay, null, plugin:PATH or udp:HOST:PORT (empty: the scene's).
+  std::string device;
 };
 
 /// One probe's record: handle position and the force sent to its device, per servo sample
@@ -51,6 +54,8 @@ struct ProbeTrace {
 
 struct HapticsReport {
   int dim = 2;
+  std::string device;   ///< the first device's name (HapticDevice::name)
+  DeviceLinkStats link; ///< summed over the devices (a UDP link's, a plug-in's faults)
   long samples = 0;
   double rate_hz_mean = 0, period_p99_us = 0, period_max_us = 0;
   long deadline_misses = 0; ///< cycles that started more than half a period late
@@ -100,6 +105,10 @@ struct HapticsReport {
 /// Runs the scene's [haptics] session for [scene].duration: a 2D scene, or a 3D one with the
 /// device's plane placed by [haptics.plane]. Needs [haptics.hand] (procat-sim) or a replay file.
 HapticsReport run_haptics(const Scene& scene, const HapticsOptions& options);
+
+/// The scene with its [haptics].device replaced as `--device SPEC` names it (SPEC empty: as it is).
+/// Throws InputError on an unknown SPEC.
+Scene with_device(const Scene& scene, const std::string& spec);
 
 /// haptics.csv (t,hx,hy,fx,fy, then hx_k,hy_k,fx_k,fy_k for probe k >= 1) and summary.json
 /// into dir, all or nothing.
