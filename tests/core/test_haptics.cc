@@ -468,31 +468,32 @@ TEST(Contact3D, TreeFollowsTheDeformedBody) {
 }
 
 TEST(Contact3D, ThePhysicsBuildsTheTreeTheServoAdopts) {
-  // In real time the physics' thread builds the next tree (prepare) once a node has moved half
-  // the margin, and the servo adopts it at its next refit without a build of its own; while an
-  // offer waits, the physics leaves it alone (the servo may be adopting it).
+  // In real time the physics' thread puts each shape it is about to publish into the spare slot
+  // (prepare), building that slot's boxes only past half the margin, and offers it; the servo's
+  // refit only adopts the offer (no copy, no build: its cost does not grow with the body). While
+  // an offer waits, the physics leaves it alone (the servo may be adopting it).
   const Mesh3 m = generate_box({0.02, 0.02, 0.02}, {4, 4, 4});
   SurfaceTree tree(m);
+  const double g = tree.margin();
   Nodal<3> x = m.points;
-  x.row(0).array() += 0.4 * tree.margin();
+  x.row(0).array() += 0.4 * g;
   tree.prepare(x);
-  EXPECT_EQ(tree.prepared(), 0) << "under half the margin the tree in use holds";
-  x.row(0).array() += 0.2 * tree.margin();
-  tree.prepare(x);
-  EXPECT_EQ(tree.prepared(), 1);
-  tree.prepare(x + Nodal<3>::Constant(3, x.cols(), tree.margin()));
-  EXPECT_EQ(tree.prepared(), 1) << "an offer not yet adopted is not rebuilt";
-  // The servo moves on by a full margin more: its old tree would need a build, the adopted one
-  // (built at +0.6 margin) holds.
-  x.row(0).array() += 0.9 * tree.margin();
-  tree.rebuild(x);
+  EXPECT_EQ(tree.prepared(), 0) << "under half the margin the slot's boxes hold: offered without a build";
+  tree.prepare(x + Nodal<3>::Constant(3, x.cols(), 5 * g));
+  tree.rebuild(x + Nodal<3>::Constant(3, x.cols(), 9 * g)); // the servo's own x is not copied
   EXPECT_EQ(tree.adopted(), 1);
   EXPECT_EQ(tree.builds(), 0);
-  const double d = 1.5 * tree.margin();
-  EXPECT_TRUE(tree.inside({0.02 + 0.9 * d, 0.01, 0.01})) << "inside the moved body only";
-  EXPECT_FALSE(tree.inside({0.9 * d, 0.01, 0.01})) << "outside the moved body only";
+  EXPECT_TRUE(tree.inside({0.02 + 0.2 * g, 0.01, 0.01})) << "the first offer's shape (the second waited)";
+  EXPECT_FALSE(tree.inside({0.1 * g, 0.01, 0.01}));
+  // A full margin from rest: the spare slot (built at rest) is built again before it is offered.
+  x.row(0).array() += 0.6 * g;
   tree.prepare(x);
-  EXPECT_EQ(tree.prepared(), 2) << "adopted: the physics builds the next one";
+  EXPECT_EQ(tree.prepared(), 1);
+  tree.rebuild(x);
+  EXPECT_EQ(tree.adopted(), 2);
+  EXPECT_EQ(tree.builds(), 0) << "the servo never builds once the physics prepares";
+  EXPECT_TRUE(tree.inside({0.02 + 0.9 * g, 0.01, 0.01})) << "inside the moved body only";
+  EXPECT_FALSE(tree.inside({0.9 * g, 0.01, 0.01})) << "outside the moved body only";
 }
 
 TEST(Haptics, SlabPressPushesBackOutOfTheSurfaceAndIsDeterministic) {

@@ -87,7 +87,7 @@ struct SurfaceTree::Impl {
   double margin = 0;
   std::atomic<int> in_use{0};  ///< the slot the servo queries (written by the servo)
   std::atomic<int> offered{0}; ///< the slot the physics last built (written by the physics)
-  Nodal<3> offered_x;          ///< the physics' record of the shape it last offered
+  std::atomic<bool> physics_prepares{false}; ///< the physics offers every shape (real time): the servo only adopts
   TreeSlot& current() { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }
   const TreeSlot& current() const { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }
 };
@@ -124,7 +124,6 @@ SurfaceTree::SurfaceTree(const Mesh3& mesh) : m_impl(std::make_unique<Impl>()) {
     slot.tree.do_not_accelerate_distance_queries();
     slot.build(m_impl->margin);
   }
-  m_impl->offered_x = mesh.points;
 }
 
 SurfaceTree::~SurfaceTree() = default;
@@ -137,6 +136,9 @@ void SurfaceTree::rebuild(const Nodal<3>& x) {
     m_impl->in_use.store(offered, std::memory_order_release); // the physics' tree from here on
     ++m_adopted;
   }
+  // Where the physics prepares the trees (real time), it has put each published shape into the
+  // slot it offered before publishing it: the servo only swaps slots, whatever the body's size.
+  if (m_impl->physics_prepares.load(std::memory_order_acquire)) return;
   TreeSlot& slot = m_impl->current();
   slot.geometry.x = x; // same size: no allocation; the triangles are read from here
   if (moved2(x, slot.built) > m_impl->margin * m_impl->margin) {
@@ -146,19 +148,22 @@ void SurfaceTree::rebuild(const Nodal<3>& x) {
 }
 
 void SurfaceTree::prepare(const Nodal<3>& x) {
-  if (x.cols() != m_impl->offered_x.cols() || !x.allFinite()) return;
+  if (x.cols() != m_impl->slots[0].geometry.x.cols() || !x.allFinite()) return;
+  m_impl->physics_prepares.store(true, std::memory_order_release);
   const int in_use = m_impl->in_use.load(std::memory_order_acquire);
-  // The last offer not yet adopted: the servo may adopt it at any moment, so it is not touched.
+  // The last offer not yet adopted: the servo may adopt it at any moment, so it is not touched
+  // (the servo then reads the shape of the publish before this one).
   if (m_impl->offered.load(std::memory_order_relaxed) != in_use) return;
-  // Built at half the margin, so that the servo adopts it before its own tree runs out.
-  if (moved2(x, m_impl->offered_x) <= 0.25 * m_impl->margin * m_impl->margin) return;
   const int spare = 1 - in_use;
   TreeSlot& slot = m_impl->slots[static_cast<std::size_t>(spare)];
   slot.geometry.x = x;
-  slot.build(m_impl->margin);
-  m_impl->offered_x = x;
+  // Its boxes, built on slot.built, stay conservative within the margin; built again past half
+  // of it, so that a tree is never offered near its limit.
+  if (moved2(x, slot.built) > 0.25 * m_impl->margin * m_impl->margin) {
+    slot.build(m_impl->margin);
+    m_prepared.fetch_add(1, std::memory_order_relaxed);
+  }
   m_impl->offered.store(spare, std::memory_order_release);
-  m_prepared.fetch_add(1, std::memory_order_relaxed);
 }
 
 double SurfaceTree::margin() const {

@@ -34,15 +34,16 @@ public:
   SurfaceTree(const SurfaceTree&) = delete;
   SurfaceTree& operator=(const SurfaceTree&) = delete;
 
-  /// Moves the tree to the body's nodes at `x`, building its boxes again when a node has moved
-  /// more than margin() since the last build; a non-finite `x` is ignored (the watchdog deals
-  /// with it), as a wrong node count would be.
-  /// Servo side: adopts the tree the physics last prepared, if any, before it moves to `x`.
+  /// Servo side: adopts the slot the physics last offered, if any. Where the physics prepares
+  /// (real time) that is all it does, in constant time: the offered slot holds the published
+  /// shape. Otherwise (lockstep) it moves the tree to the body's nodes at `x`, building its boxes
+  /// again when a node has moved more than margin() since the last build. A non-finite `x` is
+  /// ignored (the watchdog deals with it), as a wrong node count would be.
   void rebuild(const Nodal<3>& x);
-  /// Physics side (another thread than rebuild's and the queries'): builds the spare tree on `x`
-  /// once a node has moved more than half the margin since the last one offered, and offers it
-  /// to the servo; nothing while the last offer waits to be adopted. The servo then builds
-  /// nothing itself while the physics keeps up.
+  /// Physics side (another thread than rebuild's and the queries'), before it publishes `x`:
+  /// puts `x` into the spare slot, builds that slot's boxes again once a node has moved more than
+  /// half the margin since they were built, and offers the slot to the servo; nothing while the
+  /// last offer waits to be adopted. From its first call the servo builds and copies nothing.
   void prepare(const Nodal<3>& x);
   double margin() const;
   long builds() const { return m_builds; }   ///< builds in the servo (rebuild) since construction
