@@ -2,7 +2,7 @@
 # Bounded fuzzing (libFuzzer, clang, ASan + UBSan) of the .msh reader, the scene parser and the surface readers,
 # starting from tests/fuzz/corpus. Any crash, leak, sanitizer report or timeout fails it.
 # By default the run is bounded by a fixed number of inputs per target from a fixed seed
-# (about 45 s each here; libFuzzer's corpus evolution still varies slightly between runs,
+# (about 100 s each here; libFuzzer's corpus evolution still varies slightly between runs,
 # so this narrows, not removes, the role of luck in the test command's verdict); set
 # FUZZ_SECONDS=N for an open-ended, randomly seeded exploration of N seconds per target.
 # Needs the packages of setup.sh.
