@@ -1,6 +1,7 @@
 #include "vtb/haptics/devices/plugin_device.hh"
 
 #include "vtb/base/input_error.hh"
+#include "vtb/haptics/force_shaping.hh"
 
 #include <dlfcn.h>
 
@@ -68,7 +69,8 @@ PluginDevice::PluginDevice(const vtb_device_api* api, const std::string& source,
   if (std::isfinite(info.max_force) && info.max_force > 0) m_spec.max_force = std::min(host.max_force, info.max_force);
   if (std::isfinite(info.max_stiffness) && info.max_stiffness > 0)
     m_spec.max_stiffness = std::min(host.max_stiffness, info.max_stiffness);
-  const Eigen::Vector2d lo(info.workspace_min[0], info.workspace_min[1]), hi(info.workspace_max[0], info.workspace_max[1]);
+  const Eigen::Vector2d lo(info.workspace_min[0], info.workspace_min[1]),
+      hi(info.workspace_max[0], info.workspace_max[1]);
   if (lo.allFinite() && hi.allFinite() && (hi.array() > lo.array()).all()) {
     m_spec.workspace_min = lo;
     m_spec.workspace_max = hi;
@@ -99,9 +101,7 @@ void PluginDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) co
 void PluginDevice::command(const Eigen::Vector2d& force, double stiffness, const Eigen::Vector2d& anchor, double t) {
   m_t = t;
   vtb_device_command c{};
-  const double n = force.norm();
-  Eigen::Vector2d f = Eigen::Vector2d::Zero();
-  if (!m_fault && std::isfinite(n)) f = n > m_spec.max_force ? Eigen::Vector2d(force * (m_spec.max_force / n)) : force;
+  const Eigen::Vector2d f = m_fault ? Eigen::Vector2d::Zero() : saturate(force, m_spec.max_force);
   c.force[0] = f.x();
   c.force[1] = f.y();
   c.stiffness = !m_fault && std::isfinite(stiffness) ? std::clamp(stiffness, 0.0, m_spec.max_stiffness) : 0.0;

@@ -1,6 +1,8 @@
 #include "vtb/haptics/devices/udp_device.hh"
 
 #include "vtb/base/input_error.hh"
+#include "vtb/haptics/force_shaping.hh"
+#include "vtb/problem/run_report.hh"
 
 #include <arpa/inet.h>
 #include <poll.h>
@@ -21,12 +23,6 @@ std::uint64_t now_ns(clockid_t clock) {
   timespec ts{};
   clock_gettime(clock, &ts);
   return static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(ts.tv_nsec);
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
 
 } // namespace
@@ -70,7 +66,8 @@ UdpDevice::UdpDevice(const DeviceSpec& spec, const Options& o)
   // Wait for the device's first state packet: the session starts with the device there.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(o.connect_timeout);
   while (m_stats.received == 0) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    const auto left =
+        std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) {
       close(m_socket);
       throw InputError(what + ": no device packet within " + std::to_string(static_cast<int>(o.connect_timeout)) +
@@ -112,7 +109,8 @@ void UdpDevice::drain() const {
       if (c->cmsg_level == SOL_SOCKET && c->cmsg_type == SCM_TIMESTAMPNS) {
         timespec ts{};
         std::memcpy(&ts, CMSG_DATA(c), sizeof ts);
-        const std::uint64_t k = static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(ts.tv_nsec);
+        const std::uint64_t k =
+            static_cast<std::uint64_t>(ts.tv_sec) * 1000000000ull + static_cast<std::uint64_t>(ts.tv_nsec);
         if (k <= real && real - k < mono) arrival = mono - (real - k);
       }
     const auto p = udp::decode(buf, static_cast<std::size_t>(n));
@@ -158,14 +156,11 @@ void UdpDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const
 void UdpDevice::command(const Eigen::Vector2d& force, double stiffness, const Eigen::Vector2d& anchor, double t) {
   m_t = t;
   const bool silent = now_ns(CLOCK_MONOTONIC) - m_last_arrival > static_cast<std::uint64_t>(m_opt.watchdog * 1e9);
-  Eigen::Vector2d f = Eigen::Vector2d::Zero();
-  const double n = force.norm();
   if (silent) {
     ++m_stats.silent_cycles;
     if (m_stats.first_silent_time < 0) m_stats.first_silent_time = t;
-  } else if (std::isfinite(n)) {
-    f = n > m_spec.max_force ? Eigen::Vector2d(force * (m_spec.max_force / n)) : force;
   }
+  const Eigen::Vector2d f = silent ? Eigen::Vector2d::Zero() : saturate(force, m_spec.max_force);
   const double k = !silent && std::isfinite(stiffness) ? std::clamp(stiffness, 0.0, m_spec.max_stiffness) : 0.0;
   send(f, k, anchor.allFinite() ? anchor : m_position);
 }
@@ -193,8 +188,9 @@ void UdpDevice::send(const Eigen::Vector2d& force, double stiffness, const Eigen
 
 DeviceLinkStats UdpDevice::link_stats() const {
   DeviceLinkStats s = m_stats;
-  s.rtt_p50_us = percentile(m_rtt_us, 0.5);
-  s.rtt_p99_us = percentile(m_rtt_us, 0.99);
+  const StepStats rtt = step_stats(m_rtt_us); // the run's own percentiles: sample floor(q n)
+  s.rtt_p50_us = rtt.median;
+  s.rtt_p99_us = rtt.p99;
   return s;
 }
 
