@@ -42,7 +42,8 @@ std::optional<AxisFace> axis_face_of(const std::string& name, int dim) {
   return AxisFace{axis, name.compare(2, 3, "max") == 0};
 }
 
-template <int dim> Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what) {
+template <int dim>
+Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what) {
   const auto row = mesh.points.row(face.axis);
   const double plane = face.max_side ? row.maxCoeff() : row.minCoeff();
   // The generators place a face's nodes on the plane exactly; a mesh file's round trip keeps

@@ -6,8 +6,8 @@
 #include "vtb/base/input_error.hh"
 #include "vtb/haptics/devices/builtin_devices.hh"
 #include "vtb/haptics/devices/plugin_device.hh"
-#include "vtb/haptics/session.hh"
 #include "vtb/haptics/devices/udp_device.hh"
+#include "vtb/haptics/session.hh"
 #include "vtb/problem/scene.hh"
 
 #include <gtest/gtest.h>
@@ -125,7 +125,13 @@ TEST(DevicePlugin, ANullSessionRendersNothingAndTheExamplePluginPressesThePlate)
   EXPECT_EQ(p.device, "example-press");
   EXPECT_GT(p.max_force, 0.0) << "3 mm into the plate pushes back";
   EXPECT_LE(p.max_force, 3.0) << "the plug-in's own limit";
-  EXPECT_THROW(run_haptics(s, [&] { HapticsOptions x = o; x.device = "falcon"; return x; }()), InputError);
+  EXPECT_THROW(run_haptics(s,
+                           [&] {
+                             HapticsOptions x = o;
+                             x.device = "falcon";
+                             return x;
+                           }()),
+               InputError);
 }
 
 // --- the UDP bridge -----------------------------------------------------------------------

@@ -85,8 +85,8 @@ struct TreeSlot {
 struct SurfaceTree::Impl {
   std::array<TreeSlot, 2> slots;
   double margin = 0;
-  std::atomic<int> in_use{0};  ///< the slot the servo queries (written by the servo)
-  std::atomic<int> offered{0}; ///< the slot the physics last built (written by the physics)
+  std::atomic<int> in_use{0};                ///< the slot the servo queries (written by the servo)
+  std::atomic<int> offered{0};               ///< the slot the physics last built (written by the physics)
   std::atomic<bool> physics_prepares{false}; ///< the physics offers every shape (real time): the servo only adopts
   TreeSlot& current() { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }
   const TreeSlot& current() const { return slots[static_cast<std::size_t>(in_use.load(std::memory_order_relaxed))]; }

@@ -4,11 +4,11 @@
 #include "vtb/solvers/filter_pick.hh"
 
 #include "physics_side.hh"
+#include "realtime_thread.hh"
+#include "servo.hh"
 #include "vtb/haptics/devices/builtin_devices.hh"
 #include "vtb/haptics/devices/plugin_device.hh"
 #include "vtb/haptics/devices/udp_device.hh"
-#include "realtime_thread.hh"
-#include "servo.hh"
 #include "vtb/problem/output.hh"
 #include "vtb/solvers/simulation.hh"
 
@@ -284,7 +284,8 @@ template <int dim> HapticsReport run_session(const Scene& scene, const HapticsOp
     rep.link.malformed += l.malformed;
     rep.link.faults += l.faults;
     rep.link.silent_cycles += l.silent_cycles;
-    if (l.first_silent_time >= 0 && (rep.link.first_silent_time < 0 || l.first_silent_time < rep.link.first_silent_time))
+    if (l.first_silent_time >= 0 &&
+        (rep.link.first_silent_time < 0 || l.first_silent_time < rep.link.first_silent_time))
       rep.link.first_silent_time = l.first_silent_time;
     rep.link.rtt_p50_us = std::max(rep.link.rtt_p50_us, l.rtt_p50_us);
     rep.link.rtt_p99_us = std::max(rep.link.rtt_p99_us, l.rtt_p99_us);

@@ -34,7 +34,8 @@ std::string acting_along_z(const Scene& s) {
   return "";
 }
 
-std::string note_for(const std::string& kind, const std::string& label, const std::string& group, const std::string& what) {
+std::string note_for(const std::string& kind, const std::string& label, const std::string& group,
+                     const std::string& what) {
   const bool bottom = group == "bottom";
   return kind + " " + label + " names group \"" + group + "\", which in 3D is the face at the " +
          (bottom ? "smallest" : "largest") + " y (" + (bottom ? "y_min" : "y_max") + "), while " + what +

@@ -13,8 +13,12 @@ namespace {
 
 using json = nlohmann::json;
 
-Eigen::Vector2d vec2(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>()}; }
-json to_json(const Eigen::Vector2d& v) { return json::array({v.x(), v.y()}); }
+Eigen::Vector2d vec2(const json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>()};
+}
+json to_json(const Eigen::Vector2d& v) {
+  return json::array({v.x(), v.y()});
+}
 
 json spec_json(const DeviceSpec& s) {
   return {{"max_force", s.max_force},
@@ -67,8 +71,12 @@ int write_device(void* d, const vtb_device_command* c) {
   static_cast<HapticDevice*>(d)->command(Eigen::Vector2d(c->force[0], c->force[1]));
   return 0;
 }
-void advance_device(void* d, double dt) { static_cast<HapticDevice*>(d)->advance(dt); }
-void close_device(void* d) { delete static_cast<HapticDevice*>(d); }
+void advance_device(void* d, double dt) {
+  static_cast<HapticDevice*>(d)->advance(dt);
+}
+void close_device(void* d) {
+  delete static_cast<HapticDevice*>(d);
+}
 
 /// The null device: a handle held at `rest`, rendering nothing.
 class NullDevice final : public HapticDevice {
@@ -116,11 +124,12 @@ void* open_replay(const char* config, vtb_device_info* info, char* error, std::s
   });
 }
 
-constexpr vtb_device_api kNull{VTB_DEVICE_ABI_VERSION, open_null, read_device, write_device, advance_device, close_device};
-constexpr vtb_device_api kProcat{VTB_DEVICE_ABI_VERSION, open_procat, read_device, write_device, advance_device,
-                                 close_device};
-constexpr vtb_device_api kReplay{VTB_DEVICE_ABI_VERSION, open_replay, read_device, write_device, advance_device,
-                                 close_device};
+constexpr vtb_device_api kNull{VTB_DEVICE_ABI_VERSION, open_null,      read_device,
+                               write_device,           advance_device, close_device};
+constexpr vtb_device_api kProcat{VTB_DEVICE_ABI_VERSION, open_procat,    read_device,
+                                 write_device,           advance_device, close_device};
+constexpr vtb_device_api kReplay{VTB_DEVICE_ABI_VERSION, open_replay,    read_device,
+                                 write_device,           advance_device, close_device};
 
 } // namespace
 
@@ -135,10 +144,8 @@ std::string procat_sim_config(const DeviceSpec& spec, const HandScript& hand) {
   json w = json::array();
   for (const auto& p : hand.waypoints) w.push_back(to_json(p));
   // 17 digits: the script reaches the device bit for bit.
-  return json{{"spec", spec_json(spec)},
-              {"waypoints", w},
-              {"duration", hand.duration},
-              {"grip_stiffness", hand.grip_stiffness}}
+  return json{
+      {"spec", spec_json(spec)}, {"waypoints", w}, {"duration", hand.duration}, {"grip_stiffness", hand.grip_stiffness}}
       .dump();
 }
 
@@ -146,6 +153,8 @@ std::string replay_config(const DeviceSpec& spec, const std::filesystem::path& c
   return json{{"spec", spec_json(spec)}, {"file", csv.string()}, {"probe", probe}}.dump();
 }
 
-std::string null_config(const Eigen::Vector2d& rest) { return json{{"rest", to_json(rest)}}.dump(); }
+std::string null_config(const Eigen::Vector2d& rest) {
+  return json{{"rest", to_json(rest)}}.dump();
+}
 
 } // namespace vtb

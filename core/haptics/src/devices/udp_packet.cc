@@ -1,8 +1,8 @@
 #include "vtb/haptics/devices/udp_packet.hh"
 
 #include <bit>
-#include <type_traits>
 #include <cstring>
+#include <type_traits>
 
 namespace vtb::udp {
 namespace {

@@ -56,7 +56,8 @@ std::optional<AxisFace> axis_face_of(const std::string& name, int dim);
 /// body's diagonal, and the boundary facets all of whose vertices lie there. On a generated box,
 /// slab or rectangle it is the named face (`z_min` = `front`, `y_min` = `bottom`, ...). Throws
 /// InputError (naming `what`) where no boundary facet lies there (a curved body's extreme).
-template <int dim> Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what);
+template <int dim>
+Selection<dim> select_axis_face(const Mesh<dim>& mesh, const AxisFace& face, const std::string& what);
 
 /// Resolves a region against a mesh. A box selects nodes inside it and the boundary facets
 /// whose vertices all lie inside it; a group selects its nodes and facets; a point selects

@@ -23,13 +23,13 @@ struct DeviceSpec {
 /// A device's link to vtb, for the run line and summary.json: what a device in another process
 /// (udp_device.hh) sent and lost, or what a plug-in's read reported. Zero for an in-process one.
 struct DeviceLinkStats {
-  long received = 0;  ///< packets taken (each the newest so far)
-  long stale = 0;     ///< packets older than one already taken (out of order), dropped
-  long lost = 0;      ///< sequence numbers never seen
-  long malformed = 0; ///< packets of the wrong size, magic, version or kind, dropped
-  long faults = 0;    ///< reads or writes the device failed (0 N is rendered from the first)
-  long silent_cycles = 0;        ///< servo cycles commanded 0 N because the link was silent past its watchdog
-  double first_silent_time = -1; ///< s of servo time when the link first fell silent (-1: never)
+  long received = 0;                     ///< packets taken (each the newest so far)
+  long stale = 0;                        ///< packets older than one already taken (out of order), dropped
+  long lost = 0;                         ///< sequence numbers never seen
+  long malformed = 0;                    ///< packets of the wrong size, magic, version or kind, dropped
+  long faults = 0;                       ///< reads or writes the device failed (0 N is rendered from the first)
+  long silent_cycles = 0;                ///< servo cycles commanded 0 N because the link was silent past its watchdog
+  double first_silent_time = -1;         ///< s of servo time when the link first fell silent (-1: never)
   double rtt_p50_us = 0, rtt_p99_us = 0; ///< the link's round trip, without the time a packet waited to be read
 };
 

@@ -111,10 +111,10 @@ struct HapticsDesc {
   /// procat-sim | replay | null | plugin (a driver's shared library, device_abi.h) | udp (a device
   /// in another process, docs/haptics.md "The UDP bridge")
   std::string device = "procat-sim";
-  std::filesystem::path plugin; ///< device = "plugin": the library, resolved against the scene's folder
-  std::string plugin_config;    ///< handed to the plug-in's open as it is
+  std::filesystem::path plugin;            ///< device = "plugin": the library, resolved against the scene's folder
+  std::string plugin_config;               ///< handed to the plug-in's open as it is
   std::string address = "127.0.0.1:47000"; ///< device = "udp": HOST:PORT vtb binds
-  double link_watchdog = 0.05;  ///< s: a udp link silent this long gets 0 N
+  double link_watchdog = 0.05;             ///< s: a udp link silent this long gets 0 N
   double rate = 1000.0;
   double coupling_stiffness = 400.0;
   double coupling_damping = 2.0;

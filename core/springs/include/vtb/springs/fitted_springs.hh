@@ -77,8 +77,8 @@ struct FitOptions {
   /// training set (the FEM's answers, with the supports, to the boundary tractions of each
   /// uniform stress, as loads of the training modes' size). They are the loads of a tension or
   /// shear test, which a clamped body's low modes barely contain. Chosen from 0, 0.3, 1, 2, 4 on
-  /// the reproduction's fidelity cases (docs/decisions/spring_fit_trains_on_supports_stress_states_equal_energy.md). The free body's
-  /// modes contain its stretching (weight unused).
+  /// the reproduction's fidelity cases (docs/decisions/spring_fit_trains_on_supports_stress_states_equal_energy.md).
+  /// The free body's modes contain its stretching (weight unused).
   double uniform_stress = 2;
   Eigen::VectorXd
       start; ///< the first iterate (per edge); empty: the prior. The pull and floor stay relative to the prior

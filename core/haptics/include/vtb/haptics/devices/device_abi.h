@@ -29,11 +29,11 @@ extern "C" {
 /* What the device is, filled by open. Every field has a default set by vtb before the call
  * (the scene's limit, 2000 N/m, the ProCAT's workspace); a plug-in overwrites what it knows. */
 typedef struct vtb_device_info {
-  char name[64];             /* shown on the run line and in summary.json */
-  double max_force;          /* N: the device's own limit */
-  double max_stiffness;      /* N/m: the stiffest coupling it renders stably */
-  double workspace_min[2];   /* m, device coordinates */
-  double workspace_max[2];   /* m */
+  char name[64];           /* shown on the run line and in summary.json */
+  double max_force;        /* N: the device's own limit */
+  double max_stiffness;    /* N/m: the stiffest coupling it renders stably */
+  double workspace_min[2]; /* m, device coordinates */
+  double workspace_max[2]; /* m */
 } vtb_device_info;
 
 /* One reading of the handle, in the device's plane (m, m/s). */
@@ -46,10 +46,10 @@ typedef struct vtb_device_state {
  * driver running faster than the servo can render between cycles:
  *   F(x) = force - stiffness (x - anchor)   (anchor: the handle where force was computed). */
 typedef struct vtb_device_command {
-  double force[2];   /* N, already clamped by vtb */
-  double stiffness;  /* N/m, >= 0 */
-  double anchor[2];  /* m */
-  double time;       /* s: the servo's clock */
+  double force[2];  /* N, already clamped by vtb */
+  double stiffness; /* N/m, >= 0 */
+  double anchor[2]; /* m */
+  double time;      /* s: the servo's clock */
 } vtb_device_command;
 
 typedef struct vtb_device_api {

@@ -58,7 +58,7 @@ private:
   double m_t = 0;
   std::uint32_t m_sent = 0;
   mutable sockaddr_in m_peer{};
-  mutable udp::Packet m_last{};            ///< the newest state taken
+  mutable udp::Packet m_last{};             ///< the newest state taken
   mutable std::uint64_t m_last_arrival = 0; ///< its arrival, ns on the monotonic clock
   mutable DeviceLinkStats m_stats;
   mutable bool m_started = false; ///< the servo's first read done (the counts start there)
