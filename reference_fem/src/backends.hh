@@ -8,6 +8,8 @@
 //     nonlinear tangent; never touches MPI, so a plain `vtb run` needs no MPI initialisation.
 //   Distributed: parallel::fullydistributed::Triangulation (the distributed triangulation that
 //     takes simplices), Trilinos matrices and vectors and Trilinos' direct solver, under mpirun.
+// Either backend's systems may instead go to AMG-preconditioned CG (amg_krylov.hh), chosen per
+// run (KelvinVoigtProblem::choose_solvers).
 
 #include "grid.hh"
 

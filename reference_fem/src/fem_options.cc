@@ -10,6 +10,7 @@ FemOptions options_from(const SolverDesc& solver) {
   FemOptions o;
   static_cast<FemSettings&>(o) = solver.fem;
   o.dt = solver.dt;
+  o.linear_solver = solver.step.linear_solver; // one key, read once by the scene (scene.cc)
   return o;
 }
 
@@ -21,6 +22,16 @@ void check_options(const FemOptions& options) {
                      "\" runs with scheme = \"backward-euler\" or static = true, not "
                      "scheme = \"" +
                      options.scheme + "\"");
+  const auto& k = options.linear_solver;
+  if (k != "auto" && k != "direct" && k != "cg" && k != "cg-multigrid")
+    throw InputError("[solver].linear_solver = \"" + k + "\" is not auto, direct, cg or cg-multigrid");
+}
+
+bool iterative_by_default(int dim, long dofs, int ranks) {
+  // docs/fem.md, "Linear solvers": the crossover where AMG-preconditioned CG overtakes the
+  // factorisation of a 3D P2 system; in 2D the factorisations' fill stays small.
+  if (dim == 2) return dofs > kIterativeFromDofs2D;
+  return dofs > (ranks > 1 ? kIterativeFromDofs3DDistributed : kIterativeFromDofs3D);
 }
 
 } // namespace vtb::fem

@@ -13,6 +13,7 @@ Eigen::MatrixXd KelvinVoigtProblem<dim, Backend>::body_force_answers(const Eigen
   setup_dofs();
   setup_nodes();
   setup_constraints();
+  choose_solvers();
   assemble();
   m_solver.factor(m_A0);
   // Each dof's value of the P1 field: its support point's barycentric coordinates in the scene's

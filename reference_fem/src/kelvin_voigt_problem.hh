@@ -31,6 +31,7 @@
 // (the dofs of its own cells; all dofs in a serial run); nodal outputs are summed over ranks.
 #include "vtb/fem/kelvin_voigt.hh"
 
+#include "amg_krylov.hh"
 #include "backends.hh"
 #include "grid.hh"
 #include "nonlinear.hh"
@@ -90,6 +91,12 @@ private:
   /// 2p (exact on affine simplices); A0 and M0 with the prescribed rows and columns eliminated.
   void assemble();
 
+  /// Direct or iterative (FemOptions::linear_solver; auto: iterative_by_default), and the AMG's
+  /// near-null space, the rigid-body modes at the support points.
+  void choose_solvers();
+  /// The solver's name and its work for the report (linear_solver, krylov_*, amg_setups).
+  void report_solvers(RunReport& rep) const;
+
   double prescribed(dof_t d, double t) const {
     const auto& s = m_model.supports[static_cast<std::size_t>(m_support_of[d])];
     return s.driven ? ramp_factor(t, s.start, s.ramp) * s.displacement[m_comp[d]] : 0.0;
@@ -130,6 +137,7 @@ private:
   ///   static: f_int(u+, 0) - load_scale f = 0.
   /// Converged when the free dofs' residual is 1e-9 of its first value (or of the load), or the
   /// update 1e-10 of the displacement; false when neither within 25 iterations, or non-finite.
+  /// A correction that inverts a cell (a non-finite residual) is halved, up to 10 times.
   bool newton(double load_scale);
 
   /// The nonlinear step: backward Euler with Newton, or the static solve by load continuation
@@ -171,8 +179,9 @@ private:
   std::vector<dof_t> m_node;                   ///< [node * dim + component], kUnseen if not seen here
   dealii::AffineConstraints<double> m_constraints;
   Matrix m_K, m_M, m_C, m_A, m_A0, m_M0, m_T; ///< m_T: the nonlinear tangent
-  typename Backend::SpdSolver m_solver;       ///< the linear step's A0 (symmetric positive definite)
-  typename Backend::Solver m_newton;          ///< the nonlinear tangent
+  /// The linear step's A0 (symmetric positive definite) and the nonlinear tangent.
+  ChosenSolver<typename Backend::SpdSolver, Matrix, Vector> m_solver;
+  ChosenSolver<typename Backend::Solver, Matrix, Vector> m_newton;
   Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
   Vector m_ghosted, m_ghosted_v, m_frame_prev, m_frame_last, m_frame_mix;
   double m_max_strain = 0, m_max_rotation = 0;

@@ -95,7 +95,9 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::initial
   m_K.vmult(m_tmp, m_u);
   m_rhs -= m_tmp;
   zero_prescribed(m_rhs);
-  typename Backend::SpdSolver mass;
+  decltype(m_solver) mass;
+  mass.iterative = m_solver.iterative;
+  if (mass.iterative) mass.amg.copy_settings(m_solver.amg);
   mass.factor(m_M0);
   mass.solve(m_a, m_rhs);
 }
@@ -153,6 +155,7 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
   // A static increment that has not converged in 12 iterations is halved (cheaper than more
   // iterations far from the solution); a residual 1e6 times the first has diverged.
   const int iterations = dynamic ? 25 : 12;
+  int backtracks = 0;
   for (int it = 0; it < iterations; ++it) {
     m_dv = m_ubar;
     m_dv -= m_u;
@@ -169,11 +172,19 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     }
     zero_prescribed(m_rhs);
     const double r = m_rhs.l2_norm();
-    if (!std::isfinite(r)) return false;
+    if (!std::isfinite(r)) {
+      // The last correction inverted a cell (neo-Hookean's log J <= 0 gives NaN): backtrack by
+      // halving it, up to 10 times (1/1024 of the step), before the increment itself is halved.
+      if (it == 0 || ++backtracks > 10) return false;
+      m_delta *= 0.5;
+      m_ubar += m_delta;
+      --it;
+      continue;
+    }
     if (first < 0) first = std::max(r, load_scale * m_f.l2_norm());
     if (r > 1e6 * first) return false;
     if (r <= 1e-9 * first) return true;
-    m_newton.factor(m_T);
+    m_newton.update(m_T);
     m_newton.solve(m_delta, m_rhs);
     m_ubar -= m_delta;
     // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin

@@ -25,7 +25,21 @@ struct FemOptions : FemSettings {
   /// If set: called after every step with the share of the duration done (0-1], so that a long
   /// reference can show its progress.
   std::function<void(double)> progress;
+  /// The systems' solver: auto (iterative_by_default) | direct | cg (CG preconditioned by Trilinos
+  /// ML's AMG with the rigid-body modes; `cg-multigrid` is the same): the scene's
+  /// `[solver] linear_solver`, the key implicit Euler reads too.
+  std::string linear_solver = "auto";
+  /// The AMG's near-null space with the rotations (default) or the translations alone: only
+  /// tests turn them off, to show what the rotations are for.
+  bool amg_rotations = true;
 };
+
+/// `linear_solver = "auto"`: whether a system of this many dofs goes to AMG-preconditioned CG
+/// rather than a direct factorisation (the crossover measured in docs/fem.md).
+bool iterative_by_default(int dim, long dofs, int ranks);
+inline constexpr long kIterativeFromDofs2D = 2000000;
+inline constexpr long kIterativeFromDofs3D = 30000;
+inline constexpr long kIterativeFromDofs3DDistributed = 5000;
 
 FemOptions options_from(const SolverDesc& solver);
 /// Throws InputError unless the degree is 1 or 2, dt > 0, and nonlinear kinematics come with
