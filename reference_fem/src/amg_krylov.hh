@@ -6,9 +6,9 @@
 // in 2D, six in 3D). Without the rotations the coarse spaces cannot represent a bending mode
 // and the iteration count grows with the mesh (test FemAmg.RigidBodyModesBoundTheIterations).
 //
-// The serial backend's matrices are deal.II SparseMatrix: ML takes a Trilinos copy of each
-// matrix it builds a hierarchy for (on MPI_COMM_SELF; MPI is initialised on first use, once per
-// process, as Trilinos needs it: ensure_mpi below).
+// ML takes a Trilinos copy of each matrix it builds a hierarchy for (the serial backend's are
+// deal.II SparseMatrix; the copy is on MPI_COMM_SELF, and MPI is initialised on first use, once
+// per process, as Trilinos needs it: ensure_mpi below).
 #include <deal.II/base/index_set.h>
 #include <deal.II/base/point.h>
 #include <deal.II/lac/solver_cg.h>
@@ -117,13 +117,15 @@ public:
     p.set("null space: add default vectors", false);
     ensure_mpi(); // before any Trilinos object: they hold an MPI communicator
     m_amg = std::make_unique<dealii::TrilinosWrappers::PreconditionAMG>();
-    if constexpr (std::is_same_v<Matrix, dealii::SparseMatrix<double>>) {
-      m_copy = std::make_unique<dealii::TrilinosWrappers::SparseMatrix>();
+    // ML's finest level and smoother read the matrix it was built on: a copy, so that a kept
+    // hierarchy stays one consistent preconditioner while Newton reassembles its tangent (on
+    // the matrix itself, a stale hierarchy with a new fine level diverged).
+    m_copy = std::make_unique<dealii::TrilinosWrappers::SparseMatrix>();
+    if constexpr (std::is_same_v<Matrix, dealii::SparseMatrix<double>>)
       m_copy->reinit(A, 0.0);
-      m_amg->initialize(*m_copy, p);
-    } else {
-      m_amg->initialize(A, p);
-    }
+    else
+      m_copy->copy_from(A);
+    m_amg->initialize(*m_copy, p);
     ++m_stats.setups;
     m_first_after_setup = -1;
   }

@@ -140,6 +140,19 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_c
   const double grow = 1e-9 * bounding_diagonal(m_model.mesh), tol = 1e-10 * bounding_diagonal(m_model.mesh);
   for (std::size_t s = 0; s < m_model.supports.size(); ++s) {
     const auto& sup = m_model.supports[s];
+    // The facets' bounding box (grown by tol): a dof outside it is on none of them. Without it,
+    // every dof meets every facet (424k dofs x 416 facets: 10 s of a 78 s static solve).
+    Eigen::Matrix<double, dim, 1> lo = Eigen::Matrix<double, dim, 1>::Constant(1e300), hi = -lo;
+    for (const auto& f : sup.facets)
+      for (int v : f) {
+        lo = lo.cwiseMin(m_model.mesh.points.col(v));
+        hi = hi.cwiseMax(m_model.mesh.points.col(v));
+      }
+    const auto near_facets = [&](const dealii::Point<dim>& p) {
+      for (int a = 0; a < dim; ++a)
+        if (p[a] < lo[a] - tol || p[a] > hi[a] + tol) return false;
+      return true;
+    };
     for (int node : sup.nodes)
       for (int a = 0; a < dim; ++a) {
         const dof_t d = m_node[static_cast<std::size_t>(node) * dim + static_cast<std::size_t>(a)];
@@ -153,8 +166,9 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_c
         for (int a = 0; a < dim; ++a)
           in = in && m_point[d][a] >= sup.box->min[a] - grow && m_point[d][a] <= sup.box->max[a] + grow;
       }
-      for (const auto& f : sup.facets)
-        if (!in) in = on_facet<dim>(m_model.mesh, m_point[d], f, tol);
+      if (!in && near_facets(m_point[d]))
+        for (const auto& f : sup.facets)
+          if (!in) in = on_facet<dim>(m_model.mesh, m_point[d], f, tol);
       if (in) m_support_of[d] = static_cast<int>(s);
     }
   }
