@@ -96,10 +96,9 @@ TOML
 # the right-hand side and Newton's corrections at 1e-8 (its last step quadratic): 1e-8
 # relative, as the serial tests (tests/reference_fem/test_amg_solvers.cc) hold them.
 for f in "$src/experiments/scenes/slab_press.toml" "$work/nh_press.toml"; do
-  p2=(-e 's/^\[solver\]$/[solver]\ndegree = 2/' -e 's/divisions = \[4, 4, 2\]/divisions = [6, 6, 3]/'
-      -e "s|^file = \"\\([^/]\\)|file = \"$(dirname "$f")/\\1|")
-  sed "${p2[@]}" "$f" > "$work/p2_$(basename "$f")"
-  sed "${p2[@]}" -e 's/^\[solver\]$/[solver]\nlinear_solver = "cg"/' "$f" > "$work/cg_$(basename "$f")"
+  p2=(-e 's/divisions = \[4, 4, 2\]/divisions = [6, 6, 3]/' -e "s|^file = \"\\([^/]\\)|file = \"$(dirname "$f")/\\1|")
+  sed "${p2[@]}" -e 's/^\[solver\]$/[solver]\ndegree = 2\nlinear_solver = "direct"/' "$f" > "$work/p2_$(basename "$f")"
+  sed "${p2[@]}" -e 's/^\[solver\]$/[solver]\ndegree = 2\nlinear_solver = "cg"/' "$f" > "$work/cg_$(basename "$f")"
 done
 for case in "$work/cook.toml 1.0 1e-9" "$src/experiments/scenes/plate123_step.toml 0.5 1e-9" \
   "$src/experiments/scenes/slab_press.toml 0.6 1e-9" "$work/p2_static.toml 1.0 1e-9" "$work/nh_press.toml 1.0 1e-9" \
