@@ -66,7 +66,7 @@ std::vector<double> rigid_body_modes(const dealii::IndexSet& owned, const std::v
       if constexpr (dim == 2) {
         modes[2 * n + i] = c == 0 ? -x[1] : x[0];
       } else {
-        const int a = (c + 1) % 3, b = (c + 2) % 3; // (e_r x x)_c = eps_{c r k} x_k, (c, a, b) cyclic
+        const int a = (c + 1) % 3, b = (c + 2) % 3;             // (e_r x x)_c = eps_{c r k} x_k, (c, a, b) cyclic
         modes[static_cast<std::size_t>(3 + a) * n + i] = x[b];  // r = a: eps_{c a b} = +1
         modes[static_cast<std::size_t>(3 + b) * n + i] = -x[a]; // r = b: eps_{c b a} = -1
       }

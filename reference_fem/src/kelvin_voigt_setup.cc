@@ -218,8 +218,8 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::choose_
   dealii::Point<dim> centre;
   for (int a = 0; a < dim; ++a) centre[a] = 0.5 * (X.row(a).minCoeff() + X.row(a).maxCoeff());
   const int n_modes = m_opt.amg_rotations ? dim * (dim + 1) / 2 : dim;
-  auto modes = rigid_body_modes<dim>(m_owned, m_point, m_comp, centre, bounding_diagonal(m_model.mesh),
-                                     m_opt.amg_rotations);
+  auto modes =
+      rigid_body_modes<dim>(m_owned, m_point, m_comp, centre, bounding_diagonal(m_model.mesh), m_opt.amg_rotations);
   m_solver.amg.set_null_space(modes, n_modes, dim);
   m_newton.amg.set_null_space(std::move(modes), n_modes, dim);
   // The linear systems to round-off's reach (the direct solve's answer to 1e-8, test FemAmg.*);

@@ -93,8 +93,8 @@ TEST(FemAmg, TheIterativeStaticSolveIsTheDirectOne) {
     EXPECT_EQ(extra(direct.rep, "iterative_solver"), 0);
     EXPECT_EQ(extra(cg.rep, "iterative_solver"), 1);
     const double d = field_difference(cg.tr, direct.tr);
-    std::cout << "P" << degree << " static: iterative vs direct " << d << ", "
-              << extra(cg.rep, "krylov_iterations_max") << " iterations\n";
+    std::cout << "P" << degree << " static: iterative vs direct " << d << ", " << extra(cg.rep, "krylov_iterations_max")
+              << " iterations\n";
     EXPECT_LT(d, 1e-8);
   }
 }
@@ -143,7 +143,8 @@ total_force = [0.0, 0.0, -1.0]
 kind = "fem"
 static = true
 linear_solver = "cg"
-refinements = )" + std::to_string(refinements) + "\n");
+refinements = )" + std::to_string(refinements) +
+                       "\n");
   fem::FemOptions o = fem::options_from(c.scene.solver);
   o.amg_rotations = rotations;
   Trajectory<3> tr;
@@ -160,8 +161,7 @@ TEST(FemAmg, RigidBodyModesBoundTheIterations) {
   for (int r = 0; r < 3; ++r) {
     with[r] = bar_iterations(r, true);
     without[r] = bar_iterations(r, false);
-    std::cout << "refinements " << r << ": " << with[r] << " iterations with rotations, " << without[r]
-              << " without\n";
+    std::cout << "refinements " << r << ": " << with[r] << " iterations with rotations, " << without[r] << " without\n";
   }
   EXPECT_LE(with[2], 2 * with[0] + 5) << "bounded: at most doubled across two refinements";
   EXPECT_GT(without[2], 2 * with[2]) << "the rotations are what bound it";
