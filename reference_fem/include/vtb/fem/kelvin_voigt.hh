@@ -38,7 +38,7 @@ struct FemOptions : FemSettings {
 /// rather than a direct factorisation (the crossover measured in docs/fem.md).
 bool iterative_by_default(int dim, long dofs, int ranks);
 inline constexpr long kIterativeFromDofs2D = 2000000;
-inline constexpr long kIterativeFromDofs3D = 30000;
+inline constexpr long kIterativeFromDofs3D = 110000;
 inline constexpr long kIterativeFromDofs3DDistributed = 5000;
 
 FemOptions options_from(const SolverDesc& solver);
