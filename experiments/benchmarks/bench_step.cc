@@ -28,13 +28,14 @@ namespace {
 /// A plate 0.2 x 0.05 (or a box 0.2 x 0.05 x 0.05) clamped at x = 0, pulled at x = max; with
 /// `clamped` false a free body pulled at one end (where the momentum correction acts).
 template <int dim>
-Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = true, const Mesh<dim>* mesh = nullptr) {
+Model<dim> bench_model(const Eigen::Matrix<int, dim, 1>& div, bool clamped = true, const Mesh<dim>* mesh = nullptr,
+                       const char* springs = "lloyd") {
   Scene s;
   s.file = "bench";
   s.duration = 1.0;
   s.output_interval = 0.01;
   s.material = MaterialDesc{5.0e4, 0.3333, 1000.0, 0.001, 0.05, 0.0};
-  s.solver.springs = "lloyd";
+  s.solver.springs = springs;
   FixDesc fix;
   fix.region.group = "left";
   fix.region.label = "clamp";
@@ -151,9 +152,9 @@ VTB_STEP_BENCH(plate517, solvers::kFiltered, solvers::kFilterTensor, filtered_te
 /// drifts (separate benchmarks a few seconds apart differed by up to 1.4x). Counters: each
 /// filter's median step over the rounds (us) and the median of the rounds' ratios.
 template <int dim>
-void paired_ratio(benchmark::State& st, const Model<dim>& model, const std::string& a, const std::string& b,
-                  int steps) {
-  Stepper<dim> sa(model, solvers::kFiltered, a), sb(model, solvers::kFiltered, b);
+void paired_ratio(benchmark::State& st, const Model<dim>& model_a, const Model<dim>& model_b, const std::string& a,
+                  const std::string& b, int steps) {
+  Stepper<dim> sa(model_a, solvers::kFiltered, a), sb(model_b, solvers::kFiltered, b);
   std::vector<double> ta, tb, ratio;
   for (auto _ : st) {
     const double x = sa.run(steps), y = sb.run(steps);
@@ -170,10 +171,24 @@ void paired_ratio(benchmark::State& st, const Model<dim>& model, const std::stri
   st.counters["ratio"] = median(ratio);
 }
 
+template <int dim>
+void paired_ratio(benchmark::State& st, const Model<dim>& model, const std::string& a, const std::string& b,
+                  int steps) {
+  paired_ratio(st, model, model, a, b, steps);
+}
+
 /// The tensor filter's step over the full filter's on the 517-node plate (goal: at most 2).
 void BM_ratio_plate517_tensor_over_full(benchmark::State& st) {
   paired_ratio(st, plate517(), solvers::kFilterTensor, solvers::kFilterFull, 100);
 }
+
+/// The volume term's cost (issue 72's goal: at most 1.3): the full filter's step on the plate
+/// with springs = "volume" over the same step with the springs alone, in one run.
+void BM_ratio_plate517_volume_over_springs(benchmark::State& st) {
+  static const Model<2> volume = bench_model<2>(Eigen::Vector2i(46, 10), true, nullptr, "volume");
+  paired_ratio(st, volume, plate517(), solvers::kFilterFull, solvers::kFilterFull, 100);
+}
+BENCHMARK(BM_ratio_plate517_volume_over_springs)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ratio_plate517_tensor_over_full)->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The torque correction's cost: the full filter's step on a free plate with and without it.
@@ -213,6 +228,15 @@ void BM_ratio_slab10k_tensor_multigrid_over_multigrid(benchmark::State& st) {
   paired_ratio(st, slab10k(), solvers::kFilterTensorMultigrid, solvers::kFilterMultigrid, 5);
 }
 BENCHMARK(BM_ratio_slab10k_tensor_multigrid_over_multigrid)->Unit(benchmark::kMillisecond)->Iterations(40);
+
+/// The volume term's cost on the slab: multigrid (what auto runs with the term) with and
+/// without it, in one run.
+void BM_ratio_slab10k_volume_over_springs(benchmark::State& st) {
+  static const Mesh3 mesh = mesh_solid("slab", 10000);
+  static const Model<3> volume = bench_model<3>(Eigen::Vector3i::Zero(), true, &mesh, "volume");
+  paired_ratio(st, volume, slab10k(), solvers::kFilterMultigrid, solvers::kFilterMultigrid, 5);
+}
+BENCHMARK(BM_ratio_slab10k_volume_over_springs)->Unit(benchmark::kMillisecond)->Iterations(40);
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
 

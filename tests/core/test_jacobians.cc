@@ -89,6 +89,19 @@ template <int dim> Model<dim> model_of(const char* text) {
   return build_model<dim>(s, std::get<Mesh<dim>>(load_mesh(s)));
 }
 
+/// The same scene with the volume term per cell (springs = "volume") and nu = 0.45, where the
+/// term carries most of lambda (cell_volumes.hh).
+template <int dim> Model<dim> volume_model_of(const char* text) {
+  std::string t(text);
+  const auto at = t.find("poisson_ratio = ");
+  t.replace(at, t.find('\n', at) - at, "poisson_ratio = 0.45");
+  t += "[solver]\nsprings = \"volume\"\n";
+  Model<dim> m = model_of<dim>(t.c_str());
+  EXPECT_EQ(m.net.volume.size(), m.mesh.num_cells());
+  EXPECT_GT(m.net.volume.stiffness.minCoeff(), 0.0);
+  return m;
+}
+
 /// A deformed state: every node displaced by up to 15 % of the mesh size (springs both
 /// stretched and compressed), velocities of order 1 mesh size per second.
 template <int dim> State<dim> random_state(const Model<dim>& model, double vscale, unsigned seed) {
@@ -110,11 +123,18 @@ template <int dim> Eigen::VectorXd forces(const Model<dim>& m, const Nodal<dim>&
   return Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());
 }
 
-template <int dim> void check_force_jacobians(const Model<dim>& m) {
+/// `spread`: the displacements' scale in units of 15 % of the mesh size (8: up to 120 %, where
+/// cells invert).
+template <int dim> void check_force_jacobians(const Model<dim>& m, double spread = 1.0) {
   // K at v = 0 (the dashpot's direction term, omitted by design, vanishes there); D at any v
   // (the force is linear in v, so the difference is exact but for round-off).
-  const State<dim> s = random_state(m, 0.0, 7);
-  const State<dim> sv = random_state(m, 1.0, 7);
+  State<dim> s = random_state(m, 0.0, 7);
+  State<dim> sv = random_state(m, 1.0, 7);
+  s.u *= spread;
+  sv.u *= spread;
+  if (spread > 1 && !m.net.volume.empty()) {
+    EXPECT_GT(volume_ratios<dim>(m.mesh.cells, m.net.rest, s.u).inverted, 0) << "the check passes through inversion";
+  }
   const ForceJacobians<dim> J = force_jacobians(m.net, s.u, false);
   const Eigen::MatrixXd K(J.K), D(J.D);
   const double h = 1e-6 * m.net.rest_length.minCoeff();
@@ -171,6 +191,25 @@ TEST(ForceJacobians, FreeStiffnessIsTheReferenceOnTheFreeDofs2D) {
 }
 TEST(ForceJacobians, FreeStiffnessIsTheReferenceOnTheFreeDofs3D) {
   check_free_stiffness(model_of<3>(kBox3));
+}
+
+TEST(ForceJacobians, FreeStiffnessIsTheReferenceWithTheVolumeTerm) {
+  check_free_stiffness(volume_model_of<2>(kPlate2));
+  check_free_stiffness(volume_model_of<3>(kBox3));
+}
+
+// The volume term's blocks (cell_volumes.hh) by the same differences, at strains of 15 % and
+// through inversion (displacements up to 120 % of the mesh size, cells with J < 0): its force is
+// a polynomial of the nodes, so the tolerance's argument holds there too.
+TEST(ForceJacobians, MatchForceDifferencesWithTheVolumeTerm2D) {
+  const Model<2> m = volume_model_of<2>(kPlate2);
+  check_force_jacobians(m);
+  check_force_jacobians(m, 8.0);
+}
+TEST(ForceJacobians, MatchForceDifferencesWithTheVolumeTerm3D) {
+  const Model<3> m = volume_model_of<3>(kBox3);
+  check_force_jacobians(m);
+  check_force_jacobians(m, 8.0);
 }
 
 TEST(ForceJacobians, MatchForceDifferences2D) {
@@ -698,6 +737,10 @@ TEST(CvodeJacobian, MatchesRightHandSideDifferences2D) {
 TEST(CvodeJacobian, MatchesRightHandSideDifferences3D) {
   check_cvode_jacobian(model_of<3>(kBox3));
 }
+TEST(CvodeJacobian, MatchesRightHandSideDifferencesWithTheVolumeTerm) {
+  check_cvode_jacobian(volume_model_of<2>(kPlate2));
+  check_cvode_jacobian(volume_model_of<3>(kBox3));
+}
 
 template <int dim> void check_implicit_euler_step(const Model<dim>& m) {
   // Linearised backward Euler (Baraff-Witkin) on the free dofs F:
@@ -747,6 +790,13 @@ template <int dim> void check_implicit_euler_step(const Model<dim>& m) {
   EXPECT_NEAR(s.t, expect.t, 1e-15);
   EXPECT_LT((s.v - expect.v).cwiseAbs().maxCoeff(), 1e-9 * expect.v.cwiseAbs().maxCoeff());
   EXPECT_LT((s.u - expect.u).cwiseAbs().maxCoeff(), 1e-9 * expect.u.cwiseAbs().maxCoeff());
+}
+
+// With the volume term the reference's K (clamped) holds its Gauss-Newton blocks, which the
+// step's slots must reproduce.
+TEST(ImplicitEulerStep, IsTheLinearisedBackwardEulerSystemWithTheVolumeTerm) {
+  check_implicit_euler_step(volume_model_of<2>(kPlate2));
+  check_implicit_euler_step(volume_model_of<3>(kBox3));
 }
 
 TEST(ImplicitEulerStep, IsTheLinearisedBackwardEulerSystem2D) {

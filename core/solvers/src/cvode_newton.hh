@@ -44,6 +44,21 @@ public:
                 offset(rows[w] * dim + p, cols[w] * dim + q);
       }
     }
+    // The volume term's: every cell's (dim + 1)^2 blocks (its node pairs are springs: in the pattern).
+    constexpr int nb = (dim + 1) * (dim + 1) * dim * dim;
+    m_cell_offset.assign(static_cast<std::size_t>(net.volume.size()) * nb, -1);
+    for (int c = 0; c < net.volume.size(); ++c)
+      for (int x = 0; x <= dim; ++x)
+        for (int y = 0; y <= dim; ++y) {
+          const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+          const int fa = model.free_index[static_cast<std::size_t>(cell[x])];
+          const int fb = model.free_index[static_cast<std::size_t>(cell[y])];
+          if (fa < 0 || fb < 0) continue;
+          for (int p = 0; p < dim; ++p)
+            for (int q = 0; q < dim; ++q)
+              m_cell_offset[static_cast<std::size_t>(c * nb + ((x * (dim + 1) + y) * dim + p) * dim + q)] =
+                  offset(fa * dim + p, fb * dim + q);
+        }
     m_mass.resize(n);
     m_diag.resize(static_cast<std::size_t>(n));
     for (int a = 0; a < nf; ++a)
@@ -75,6 +90,18 @@ public:
                                     m_D.valuePtr()[at[p * dim + q]] -= sign * D(p, q);
                                   }
                               });
+      constexpr int nb = (dim + 1) * (dim + 1) * dim * dim;
+      for_each_cell_block(net.volume, net.rest, u, true,
+                          [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+                            const long* at =
+                                &m_cell_offset[static_cast<std::size_t>(c * nb + (x * (dim + 1) + y) * dim * dim)];
+                            if (at[0] < 0) return;
+                            for (int p = 0; p < dim; ++p)
+                              for (int q = 0; q < dim; ++q) {
+                                m_K.valuePtr()[at[p * dim + q]] -= K(p, q);
+                                m_D.valuePtr()[at[p * dim + q]] -= D(p, q);
+                              }
+                          });
       for (std::size_t d = 0; d < m_diag.size(); ++d)
         m_D.valuePtr()[m_diag[d]] += net.mass_damping * m_mass[static_cast<Eigen::Index>(d)];
     }
@@ -115,6 +142,7 @@ private:
   const Model<dim>& m_model;
   Eigen::SparseMatrix<double> m_K, m_D, m_P; ///< one pattern; stiffness signs (K, D positive)
   std::vector<long> m_offset;                ///< per spring, block and entry: the value's offset, -1 off the free dofs
+  std::vector<long> m_cell_offset;           ///< per cell, block (a, b) and entry: as m_offset
   std::vector<long> m_diag;                  ///< per free dof: its diagonal's offset
   Eigen::VectorXd m_mass, m_b, m_x;
   Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> m_llt;

@@ -183,6 +183,15 @@ public:
       add(0, a, b, K, sign);
       add(1, a, b, D, sign);
     });
+    for_each_cell_block(net.volume, net.rest, m_u, false,
+                        [&](int c, int la, int lb, const Mat<dim>& K, const Mat<dim>& D) {
+                          const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+                          const int a = m_model.free_index[static_cast<std::size_t>(cell[la])],
+                                    b = m_model.free_index[static_cast<std::size_t>(cell[lb])];
+                          if (a < 0 || b < 0) return;
+                          add(0, a, b, K, 1.0);
+                          add(1, a, b, D, 1.0);
+                        });
     if (net.mass_damping != 0)
       for (int a = 0; a < m_nf; ++a)
         add(1, a, a,

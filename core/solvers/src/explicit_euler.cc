@@ -43,6 +43,14 @@ template <int dim> Eigen::MatrixXd dense_scaled_stiffness(const Model<dim>& mode
       S.template block<dim, dim>(b * dim, a * dim) -= K * (si * sj);
     }
   }
+  // The volume term's rest blocks, -df_a/dx_b (cell_volumes.hh).
+  const Nodal<dim> rest = Nodal<dim>::Zero(dim, net.num_nodes());
+  for_each_cell_block(net.volume, net.rest, rest, true, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>&) {
+    const int i = net.volume.cell[static_cast<std::size_t>(c)][x], j = net.volume.cell[static_cast<std::size_t>(c)][y];
+    const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
+    if (a >= 0 && b >= 0)
+      S.template block<dim, dim>(a * dim, b * dim) -= K / std::sqrt(net.mass[i] * net.mass[j]);
+  });
   return S;
 }
 } // namespace
@@ -64,6 +72,12 @@ template <int dim> double max_omega_squared(const Model<dim>& model, bool exact)
     block[static_cast<std::size_t>(s)] =
         spring_jacobian<dim>(net.rest.col(i), net.rest.col(j), net.rest_length[s], net.stiffness[s], true);
   }
+  // The volume term's rest stiffness k_c g g^T (g: the cell's rest gradients), rank one per cell.
+  std::vector<Eigen::Matrix<double, dim, dim + 1>> grad(static_cast<std::size_t>(net.volume.size()));
+  for (std::size_t c = 0; c < grad.size(); ++c) {
+    grad[c].template rightCols<dim>() = net.volume.rest_inverse[c].transpose();
+    grad[c].col(0) = -grad[c].template rightCols<dim>().rowwise().sum();
+  }
   Eigen::VectorXd scale(net.mass.size()); // 1/sqrt(m) per node
   for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = 1.0 / std::sqrt(net.mass[i]);
   Nodal<dim> x(dim, nf), y(dim, nf);
@@ -82,6 +96,20 @@ template <int dim> double max_omega_squared(const Model<dim>& model, bool exact)
       const Vec<dim> f = block[static_cast<std::size_t>(s)] * d;
       if (a >= 0) y.col(a) += scale[i] * f;
       if (b >= 0) y.col(b) -= scale[j] * f;
+    }
+    for (int c = 0; c < net.volume.size(); ++c) {
+      const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+      const auto& g = grad[static_cast<std::size_t>(c)];
+      double rate = 0; // g . (M^-1/2 x) over the cell's free nodes
+      for (int p = 0; p <= dim; ++p) {
+        const int a = model.free_index[static_cast<std::size_t>(cell[p])];
+        if (a >= 0) rate += scale[cell[p]] * g.col(p).dot(x.col(a));
+      }
+      rate *= net.volume.stiffness[c];
+      for (int p = 0; p <= dim; ++p) {
+        const int a = model.free_index[static_cast<std::size_t>(cell[p])];
+        if (a >= 0) y.col(a) += (scale[cell[p]] * rate) * g.col(p);
+      }
     }
     lambda = (x.array() * y.array()).sum() / x.squaredNorm();
     x = y / y.norm();

@@ -42,6 +42,25 @@ ImplicitEuler<dim>::ImplicitEuler(const Model<dim>& model, double dt)
         if (a >= 0 && b >= 0) slot[2] = m_solver.offset(m_solver.ordered(a * dim + p), m_solver.ordered(b * dim + q));
       }
   }
+  // The volume term's: per cell, its blocks (a, b) with a <= b (the transposed block is the
+  // same stored pair), the diagonal ones by their upper entries as above.
+  constexpr int nb = (dim + 1) * (dim + 1) * dim * dim;
+  m_cell_slot.assign(static_cast<std::size_t>(net.volume.size()) * nb, -1);
+  for (int c = 0; c < net.volume.size(); ++c)
+    for (int x = 0; x <= dim; ++x)
+      for (int y = x; y <= dim; ++y) {
+        const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+        const int a = model.free_index[static_cast<std::size_t>(cell[x])];
+        const int b = model.free_index[static_cast<std::size_t>(cell[y])];
+        if (a < 0 || b < 0) continue;
+        for (int p = 0; p < dim; ++p)
+          for (int q = 0; q < dim; ++q) {
+            const int r = m_solver.ordered(a * dim + p), col = m_solver.ordered(b * dim + q);
+            if (x == y && r > col) continue;
+            m_cell_slot[static_cast<std::size_t>(c * nb + ((x * (dim + 1) + y) * dim + p) * dim + q)] =
+                static_cast<int>(m_solver.offset(r, col));
+          }
+      }
   m_diag_slot.resize(static_cast<std::size_t>(n));
   for (int d = 0; d < n; ++d)
     m_diag_slot[static_cast<std::size_t>(d)] = m_solver.offset(m_solver.ordered(d), m_solver.ordered(d));
@@ -91,6 +110,19 @@ template <int dim> void ImplicitEuler<dim>::step(State<dim>& s) {
         const int at = slot[p * dim + q][which];
         if (at >= 0) A[at] += B(p, q);
       }
+  });
+  // The volume term's blocks (Gauss-Newton: positive semidefinite, as the springs' clamp):
+  // its K v term block by block, the matrix through the cells' slots.
+  constexpr int nb = (dim + 1) * (dim + 1) * dim * dim;
+  for_each_cell_block(net.volume, net.rest, s.u, true, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+    const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+    m_force.col(cell[x]) += dt * (K * s.v.col(cell[y]));
+    if (y < x) return;
+    const Mat<dim> B = -(dt * dt * K + dt * D);
+    const int* at = &m_cell_slot[static_cast<std::size_t>(c * nb + (x * (dim + 1) + y) * dim * dim)];
+    for (int p = 0; p < dim; ++p)
+      for (int q = 0; q < dim; ++q)
+        if (at[p * dim + q] >= 0) A[at[p * dim + q]] += B(p, q);
   });
   for (int a = 0; a < nf; ++a) {
     const int i = m_model.free_nodes[static_cast<std::size_t>(a)];

@@ -20,6 +20,7 @@ ImplicitEulerCG<dim>::ImplicitEulerCG(const Model<dim>& model, double dt, double
     if (model.constrained[static_cast<std::size_t>(i)]) m_mass[i] = 0;
   m_diag = m_mass;
   m_block.assign(static_cast<std::size_t>(model.net.num_springs()), Mat<dim>::Zero());
+  m_cell_block.assign(static_cast<std::size_t>(model.net.volume.size()) * (dim + 1) * (dim + 1), Mat<dim>::Zero());
   m_inv_diag.assign(static_cast<std::size_t>(n), Mat<dim>::Zero());
   for (auto* v : {&m_force, &m_b, &m_x, &m_r, &m_z, &m_p, &m_ap, &m_prev, &m_prev2}) *v = Nodal<dim>::Zero(dim, n);
   if (multigrid) {
@@ -55,6 +56,15 @@ template <int dim> void ImplicitEulerCG<dim>::assemble(const State<dim>& s) {
     m_inv_diag[static_cast<std::size_t>(i)] += B;
     m_inv_diag[static_cast<std::size_t>(j)] += B;
   });
+  // The volume term's blocks (Gauss-Newton, as the springs' clamp): its K v term, and every
+  // block (a, b) of a cell kept for apply().
+  for_each_cell_block(net.volume, net.rest, s.u, true, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+    const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+    m_force.col(cell[x]) += dt * (K * s.v.col(cell[y]));
+    const Mat<dim> B = -(dt * dt * K + dt * D);
+    m_cell_block[static_cast<std::size_t>((c * (dim + 1) + x) * (dim + 1) + y)] = B;
+    if (x == y) m_inv_diag[static_cast<std::size_t>(cell[x])] += B;
+  });
   for (int i = 0; i < net.num_nodes(); ++i) {
     auto& P = m_inv_diag[static_cast<std::size_t>(i)];
     P = m_model.constrained[static_cast<std::size_t>(i)] ? Mat<dim>::Zero() : Mat<dim>(P.inverse());
@@ -70,6 +80,12 @@ template <int dim> void ImplicitEulerCG<dim>::apply(const Nodal<dim>& x, Nodal<d
     const Vec<dim> f = m_block[static_cast<std::size_t>(sp)] * (x.col(i) - x.col(j));
     y.col(i) += f;
     y.col(j) -= f;
+  }
+  for (int c = 0; c < net.volume.size(); ++c) {
+    const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+    const Mat<dim>* B = &m_cell_block[static_cast<std::size_t>(c * (dim + 1) * (dim + 1))];
+    for (int a = 0; a <= dim; ++a)
+      for (int b = 0; b <= dim; ++b) y.col(cell[a]) += B[a * (dim + 1) + b] * x.col(cell[b]);
   }
   for (int i = 0; i < net.num_nodes(); ++i)
     if (m_model.constrained[static_cast<std::size_t>(i)]) y.col(i).setZero();

@@ -27,8 +27,12 @@ template <int dim> std::string chosen_filter(const Model<dim>& model, const std:
   // than implicit Euler, as accurate, 188 MB peak). Beyond the sizes measured, the scalar
   // V-cycle (a ninth of the cost, and the lag).
   if (dim == 3 && free >= kScalarCycleFreeNodes3D) return solvers::kFilterMultigrid;
-  if (dim == 3 && free >= kTensorCycleFreeNodes3D) return solvers::kFilterTensorMultigrid;
-  return solvers::kFilterTensor;
+  // The tensor filter has no cell blocks for the volume term (docs/method.md): its scalar
+  // counterparts at the same sizes.
+  const bool cells = !model.net.volume.empty();
+  if (dim == 3 && free >= kTensorCycleFreeNodes3D)
+    return cells ? solvers::kFilterMultigrid : solvers::kFilterTensorMultigrid;
+  return cells ? solvers::kFilterFull : solvers::kFilterTensor;
 }
 
 template <int dim>

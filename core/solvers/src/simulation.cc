@@ -54,6 +54,18 @@ void record_sample(const Model<dim>& model, const State<dim>& s, Trajectory<dim>
   if (!(small <= rep.max_strain)) rep.max_strain = small; // propagates NaN
   const double rotation = max_rotation(model.mesh, s.u);
   if (!(rotation <= rep.max_rotation)) rep.max_rotation = rotation;
+  // The cells' volume ratios over the samples (summary.json): the smallest J and the most cells
+  // at J <= 0 at once; every spring run reports them, with or without the volume term.
+  const VolumeRatios vr = volume_ratios<dim>(model.mesh.cells, model.net.rest, s.u);
+  const auto slot = [&](const char* key, double first) -> double& {
+    for (auto& [k, value] : rep.extra)
+      if (k == key) return value;
+    return rep.extra.emplace_back(key, first).second;
+  };
+  double& min_ratio = slot("min_volume_ratio", vr.min_ratio);
+  if (!(vr.min_ratio >= min_ratio)) min_ratio = vr.min_ratio; // propagates NaN
+  double& inverted = slot("inverted_cells", vr.inverted);
+  inverted = std::max(inverted, static_cast<double>(vr.inverted));
 }
 
 namespace {

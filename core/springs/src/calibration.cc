@@ -135,14 +135,24 @@ template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, d
   return k;
 }
 
-template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness) {
-  constexpr int ne = dim * (dim + 1) / 2; // edges per simplex
-  constexpr int n = dim * (dim + 1);      // element dofs
+namespace {
+
+/// Lloyd's element fit, with (kVolume) or without a volume term's rest stiffness k_c g g^T as
+/// one more constant of each element: the springs' constants summed per edge into k, the
+/// volume's per cell into cell_k (when kVolume).
+template <int dim, bool kVolume>
+void lloyd_fit(const Mesh<dim>& mesh, double E, double nu, double thickness, Eigen::VectorXd& k,
+               Eigen::VectorXd* cell_k) {
+  constexpr int ns = dim * (dim + 1) / 2; // edges per simplex
+  constexpr int ne = ns + (kVolume ? 1 : 0);
+  constexpr int n = dim * (dim + 1); // element dofs
   const auto edges = unique_edges(mesh);
-  Eigen::VectorXd k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
+  k = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(edges.size()));
+  if (cell_k) *cell_k = Eigen::VectorXd::Zero(mesh.num_cells());
   std::array<Eigen::Matrix<double, n, n>, ne> S;
-  std::array<std::array<int, 2>, ne> local{};
-  for (const auto& c : mesh.cells) {
+  std::array<std::array<int, 2>, ns> local{};
+  for (std::size_t ci = 0; ci < mesh.cells.size(); ++ci) {
+    const auto& c = mesh.cells[ci];
     const Eigen::MatrixXd K = fem_element_stiffness(mesh, c, E, nu, thickness);
     int e = 0;
     for (int a = 0; a <= dim; ++a)
@@ -156,6 +166,15 @@ template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double
         S[e].template block<dim, dim>(b * dim, a * dim) = -nn;
         local[e] = {c[a], c[b]};
       }
+    if constexpr (kVolume) { // the volume ratio's rest gradients: g_a = b_a (cell_volumes.hh)
+      Mat<dim> Dm;
+      for (int q = 0; q < dim; ++q) Dm.col(q) = mesh.points.col(c[q + 1]) - mesh.points.col(c[0]);
+      Eigen::Matrix<double, n, 1> g;
+      const Mat<dim> Bt = Dm.inverse().transpose();
+      for (int a = 1; a <= dim; ++a) g.template segment<dim>(a * dim) = Bt.col(a - 1);
+      g.template head<dim>() = -Bt.rowwise().sum();
+      S[ns] = g * g.transpose();
+    }
     Eigen::Matrix<double, ne, ne> G;
     Eigen::Matrix<double, ne, 1> rhs;
     for (int p = 0; p < ne; ++p) {
@@ -185,10 +204,26 @@ template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double
         }
       if (!changed) break;
     }
-    for (int p = 0; p < ne; ++p)
+    for (int p = 0; p < ns; ++p)
       k[edge_index(edges, local[static_cast<std::size_t>(p)][0], local[static_cast<std::size_t>(p)][1])] +=
           std::max(0.0, x[p]);
+    if constexpr (kVolume) (*cell_k)[static_cast<Eigen::Index>(ci)] = std::max(0.0, x[ns]);
   }
+}
+
+} // namespace
+
+template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness) {
+  Eigen::VectorXd k;
+  lloyd_fit<dim, false>(mesh, E, nu, thickness, k, nullptr);
+  return k;
+}
+
+template <int dim>
+Eigen::VectorXd lloyd_volume_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness,
+                                       Eigen::VectorXd& cell_stiffness) {
+  Eigen::VectorXd k;
+  lloyd_fit<dim, true>(mesh, E, nu, thickness, k, &cell_stiffness);
   return k;
 }
 
@@ -196,6 +231,7 @@ template <int dim> Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double
   template Eigen::VectorXd lumped_masses<D>(const Mesh<D>&, double, double);                                           \
   template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D>&, double, double);                                    \
   template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D>&, double, double, double);                                 \
+  template Eigen::VectorXd lloyd_volume_stiffness<D>(const Mesh<D>&, double, double, double, Eigen::VectorXd&);         \
   template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);     \
   template Eigen::SparseMatrix<double> fem_stiffness_matrix<D>(const Mesh<D>&, double, double, double);
 VTB_INSTANTIATE(2)

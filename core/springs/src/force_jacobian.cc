@@ -20,6 +20,16 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
                                 td.emplace_back(dim * i + p, dim * j + q, sign * D(p, q));
                               }
                           });
+  for_each_cell_block(net.volume, net.rest, u, clamp_compression,
+                      [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+                        const int i = net.volume.cell[static_cast<std::size_t>(c)][x];
+                        const int j = net.volume.cell[static_cast<std::size_t>(c)][y];
+                        for (int p = 0; p < dim; ++p)
+                          for (int q = 0; q < dim; ++q) {
+                            tk.emplace_back(dim * i + p, dim * j + q, K(p, q));
+                            td.emplace_back(dim * i + p, dim * j + q, D(p, q));
+                          }
+                      });
   for (int i = 0; i < net.num_nodes(); ++i)
     for (int p = 0; p < dim; ++p) td.emplace_back(dim * i + p, dim * i + p, -net.mass_damping * net.mass[i]);
   ForceJacobians<dim> J;
@@ -100,6 +110,18 @@ void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
                               for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= sign * K(p, q);
                             }
                           });
+  // The volume term's blocks (its cells' node pairs are springs: the same pattern).
+  for_each_cell_block(net.volume, net.rest, u, clamp_compression,
+                      [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>&) {
+                        const int a = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][x])];
+                        const int b = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][y])];
+                        if (a < 0 || b < 0 || (blocks == Blocks::lower && a < b)) return;
+                        for (int q = 0; q < dim; ++q) {
+                          const int col = dim * b + q;
+                          const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
+                          for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= K(p, q);
+                        }
+                      });
 }
 
 template <int dim>

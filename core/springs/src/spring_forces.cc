@@ -99,6 +99,7 @@ void forces_kernel(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nod
     add_by_first_node_runs<-1>(net, s0, n, f,
                                [&](int s) -> Vec<dim> { return g[s] * Eigen::Map<const Vec<dim>>(d + dim * s); });
   }
+  if (!net.volume.empty()) add_volume_forces(net.volume, net.rest, u, v, f, extra_damping_per_k);
   if (net.mass_damping != 0) f.noalias() -= net.mass_damping * (v * net.mass.asDiagonal());
 }
 

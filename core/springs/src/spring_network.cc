@@ -50,9 +50,13 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
       net.calibration = fit.chosen;
       net.calibration_note = "the fit kept " + fit.chosen + "'s constants: they answer its held-out modes better";
     }
+  } else if (calibration == "volume") {
+    Eigen::VectorXd cell_k;
+    net.stiffness = lloyd_volume_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, cell_k);
+    net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, std::move(cell_k), mat.retardation_time);
   } else
     throw InputError("[solver].springs = \"" + std::string(calibration) +
-                     "\": must be auto, lloyd, van-gelder or fitted");
+                     "\": must be auto, lloyd, van-gelder, fitted or volume");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;
@@ -100,7 +104,7 @@ template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const No
     const double l = (net.rest.col(j) + u.col(j) - net.rest.col(i) - u.col(i)).norm();
     e += 0.5 * net.stiffness[s] * (l - net.rest_length[s]) * (l - net.rest_length[s]);
   }
-  return e;
+  return e + volume_energy(net.volume, net.rest, u);
 }
 
 template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v) {

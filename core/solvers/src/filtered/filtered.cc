@@ -29,6 +29,15 @@ template <int dim> Eigen::SparseMatrix<double> filter_system_matrix(const Model<
     const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
     if (a >= 0 && b >= 0) trip.emplace_back(a, b, -sign * (dt * D.trace() + dt * dt * K.trace()));
   });
+  // The volume term's blocks at rest by their traces too: k_c g_a . g_b, a Gram matrix of the
+  // cell's gradients, so H stays positive definite.
+  for_each_cell_block(net.volume, net.rest, rest, false,
+                      [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+                        const auto& cell = net.volume.cell[static_cast<std::size_t>(c)];
+                        const int a = model.free_index[static_cast<std::size_t>(cell[x])];
+                        const int b = model.free_index[static_cast<std::size_t>(cell[y])];
+                        if (a >= 0 && b >= 0) trip.emplace_back(a, b, -(dt * D.trace() + dt * dt * K.trace()));
+                      });
   Eigen::SparseMatrix<double> H(nf, nf);
   H.setFromTriplets(trip.begin(), trip.end());
   return H;
@@ -66,6 +75,10 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   const Eigen::Index n = model.num_nodes();
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (m_filter == solvers::kFilterTensor || m_filter == solvers::kFilterTensorMultigrid) {
+    if (!model.net.volume.empty())
+      throw InputError("[solver].filter = \"" + m_filter +
+                       "\": the tensor filter does not take springs = \"volume\"'s cell term; use auto, full, "
+                       "multigrid or neighbors");
     const bool multigrid = m_filter == solvers::kFilterTensorMultigrid;
     m_tensor = std::make_unique<TensorFilter<dim>>(model, o.dt, multigrid);
     // Its fallback: implicit Euler with the current Jacobian, by the linear solver implicit

@@ -26,6 +26,7 @@ private:
   /// Per spring and block entry (p, q): value offsets of blocks ii, jj, ij, or -1 where the
   /// node is constrained or the entry lies in the other triangle.
   std::vector<std::array<int, 3>> m_slot;
+  std::vector<int> m_cell_slot; ///< per cell, block (a <= b) and entry: the value's slot, -1 if not stored
   std::vector<int> m_diag_slot; ///< per free dof
   Nodal<dim> m_force;
   Eigen::MatrixXd m_rhs; ///< ordered, one column

@@ -43,6 +43,7 @@ private:
   Eigen::VectorXd m_mass;                            ///< m (1 + dt gamma), 0 on constrained nodes
   Eigen::VectorXd m_diag;                            ///< this step's diagonal: m_mass plus the couplings' dt^2 k + dt c
   std::vector<Mat<dim>> m_block;                     ///< per spring: B_s
+  std::vector<Mat<dim>> m_cell_block;                ///< per cell and node pair (a, b): the volume term's block
   std::vector<Mat<dim>> m_inv_diag;                  ///< per node: inverse of A's diagonal block (0 if constrained)
   Nodal<dim> m_force, m_b, m_x, m_r, m_z, m_p, m_ap; ///< per node
   Nodal<dim> m_prev, m_prev2;                        ///< the dv of the two steps before the last

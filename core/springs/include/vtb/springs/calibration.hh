@@ -29,6 +29,16 @@ template <int dim> Eigen::VectorXd van_gelder_stiffness(const Mesh<dim>& mesh, d
 template <int dim>
 Eigen::VectorXd lloyd_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness);
 
+/// Lloyd's element fit with one more constant per element, the rest stiffness k_c g g^T of a
+/// volume term (cell_volumes.hh): the springs' constants per edge (returned) and k_c per cell
+/// (cell_stiffness), both held non-negative. The springs carry the element's Cauchy part and
+/// k_c what the Cauchy relation leaves of lambda: on an equilateral triangle none at nu = 1/3
+/// (plane stress), growing with nu above; a tetrahedron's six edges are not an isotropic
+/// lattice, so some k_c remains at nu = 1/4 in 3D.
+template <int dim>
+Eigen::VectorXd lloyd_volume_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
+                                       double thickness, Eigen::VectorXd& cell_stiffness);
+
 /// The Poisson ratio that a network of central springs implies on a regular lattice
 /// (Cauchy relation): 1/3 for triangles, 1/4 for tetrahedra. Reported in summary.json; the
 /// scene's nu enters only through the Lloyd fit.

@@ -4,6 +4,7 @@
 
 #include "vtb/meshes/mesh.hh"
 #include "vtb/problem/scene.hh"
+#include "vtb/springs/cell_volumes.hh"
 #include "vtb/springs/fitted_springs.hh"
 #include "vtb/springs/spring_kernels.hh"
 
@@ -21,7 +22,10 @@ template <int dim> struct SpringNetwork {
   Eigen::VectorXd stiffness;            ///< k per spring, N/m
   Eigen::VectorXd damping;              ///< c = tau k per spring, N s/m
   double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
-  std::string calibration;              ///< the constants used: "lloyd" | "van-gelder" | "fitted"
+  /// The volume term per cell (calibration "volume"; empty otherwise): every force pass,
+  /// Jacobian and integrator takes it beside the springs (cell_volumes.hh).
+  CellVolumes<dim> volume;
+  std::string calibration;              ///< the constants used: "lloyd" | "van-gelder" | "fitted" | "volume"
   std::string calibration_requested;    ///< the scene's [solver].springs: the above or "auto"
   double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
   bool calibration_cached = false;      ///< the fit's constants came from the fit cache (fitted_cache.hh)
@@ -62,7 +66,8 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mate
 
 /// Adds the internal forces at positions X + u and velocities v to f (f is not cleared):
 /// Voigt elements with dashpot c + extra_damping_per_k * k (the filtered scheme passes dt
-/// for its k dt (v_j - v_i) term), and -gamma m v. Allocates nothing.
+/// for its k dt (v_j - v_i) term), the volume term's (its dashpot likewise), and -gamma m v.
+/// Allocates nothing.
 template <int dim>
 void add_internal_forces(const SpringNetwork<dim>& net, const Nodal<dim>& u, const Nodal<dim>& v, Nodal<dim>& f,
                          double extra_damping_per_k = 0.0);
@@ -119,7 +124,7 @@ template <int kSecond, int dim, class Term>
 /// Largest |l / L0 - 1| over all springs at X + u.
 template <int dim> double max_strain(const SpringNetwork<dim>& net, const Nodal<dim>& u);
 
-/// Elastic energy sum 1/2 k (l - L0)^2 and kinetic energy sum 1/2 m |v|^2.
+/// Elastic energy sum 1/2 k (l - L0)^2 (and the volume term's) and kinetic energy sum 1/2 m |v|^2.
 template <int dim> double elastic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& u);
 template <int dim> double kinetic_energy(const SpringNetwork<dim>& net, const Nodal<dim>& v);
 

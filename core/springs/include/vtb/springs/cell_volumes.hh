@@ -1,0 +1,125 @@
+#pragma once
+/// \file
+/// The network's volume energy per cell (docs/springs.md, "The volume term"): a Voigt unit on
+/// each simplex's volume ratio J = det F (area ratio in 2D), beside the pair springs,
+///   E_c = k_c / 2 (J - 1)^2,   f_a = -(k_c (J - 1) + c_c dJ/dt) dJ/dx_a,
+/// with k_c = kappa_c V_c (J) and its dashpot c_c = tau k_c. J is a polynomial of the nodes
+/// (dJ/dx_a is F's cofactor times a rest gradient), finite through inversion, and the force
+/// pushes every cell toward J = 1 whatever the sign of J: a cell pressed through its base is
+/// pushed back (a pair of central springs is not: it has no orientation).
+
+#include "vtb/linalg/nodal.hh"
+
+#include <Eigen/Dense>
+
+#include <array>
+#include <vector>
+
+namespace vtb {
+
+template <int dim> struct CellVolumes {
+  std::vector<std::array<int, dim + 1>> cell; ///< the mesh's simplices
+  std::vector<Mat<dim>> rest_inverse;         ///< Dm^{-1}, Dm = [X_1 - X_0, ...] at rest
+  Eigen::VectorXd stiffness;                  ///< k_c = kappa_c V_c, J
+  Eigen::VectorXd damping;                    ///< c_c = tau k_c, J s
+  bool empty() const { return cell.empty(); }
+  int size() const { return static_cast<int>(cell.size()); }
+};
+
+/// The gradients dJ/dx_a (columns a = 0..dim) of a cell's volume ratio at positions x_a, and J.
+template <int dim>
+inline double volume_ratio_gradients(const Mat<dim>& rest_inverse, const Eigen::Matrix<double, dim, dim + 1>& x,
+                                     Eigen::Matrix<double, dim, dim + 1>& g) {
+  Mat<dim> Ds;
+  for (int k = 0; k < dim; ++k) Ds.col(k) = x.col(k + 1) - x.col(0);
+  const Mat<dim> F = Ds * rest_inverse;
+  Mat<dim> cof; // dJ/dF = cof(F), polynomial: no inverse of F
+  if constexpr (dim == 2) {
+    cof << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
+  } else {
+    cof.col(0) = F.col(1).cross(F.col(2));
+    cof.col(1) = F.col(2).cross(F.col(0));
+    cof.col(2) = F.col(0).cross(F.col(1));
+  }
+  g.template rightCols<dim>() = cof * rest_inverse.transpose(); // dJ/dx_a = cof(F) b_a, b_a = row a-1 of Dm^-1
+  g.col(0) = -g.template rightCols<dim>().rowwise().sum();
+  return F.determinant();
+}
+
+/// d^2 J / dx_a dx_b (a dim x dim block; zero for a = b): in 3D the skew matrix of w = F (b_a x
+/// b_b) with H(i, k) = eps_ikm w_m, in 2D eps_ik (b_a x b_b) det-free; b_a the rest gradient
+/// of node a's barycentric function (b_0 = -sum of the others).
+template <int dim>
+inline Mat<dim> volume_ratio_hessian(const Mat<dim>& F, const Vec<dim>& ba, const Vec<dim>& bb) {
+  Mat<dim> H;
+  if constexpr (dim == 2) {
+    const double c = ba[0] * bb[1] - ba[1] * bb[0];
+    H << 0, c, -c, 0;
+  } else {
+    const Vec<3> w = F * ba.cross(bb);
+    H << 0, w[2], -w[1], -w[2], 0, w[0], w[1], -w[0], 0;
+  }
+  return H;
+}
+
+/// For each cell and each ordered pair (a, b) of its nodes (a = b included), the blocks
+/// K = df_a/dx_b and D = df_a/dv_b of the volume term at displacement u:
+///   K = -k_c (g_a g_b^T + (J - 1) d^2J/dx_a dx_b),   D = -c_c g_a g_b^T
+/// (the dashpot's dependence on positions omitted, as the springs'). With `gauss_newton`, K
+/// keeps its first term alone: -k_c g g^T over the cell is negative semidefinite, as the
+/// springs' clamp keeps theirs (implicit Euler factors it). Calls add(c, a, b, K, D) with the
+/// cell c and its local node indices a, b (global: cv.cell[c][a]). Allocates nothing.
+template <int dim, class Add>
+void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, bool gauss_newton,
+                         Add&& add) {
+  Eigen::Matrix<double, dim, dim + 1> x, g;
+  for (int c = 0; c < cv.size(); ++c) {
+    const auto& cell = cv.cell[static_cast<std::size_t>(c)];
+    for (int a = 0; a <= dim; ++a) x.col(a) = rest.col(cell[a]) + u.col(cell[a]);
+    const Mat<dim>& Bi = cv.rest_inverse[static_cast<std::size_t>(c)];
+    const double J = volume_ratio_gradients<dim>(Bi, x, g);
+    Mat<dim> Ds;
+    for (int k = 0; k < dim; ++k) Ds.col(k) = x.col(k + 1) - x.col(0);
+    const Mat<dim> F = Ds * Bi;
+    Eigen::Matrix<double, dim, dim + 1> b; // rest gradients
+    b.template rightCols<dim>() = Bi.transpose();
+    b.col(0) = -b.template rightCols<dim>().rowwise().sum();
+    const double k = cv.stiffness[c], d = cv.damping[c];
+    for (int a = 0; a <= dim; ++a)
+      for (int bn = 0; bn <= dim; ++bn) {
+        const Mat<dim> gg = g.col(a) * g.col(bn).transpose();
+        Mat<dim> K = -k * gg;
+        if (!gauss_newton && a != bn)
+          K -= k * (J - 1.0) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
+        add(c, a, bn, K, Mat<dim>(-d * gg));
+      }
+  }
+}
+
+/// Adds the volume term's forces at X + u, velocities v to f (not cleared); the dashpot is
+/// c_c + extra_damping_per_k k_c (as the springs', the filtered scheme passes dt). Allocates
+/// nothing.
+template <int dim>
+void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
+                       Nodal<dim>& f, double extra_damping_per_k);
+
+/// The volume term's elastic energy sum k_c/2 (J - 1)^2.
+template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u);
+
+/// What a run reports of the cells' volume ratios at X + u (every cell of `cells`, with or
+/// without a volume term): the smallest J and how many cells have J <= 0 (inverted or flat).
+struct VolumeRatios {
+  double min_ratio = 1.0;
+  int inverted = 0;
+};
+template <int dim>
+VolumeRatios volume_ratios(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
+                           const Nodal<dim>& u);
+
+/// The rest data of the cells (Dm^{-1}; throws InputError naming a degenerate cell) with
+/// their constants k_c and c_c = tau k_c.
+template <int dim>
+CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
+                                   Eigen::VectorXd stiffness, double retardation_time);
+
+} // namespace vtb
