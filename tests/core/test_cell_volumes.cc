@@ -7,9 +7,12 @@
 // h have truncation error ~ h^2 |E'''| (1e-12 of the force at h = 1e-6 of the cell) and
 // round-off ~ eps E / h (~ 1e-10 of it); 1e-7 of the largest force bounds both, while a sign
 // error or a dropped term is O(1) of it.
+#include "vtb/solvers/integrator.hh"
 #include "vtb/springs/calibration.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/spring_network.hh"
+
+#include "support/small_models.hh"
 
 #include <gtest/gtest.h>
 
@@ -171,6 +174,28 @@ TEST(CellVolumes, TheElementFitGivesTheTermLambdasExcessOverTheLattice2D) {
 }
 TEST(CellVolumes, TheElementFitGivesTheTermLambdasExcessOverTheLattice3D) {
   check_element_fit<3>();
+}
+
+TEST(CellVolumes, TheTensorFilterRefusesTheTermInOneLineAndAutoRunsTheScalarFilter) {
+  std::string text = test::pulled_plate(12, 3, "[solver]\nsprings = \"volume\"\n");
+  text.replace(text.find("poisson_ratio = 0.3333"), 22, "poisson_ratio = 0.45");
+  const Model<2> model = test::model_from(text);
+  IntegratorOptions o;
+  o.kind = "filtered";
+  o.dt = 1e-3;
+  o.filter = "tensor";
+  try {
+    make_integrator(model, o);
+    ADD_FAILURE() << "the tensor filter took the volume term";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("[solver].filter = \"tensor\""), std::string::npos) << what;
+    EXPECT_NE(what.find("springs = \"volume\""), std::string::npos) << what;
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "one line";
+  }
+  EXPECT_EQ(chosen_filter(model, "auto"), "full");
+  const Model<2> springs = test::model_from(test::pulled_plate(12, 3, "[solver]\nsprings = \"lloyd\"\n"));
+  EXPECT_EQ(chosen_filter(springs, "auto"), "tensor") << "the springs alone keep auto's lag-free filter";
 }
 
 } // namespace

@@ -166,6 +166,38 @@ INSTANTIATE_TEST_SUITE_P(ImplicitSolvers, CouplingsAllocateNothing,
                            return n;
                          });
 
+TEST(NoAllocation, StepsWithTheVolumeTermAllocateNothing) {
+  // springs = "volume" (the volume term per cell) at nu 0.45, in every integrator that takes it.
+  std::string text = test::plate_scene(12, 3, R"(
+[[fix]]
+group = "left"
+[[load]]
+group = "right"
+total_force = [0.2, 0.1]
+[solver]
+springs = "volume"
+)");
+  text.replace(text.find("poisson_ratio = 0.3333"), 22, "poisson_ratio = 0.45");
+  const Model<2> model = test::model_from(text);
+  ASSERT_GT(model.net.volume.stiffness.sum(), 0.0);
+  for (const Case& c : {Case{"explicit", ""}, Case{"filtered", "full"}, Case{"filtered", "neighbors"},
+                        Case{"implicit-euler", "", "direct"}, Case{"implicit-euler", "", "cg"}}) {
+    IntegratorOptions o;
+    o.kind = c.kind;
+    o.filter = c.filter;
+    o.linear_solver = c.linear_solver;
+    o.dt = o.kind == "explicit" ? 1e-6 : 1e-3;
+    auto integ = make_integrator(model, o);
+    State<2> s = initial_state(model);
+    integ->step(s); // warm up
+    g_allocations = 0;
+    g_counting = true;
+    for (int k = 0; k < 50; ++k) integ->step(s);
+    g_counting = false;
+    EXPECT_EQ(g_allocations, 0) << c;
+  }
+}
+
 TEST(NoAllocation, MultigridFilterAllocatesNothing) {
   // 451 nodes: a hierarchy of three levels (the small plate above has none, as the filter
   // solves meshes below 64 free nodes directly).

@@ -3,6 +3,8 @@
 
 #include "vtb/base/input_error.hh"
 
+#include <algorithm>
+#include <numeric>
 #include <string>
 
 namespace vtb {
@@ -27,16 +29,33 @@ template <int dim> double ratio(const Mat<dim>& rest_inverse, const Eigen::Matri
 template <int dim>
 void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
                        Nodal<dim>& f, double extra_damping_per_k) {
-  Eigen::Matrix<double, dim, dim + 1> g;
+  // With F = D_s D_m^-1: J = det(D_s) / det(D_m), and the gradients dJ/dx_a (a >= 1), the
+  // columns of cof(F) D_m^-T = cof(D_s) cof(D_m^-1) D_m^-T, are those of cof(D_s) / det(D_m):
+  // the cross products of the cell's edge vectors now, no rest matrix per cell.
   for (int c = 0; c < cv.size(); ++c) {
     const auto& cell = cv.cell[static_cast<std::size_t>(c)];
-    const double J = volume_ratio_gradients<dim>(cv.rest_inverse[static_cast<std::size_t>(c)],
-                                                 cell_positions<dim>(cell, rest, u), g);
-    double rate = 0; // dJ/dt
-    for (int a = 0; a <= dim; ++a) rate += g.col(a).dot(v.col(cell[a]));
+    const Vec<dim> x0 = rest.col(cell[0]) + u.col(cell[0]);
+    Mat<dim> Ds, g; // g: dJ/dx_1 .. dJ/dx_dim
+    for (int k = 0; k < dim; ++k) Ds.col(k) = rest.col(cell[k + 1]) + u.col(cell[k + 1]) - x0;
+    double det;
+    if constexpr (dim == 2) {
+      g << Ds(1, 1), -Ds(1, 0), -Ds(0, 1), Ds(0, 0);
+      det = Ds(0, 0) * Ds(1, 1) - Ds(0, 1) * Ds(1, 0);
+    } else {
+      g.col(0) = Ds.col(1).cross(Ds.col(2));
+      g.col(1) = Ds.col(2).cross(Ds.col(0));
+      g.col(2) = Ds.col(0).cross(Ds.col(1));
+      det = Ds.col(0).dot(g.col(0));
+    }
+    const double inv = cv.inverse_rest_det[c];
+    g *= inv;
+    const Vec<dim> g0 = -g.rowwise().sum();
+    double rate = g0.dot(v.col(cell[0])); // dJ/dt
+    for (int a = 1; a <= dim; ++a) rate += g.col(a - 1).dot(v.col(cell[a]));
     const double k = cv.stiffness[c];
-    const double s = k * (J - 1.0) + (cv.damping[c] + extra_damping_per_k * k) * rate;
-    for (int a = 0; a <= dim; ++a) f.col(cell[a]) -= s * g.col(a);
+    const double s = k * (det * inv - 1.0) + (cv.damping[c] + extra_damping_per_k * k) * rate;
+    f.col(cell[0]) -= s * g0;
+    for (int a = 1; a <= dim; ++a) f.col(cell[a]) -= s * g.col(a - 1);
   }
 }
 
@@ -71,14 +90,27 @@ template <int dim>
 CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
                                    Eigen::VectorXd stiffness, double retardation_time) {
   CellVolumes<dim> cv;
-  cv.cell = cells;
+  // In the order of their lowest node (the springs run in their first node's order): the force
+  // pass then walks the nodes' columns nearly in order instead of a mesher's cell order.
+  std::vector<std::size_t> order(cells.size());
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const auto low = [&](std::size_t c) { return *std::min_element(cells[c].begin(), cells[c].end()); };
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return low(a) < low(b); });
+  Eigen::VectorXd sorted(stiffness.size());
+  for (std::size_t c = 0; c < order.size(); ++c) {
+    cv.cell.push_back(cells[order[c]]);
+    sorted[static_cast<Eigen::Index>(c)] = stiffness[static_cast<Eigen::Index>(order[c])];
+  }
+  stiffness = std::move(sorted);
   cv.rest_inverse.resize(cells.size());
+  cv.inverse_rest_det.resize(static_cast<Eigen::Index>(cells.size()));
   for (std::size_t c = 0; c < cells.size(); ++c) {
     Mat<dim> Dm;
-    for (int k = 0; k < dim; ++k) Dm.col(k) = rest.col(cells[c][k + 1]) - rest.col(cells[c][0]);
+    for (int k = 0; k < dim; ++k) Dm.col(k) = rest.col(cv.cell[c][k + 1]) - rest.col(cv.cell[c][0]);
     if (!(std::abs(Dm.determinant()) > 0))
-      throw InputError("cell " + std::to_string(c) + ": zero volume, the volume term needs a rest shape");
+      throw InputError("cell " + std::to_string(order[c]) + ": zero volume, the volume term needs a rest shape");
     cv.rest_inverse[c] = Dm.inverse();
+    cv.inverse_rest_det[static_cast<Eigen::Index>(c)] = 1.0 / Dm.determinant();
   }
   cv.damping = retardation_time * stiffness;
   cv.stiffness = std::move(stiffness);

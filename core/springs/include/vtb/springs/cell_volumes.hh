@@ -20,6 +20,7 @@ namespace vtb {
 template <int dim> struct CellVolumes {
   std::vector<std::array<int, dim + 1>> cell; ///< the mesh's simplices
   std::vector<Mat<dim>> rest_inverse;         ///< Dm^{-1}, Dm = [X_1 - X_0, ...] at rest
+  Eigen::VectorXd inverse_rest_det;           ///< 1 / det(Dm): the force pass's J and dJ/dx (cell_volumes.cc)
   Eigen::VectorXd stiffness;                  ///< k_c = kappa_c V_c, J
   Eigen::VectorXd damping;                    ///< c_c = tau k_c, J s
   bool empty() const { return cell.empty(); }
@@ -49,8 +50,7 @@ inline double volume_ratio_gradients(const Mat<dim>& rest_inverse, const Eigen::
 /// d^2 J / dx_a dx_b (a dim x dim block; zero for a = b): in 3D the skew matrix of w = F (b_a x
 /// b_b) with H(i, k) = eps_ikm w_m, in 2D eps_ik (b_a x b_b) det-free; b_a the rest gradient
 /// of node a's barycentric function (b_0 = -sum of the others).
-template <int dim>
-inline Mat<dim> volume_ratio_hessian(const Mat<dim>& F, const Vec<dim>& ba, const Vec<dim>& bb) {
+template <int dim> inline Mat<dim> volume_ratio_hessian(const Mat<dim>& F, const Vec<dim>& ba, const Vec<dim>& bb) {
   Mat<dim> H;
   if constexpr (dim == 2) {
     const double c = ba[0] * bb[1] - ba[1] * bb[0];
@@ -89,8 +89,7 @@ void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, con
       for (int bn = 0; bn <= dim; ++bn) {
         const Mat<dim> gg = g.col(a) * g.col(bn).transpose();
         Mat<dim> K = -k * gg;
-        if (!gauss_newton && a != bn)
-          K -= k * (J - 1.0) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
+        if (!gauss_newton && a != bn) K -= k * (J - 1.0) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
         add(c, a, bn, K, Mat<dim>(-d * gg));
       }
   }
