@@ -74,10 +74,7 @@ template <int dim> double max_omega_squared(const Model<dim>& model, bool exact)
   }
   // The volume term's rest stiffness k_c g g^T (g: the cell's rest gradients), rank one per cell.
   std::vector<Eigen::Matrix<double, dim, dim + 1>> grad(static_cast<std::size_t>(net.volume.size()));
-  for (std::size_t c = 0; c < grad.size(); ++c) {
-    grad[c].template rightCols<dim>() = net.volume.rest_inverse[c].transpose();
-    grad[c].col(0) = -grad[c].template rightCols<dim>().rowwise().sum();
-  }
+  for (std::size_t c = 0; c < grad.size(); ++c) grad[c] = rest_gradients<dim>(net.volume.rest_inverse[c]);
   Eigen::VectorXd scale(net.mass.size()); // 1/sqrt(m) per node
   for (Eigen::Index i = 0; i < scale.size(); ++i) scale[i] = 1.0 / std::sqrt(net.mass[i]);
   Nodal<dim> x(dim, nf), y(dim, nf);

@@ -1,5 +1,7 @@
 #include "vtb/springs/calibration.hh"
 
+#include "vtb/springs/cell_volumes.hh"
+
 #include <Eigen/Dense>
 #include <algorithm>
 
@@ -166,13 +168,10 @@ void lloyd_fit(const Mesh<dim>& mesh, double E, double nu, double thickness, Eig
         S[e].template block<dim, dim>(b * dim, a * dim) = -nn;
         local[e] = {c[a], c[b]};
       }
-    if constexpr (kVolume) { // the volume ratio's rest gradients: g_a = b_a (cell_volumes.hh)
-      Mat<dim> Dm;
-      for (int q = 0; q < dim; ++q) Dm.col(q) = mesh.points.col(c[q + 1]) - mesh.points.col(c[0]);
-      Eigen::Matrix<double, n, 1> g;
-      const Mat<dim> Bt = Dm.inverse().transpose();
-      for (int a = 1; a <= dim; ++a) g.template segment<dim>(a * dim) = Bt.col(a - 1);
-      g.template head<dim>() = -Bt.rowwise().sum();
+    if constexpr (kVolume) { // the volume ratio's rest gradients, stacked by node (cell_volumes.hh)
+      const auto X = [&](int i) -> Vec<dim> { return mesh.points.col(i); };
+      const Eigen::Matrix<double, dim, dim + 1> b = rest_gradients<dim>(edge_matrix<dim>(c, X).inverse());
+      const Eigen::Map<const Eigen::Matrix<double, n, 1>> g(b.data());
       S[ns] = g * g.transpose();
     }
     Eigen::Matrix<double, ne, ne> G;

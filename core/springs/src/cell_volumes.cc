@@ -8,62 +8,28 @@
 #include <string>
 
 namespace vtb {
-namespace {
-
-template <int dim>
-Eigen::Matrix<double, dim, dim + 1> cell_positions(const std::array<int, dim + 1>& cell, const Nodal<dim>& rest,
-                                                   const Nodal<dim>& u) {
-  Eigen::Matrix<double, dim, dim + 1> x;
-  for (int a = 0; a <= dim; ++a) x.col(a) = rest.col(cell[a]) + u.col(cell[a]);
-  return x;
-}
-
-template <int dim> double ratio(const Mat<dim>& rest_inverse, const Eigen::Matrix<double, dim, dim + 1>& x) {
-  Mat<dim> Ds;
-  for (int k = 0; k < dim; ++k) Ds.col(k) = x.col(k + 1) - x.col(0);
-  return (Ds * rest_inverse).determinant();
-}
-
-} // namespace
 
 template <int dim>
 void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
                        Nodal<dim>& f, double extra_damping_per_k) {
-  // With F = D_s D_m^-1: J = det(D_s) / det(D_m), and the gradients dJ/dx_a (a >= 1), the
-  // columns of cof(F) D_m^-T = cof(D_s) cof(D_m^-1) D_m^-T, are those of cof(D_s) / det(D_m):
-  // the cross products of the cell's edge vectors now, no rest matrix per cell.
+  Eigen::Matrix<double, dim, dim + 1> g;
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   for (int c = 0; c < cv.size(); ++c) {
     const auto& cell = cv.cell[static_cast<std::size_t>(c)];
-    const Vec<dim> x0 = rest.col(cell[0]) + u.col(cell[0]);
-    Mat<dim> Ds, g; // g: dJ/dx_1 .. dJ/dx_dim
-    for (int k = 0; k < dim; ++k) Ds.col(k) = rest.col(cell[k + 1]) + u.col(cell[k + 1]) - x0;
-    double det;
-    if constexpr (dim == 2) {
-      g << Ds(1, 1), -Ds(1, 0), -Ds(0, 1), Ds(0, 0);
-      det = Ds(0, 0) * Ds(1, 1) - Ds(0, 1) * Ds(1, 0);
-    } else {
-      g.col(0) = Ds.col(1).cross(Ds.col(2));
-      g.col(1) = Ds.col(2).cross(Ds.col(0));
-      g.col(2) = Ds.col(0).cross(Ds.col(1));
-      det = Ds.col(0).dot(g.col(0));
-    }
-    const double inv = cv.inverse_rest_det[c];
-    g *= inv;
-    const Vec<dim> g0 = -g.rowwise().sum();
-    double rate = g0.dot(v.col(cell[0])); // dJ/dt
-    for (int a = 1; a <= dim; ++a) rate += g.col(a - 1).dot(v.col(cell[a]));
+    const double J = volume_ratio_gradients<dim>(edge_matrix<dim>(cell, x), cv.inverse_rest_det[c], g);
+    double rate = 0; // dJ/dt
+    for (int a = 0; a <= dim; ++a) rate += g.col(a).dot(v.col(cell[a]));
     const double k = cv.stiffness[c];
-    const double s = k * (det * inv - 1.0) + (cv.damping[c] + extra_damping_per_k * k) * rate;
-    f.col(cell[0]) -= s * g0;
-    for (int a = 1; a <= dim; ++a) f.col(cell[a]) -= s * g.col(a - 1);
+    const double s = k * (J - 1.0) + (cv.damping[c] + extra_damping_per_k * k) * rate;
+    for (int a = 0; a <= dim; ++a) f.col(cell[a]) -= s * g.col(a);
   }
 }
 
 template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u) {
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   double e = 0;
   for (int c = 0; c < cv.size(); ++c) {
-    const double J = ratio<dim>(cv.rest_inverse[static_cast<std::size_t>(c)],
-                                cell_positions<dim>(cv.cell[static_cast<std::size_t>(c)], rest, u));
+    const double J = edge_matrix<dim>(cv.cell[static_cast<std::size_t>(c)], x).determinant() * cv.inverse_rest_det[c];
     e += 0.5 * cv.stiffness[c] * (J - 1.0) * (J - 1.0);
   }
   return e;
@@ -72,14 +38,11 @@ template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<
 template <int dim>
 VolumeRatios volume_ratios(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
                            const Nodal<dim>& u) {
+  const auto X = [&](int i) -> Vec<dim> { return rest.col(i); };
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   VolumeRatios r;
   for (const auto& cell : cells) {
-    Mat<dim> Dm, Ds;
-    for (int k = 0; k < dim; ++k) {
-      Dm.col(k) = rest.col(cell[k + 1]) - rest.col(cell[0]);
-      Ds.col(k) = rest.col(cell[k + 1]) + u.col(cell[k + 1]) - rest.col(cell[0]) - u.col(cell[0]);
-    }
-    const double J = Ds.determinant() / Dm.determinant();
+    const double J = edge_matrix<dim>(cell, x).determinant() / edge_matrix<dim>(cell, X).determinant();
     if (!(J > 0)) ++r.inverted; // NaN counts as inverted
     if (!(J >= r.min_ratio)) r.min_ratio = J;
   }
@@ -104,9 +67,9 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   stiffness = std::move(sorted);
   cv.rest_inverse.resize(cells.size());
   cv.inverse_rest_det.resize(static_cast<Eigen::Index>(cells.size()));
+  const auto X = [&](int i) -> Vec<dim> { return rest.col(i); };
   for (std::size_t c = 0; c < cells.size(); ++c) {
-    Mat<dim> Dm;
-    for (int k = 0; k < dim; ++k) Dm.col(k) = rest.col(cv.cell[c][k + 1]) - rest.col(cv.cell[c][0]);
+    const Mat<dim> Dm = edge_matrix<dim>(cv.cell[c], X);
     if (!(std::abs(Dm.determinant()) > 0))
       throw InputError("cell " + std::to_string(order[c]) + ": zero volume, the volume term needs a rest shape");
     cv.rest_inverse[c] = Dm.inverse();

@@ -27,24 +27,44 @@ template <int dim> struct CellVolumes {
   int size() const { return static_cast<int>(cell.size()); }
 };
 
-/// The gradients dJ/dx_a (columns a = 0..dim) of a cell's volume ratio at positions x_a, and J.
+/// A cell's edge matrix [x_1 - x_0, ..., x_dim - x_0] of the positions x(i) of its nodes.
+template <int dim, class Position> inline Mat<dim> edge_matrix(const std::array<int, dim + 1>& cell, Position&& x) {
+  const Vec<dim> x0 = x(cell[0]);
+  Mat<dim> D;
+  for (int k = 0; k < dim; ++k) D.col(k) = x(cell[k + 1]) - x0;
+  return D;
+}
+
+/// A cell's volume ratio J = det(D_s) / det(D_m) (returned) and its gradients dJ/dx_a in the
+/// columns a = 0..dim of g. With F = D_s D_m^-1, dJ/dx_a (a >= 1) is column a of cof(F) D_m^-T
+/// = cof(D_s) cof(D_m^-1) D_m^-T, that is of cof(D_s) / det(D_m): the cross products of the
+/// edge vectors now, polynomial (finite through inversion), no rest matrix.
 template <int dim>
-inline double volume_ratio_gradients(const Mat<dim>& rest_inverse, const Eigen::Matrix<double, dim, dim + 1>& x,
+inline double volume_ratio_gradients(const Mat<dim>& Ds, double inverse_rest_det,
                                      Eigen::Matrix<double, dim, dim + 1>& g) {
-  Mat<dim> Ds;
-  for (int k = 0; k < dim; ++k) Ds.col(k) = x.col(k + 1) - x.col(0);
-  const Mat<dim> F = Ds * rest_inverse;
-  Mat<dim> cof; // dJ/dF = cof(F), polynomial: no inverse of F
+  double det;
   if constexpr (dim == 2) {
-    cof << F(1, 1), -F(1, 0), -F(0, 1), F(0, 0);
+    g.col(1) << Ds(1, 1), -Ds(0, 1);
+    g.col(2) << -Ds(1, 0), Ds(0, 0);
+    det = Ds(0, 0) * Ds(1, 1) - Ds(0, 1) * Ds(1, 0);
   } else {
-    cof.col(0) = F.col(1).cross(F.col(2));
-    cof.col(1) = F.col(2).cross(F.col(0));
-    cof.col(2) = F.col(0).cross(F.col(1));
+    g.col(1) = Ds.col(1).cross(Ds.col(2));
+    g.col(2) = Ds.col(2).cross(Ds.col(0));
+    g.col(3) = Ds.col(0).cross(Ds.col(1));
+    det = Ds.col(0).dot(g.col(1));
   }
-  g.template rightCols<dim>() = cof * rest_inverse.transpose(); // dJ/dx_a = cof(F) b_a, b_a = row a-1 of Dm^-1
+  g.template rightCols<dim>() *= inverse_rest_det;
   g.col(0) = -g.template rightCols<dim>().rowwise().sum();
-  return F.determinant();
+  return det * inverse_rest_det;
+}
+
+/// The rest gradients b_a of a cell's barycentric functions (columns a = 0..dim; b_a, a >= 1, is
+/// row a - 1 of D_m^-1, b_0 = -sum of the others): dJ/dx_a at rest.
+template <int dim> inline Eigen::Matrix<double, dim, dim + 1> rest_gradients(const Mat<dim>& rest_inverse) {
+  Eigen::Matrix<double, dim, dim + 1> b;
+  b.template rightCols<dim>() = rest_inverse.transpose();
+  b.col(0) = -b.template rightCols<dim>().rowwise().sum();
+  return b;
 }
 
 /// d^2 J / dx_a dx_b (a dim x dim block; zero for a = b): in 3D the skew matrix of w = F (b_a x
@@ -72,18 +92,15 @@ template <int dim> inline Mat<dim> volume_ratio_hessian(const Mat<dim>& F, const
 template <int dim, class Add>
 void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, bool gauss_newton,
                          Add&& add) {
-  Eigen::Matrix<double, dim, dim + 1> x, g;
+  Eigen::Matrix<double, dim, dim + 1> g;
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   for (int c = 0; c < cv.size(); ++c) {
     const auto& cell = cv.cell[static_cast<std::size_t>(c)];
-    for (int a = 0; a <= dim; ++a) x.col(a) = rest.col(cell[a]) + u.col(cell[a]);
     const Mat<dim>& Bi = cv.rest_inverse[static_cast<std::size_t>(c)];
-    const double J = volume_ratio_gradients<dim>(Bi, x, g);
-    Mat<dim> Ds;
-    for (int k = 0; k < dim; ++k) Ds.col(k) = x.col(k + 1) - x.col(0);
+    const Mat<dim> Ds = edge_matrix<dim>(cell, x);
+    const double J = volume_ratio_gradients<dim>(Ds, cv.inverse_rest_det[c], g);
     const Mat<dim> F = Ds * Bi;
-    Eigen::Matrix<double, dim, dim + 1> b; // rest gradients
-    b.template rightCols<dim>() = Bi.transpose();
-    b.col(0) = -b.template rightCols<dim>().rowwise().sum();
+    const Eigen::Matrix<double, dim, dim + 1> b = rest_gradients<dim>(Bi);
     const double k = cv.stiffness[c], d = cv.damping[c];
     for (int a = 0; a <= dim; ++a)
       for (int bn = 0; bn <= dim; ++bn) {
