@@ -612,7 +612,8 @@ output_interval = 1.0
 generate = { shape = "box", size = [0.1, 0.03, 0.03], divisions = [6, 2, 2] }
 [material]
 young_modulus = 5.0e4
-poisson_ratio = )" + std::to_string(nu) + R"(
+poisson_ratio = )" + std::to_string(nu) +
+                                  R"(
 density = 1000.0
 retardation_time = )" + std::to_string(tau) +
                                   R"(

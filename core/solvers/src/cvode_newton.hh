@@ -91,17 +91,16 @@ public:
                                   }
                               });
       constexpr int nb = (dim + 1) * (dim + 1) * dim * dim;
-      for_each_cell_block(net.volume, net.rest, u, true,
-                          [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
-                            const long* at =
-                                &m_cell_offset[static_cast<std::size_t>(c * nb + (x * (dim + 1) + y) * dim * dim)];
-                            if (at[0] < 0) return;
-                            for (int p = 0; p < dim; ++p)
-                              for (int q = 0; q < dim; ++q) {
-                                m_K.valuePtr()[at[p * dim + q]] -= K(p, q);
-                                m_D.valuePtr()[at[p * dim + q]] -= D(p, q);
-                              }
-                          });
+      for_each_cell_block(
+          net.volume, net.rest, u, true, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>& D) {
+            const long* at = &m_cell_offset[static_cast<std::size_t>(c * nb + (x * (dim + 1) + y) * dim * dim)];
+            if (at[0] < 0) return;
+            for (int p = 0; p < dim; ++p)
+              for (int q = 0; q < dim; ++q) {
+                m_K.valuePtr()[at[p * dim + q]] -= K(p, q);
+                m_D.valuePtr()[at[p * dim + q]] -= D(p, q);
+              }
+          });
       for (std::size_t d = 0; d < m_diag.size(); ++d)
         m_D.valuePtr()[m_diag[d]] += net.mass_damping * m_mass[static_cast<Eigen::Index>(d)];
     }

@@ -48,8 +48,7 @@ template <int dim> Eigen::MatrixXd dense_scaled_stiffness(const Model<dim>& mode
   for_each_cell_block(net.volume, net.rest, rest, true, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>&) {
     const int i = net.volume.cell[static_cast<std::size_t>(c)][x], j = net.volume.cell[static_cast<std::size_t>(c)][y];
     const int a = model.free_index[static_cast<std::size_t>(i)], b = model.free_index[static_cast<std::size_t>(j)];
-    if (a >= 0 && b >= 0)
-      S.template block<dim, dim>(a * dim, b * dim) -= K / std::sqrt(net.mass[i] * net.mass[j]);
+    if (a >= 0 && b >= 0) S.template block<dim, dim>(a * dim, b * dim) -= K / std::sqrt(net.mass[i] * net.mass[j]);
   });
   return S;
 }

@@ -230,7 +230,7 @@ Eigen::VectorXd lloyd_volume_stiffness(const Mesh<dim>& mesh, double E, double n
   template Eigen::VectorXd lumped_masses<D>(const Mesh<D>&, double, double);                                           \
   template Eigen::VectorXd van_gelder_stiffness<D>(const Mesh<D>&, double, double);                                    \
   template Eigen::VectorXd lloyd_stiffness<D>(const Mesh<D>&, double, double, double);                                 \
-  template Eigen::VectorXd lloyd_volume_stiffness<D>(const Mesh<D>&, double, double, double, Eigen::VectorXd&);         \
+  template Eigen::VectorXd lloyd_volume_stiffness<D>(const Mesh<D>&, double, double, double, Eigen::VectorXd&);        \
   template Eigen::MatrixXd fem_element_stiffness<D>(const Mesh<D>&, const Mesh<D>::Cell&, double, double, double);     \
   template Eigen::SparseMatrix<double> fem_stiffness_matrix<D>(const Mesh<D>&, double, double, double);
 VTB_INSTANTIATE(2)

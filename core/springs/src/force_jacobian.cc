@@ -111,17 +111,17 @@ void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
                             }
                           });
   // The volume term's blocks (its cells' node pairs are springs: the same pattern).
-  for_each_cell_block(net.volume, net.rest, u, clamp_compression,
-                      [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>&) {
-                        const int a = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][x])];
-                        const int b = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][y])];
-                        if (a < 0 || b < 0 || (blocks == Blocks::lower && a < b)) return;
-                        for (int q = 0; q < dim; ++q) {
-                          const int col = dim * b + q;
-                          const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
-                          for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= K(p, q);
-                        }
-                      });
+  for_each_cell_block(
+      net.volume, net.rest, u, clamp_compression, [&](int c, int x, int y, const Mat<dim>& K, const Mat<dim>&) {
+        const int a = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][x])];
+        const int b = free_index[static_cast<std::size_t>(net.volume.cell[static_cast<std::size_t>(c)][y])];
+        if (a < 0 || b < 0 || (blocks == Blocks::lower && a < b)) return;
+        for (int q = 0; q < dim; ++q) {
+          const int col = dim * b + q;
+          const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
+          for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= K(p, q);
+        }
+      });
 }
 
 template <int dim>

@@ -388,8 +388,7 @@ density = 1.0
         double inverted = std::nan("");
         for (const auto& [key, value] : r.extra)
           if (key == "inverted_cells") inverted = value;
-        row(name, level, level * f30, d, r.stable && std::abs(d - depth(tr, last - 1)) <= 1e-3 * std::abs(d),
-            inverted);
+        row(name, level, level * f30, d, r.stable && std::abs(d - depth(tr, last - 1)) <= 1e-3 * std::abs(d), inverted);
       }
       if (log) *log << "  nu " << nu << ": " << name << " in " << seconds() << " s\n" << std::flush;
     }

@@ -25,10 +25,10 @@ template <int dim> struct SpringNetwork {
   /// The volume term per cell (calibration "volume"; empty otherwise): every force pass,
   /// Jacobian and integrator takes it beside the springs (cell_volumes.hh).
   CellVolumes<dim> volume;
-  std::string calibration;              ///< the constants used: "lloyd" | "van-gelder" | "fitted" | "volume"
-  std::string calibration_requested;    ///< the scene's [solver].springs: the above or "auto"
-  double calibration_seconds = 0;       ///< wall time of the stiffness calibration (the fit, for "fitted")
-  bool calibration_cached = false;      ///< the fit's constants came from the fit cache (fitted_cache.hh)
+  std::string calibration;           ///< the constants used: "lloyd" | "van-gelder" | "fitted" | "volume"
+  std::string calibration_requested; ///< the scene's [solver].springs: the above or "auto"
+  double calibration_seconds = 0;    ///< wall time of the stiffness calibration (the fit, for "fitted")
+  bool calibration_cached = false;   ///< the fit's constants came from the fit cache (fitted_cache.hh)
   /// When a fit ran (or was read): the used constants' relative error on the fit's held-out
   /// modes (FitReport::validation); NaN otherwise.
   double calibration_validation = std::numeric_limits<double>::quiet_NaN();
