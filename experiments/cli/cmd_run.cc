@@ -90,7 +90,7 @@ Action add_run(CLI::App& app) {
         std::cout << "vtb run: the " << r.calibration << " springs are " << pct(r.calibration_load_error) << " from "
                   << (continuum ? "the continuum" : "P1 FEM") << " on this scene's loads (static, linear; above "
                   << 100 * kLoadErrorGoal << " %): "
-                  << (r.calibration == "fitted"
+                  << (r.calibration.rfind("fitted", 0) == 0
                           ? "central springs miss part of this response (bending of a part a few cells thick, a "
                             "load concentrated at an edge or corner, or nu near 0.5; docs/fidelity.md)"
                           : "springs = \"fitted\" fits them to the FEM (docs/fidelity.md)")

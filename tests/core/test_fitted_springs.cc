@@ -1,6 +1,7 @@
 // springs = "fitted": the network identified from the P1 FEM on the same mesh, checked on
 // static cases that the fit never saw (its training loads are the free mesh's modes).
 #include "support/fresh_dir.hh"
+#include "support/static_answers.hh"
 #ifdef VTB_HAVE_CGAL_MESHERS
 #include "vtb/meshes/cgal_generate.hh"
 #endif
@@ -32,39 +33,11 @@
 namespace vtb {
 namespace {
 
-using SpMat = Eigen::SparseMatrix<double>;
+using test::clamped_solve;
+using test::SpMat;
 
 template <int dim> SpMat spring_matrix(const Mesh<dim>& mesh, const Eigen::VectorXd& k) {
-  MaterialDesc mat;
-  SpringNetwork<dim> net = build_network(mesh, mat, "van-gelder");
-  net.stiffness = k;
-  net.damping.setZero();
-  const Nodal<dim> zero = Nodal<dim>::Zero(dim, mesh.num_nodes());
-  return -force_jacobians<dim>(net, zero, false).K;
-}
-
-/// Linear static answer of K u = f with the nodes where `fixed` is true clamped.
-Eigen::VectorXd clamped_solve(const SpMat& K, const Eigen::VectorXd& f, const std::vector<bool>& fixed, int dim) {
-  std::vector<int> index(fixed.size(), -1);
-  int nf = 0;
-  for (std::size_t v = 0; v < fixed.size(); ++v)
-    if (!fixed[v]) index[v] = nf++;
-  std::vector<Eigen::Triplet<double>> kept;
-  for (int c = 0; c < K.outerSize(); ++c)
-    for (SpMat::InnerIterator it(K, c); it; ++it) {
-      const int r = index[static_cast<std::size_t>(it.row() / dim)],
-                q = index[static_cast<std::size_t>(it.col() / dim)];
-      if (r >= 0 && q >= 0) kept.emplace_back(dim * r + it.row() % dim, dim * q + it.col() % dim, it.value());
-    }
-  SpMat Kff(dim * nf, dim * nf);
-  Kff.setFromTriplets(kept.begin(), kept.end());
-  Eigen::VectorXd rhs(dim * nf), u = Eigen::VectorXd::Zero(f.size());
-  for (std::size_t v = 0; v < fixed.size(); ++v)
-    if (index[v] >= 0) rhs.segment(dim * index[v], dim) = f.segment(dim * static_cast<Eigen::Index>(v), dim);
-  const Eigen::VectorXd uf = Eigen::SimplicialLDLT<SpMat>(Kff).solve(rhs);
-  for (std::size_t v = 0; v < fixed.size(); ++v)
-    if (index[v] >= 0) u.segment(dim * static_cast<Eigen::Index>(v), dim) = uf.segment(dim * index[v], dim);
-  return u;
+  return test::network_matrix(mesh, k);
 }
 
 /// A cantilever clamped where coordinate `axis` is least, with a load spread over the nodes
@@ -80,9 +53,7 @@ double cantilever_error(const Mesh<dim>& mesh, const Eigen::VectorXd& k, double 
     fixed[static_cast<std::size_t>(v)] = mesh.points(axis, v) < low + 1e-9;
     if (mesh.points(axis, v) > high - 1e-9) f.segment<dim>(dim * v) = force;
   }
-  const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(mesh, E, nu, t), f, fixed, dim);
-  const Eigen::VectorXd us = clamped_solve(spring_matrix(mesh, k), f, fixed, dim);
-  return (us - ufem).norm() / ufem.norm();
+  return test::static_error(mesh, k, nullptr, E, nu, t, fixed, f);
 }
 
 /// A patch of equilateral triangles (a triangular lattice cut to a parallelogram).
@@ -257,9 +228,7 @@ TEST(FittedSprings, StopEarlyByDefaultOnlyWhereAStepCostsSeconds) {
 /// `top`, relative L2 error over all nodes.
 double block_error(const Mesh3& m, const Eigen::VectorXd& k, double E, double nu, const std::vector<bool>& fixed,
                    const Eigen::VectorXd& f) {
-  const Eigen::VectorXd ufem = clamped_solve(fem_stiffness_matrix(m, E, nu, 1.0), f, fixed, 3);
-  const Eigen::VectorXd us = clamped_solve(spring_matrix(m, k), f, fixed, 3);
-  return (us - ufem).norm() / ufem.norm();
+  return test::static_error(m, k, nullptr, E, nu, 1.0, fixed, f);
 }
 
 /// Two strips of the block's top face (x <= 1 cm, x >= 3 cm) under opposite uniform tractions

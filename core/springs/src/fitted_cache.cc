@@ -34,7 +34,8 @@ struct Fnv {
 /// do not), so the key holds nu and not E or t: one fit per mesh, Poisson ratio and supports,
 /// and a stiffness sweep or the viewer's stiffness slider reads it back scaled.
 template <int dim>
-std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports, const std::string& target) {
+std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports, const std::string& target,
+                  bool volume) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
@@ -51,20 +52,22 @@ std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supp
                          o.min_improvement, double(FitOptions::kEarlyStopDofs)})
     f.add(x);
   f.add(target.data(), target.size());
+  if (volume) f.add("volume", 6); // the springs-only fits' keys stay as they were
   return f.h;
 }
 
-constexpr const char* kChosen[3] = {"fitted", "lloyd", "van-gelder"};
+constexpr const char* kChosen[4] = {"fitted", "lloyd", "van-gelder", "volume"};
 
 /// The index of `chosen` in kChosen (0, "fitted", for anything else).
 int chosen_index(const std::string& chosen) {
-  for (int i = 0; i < 3; ++i)
+  for (int i = 0; i < 4; ++i)
     if (chosen == kChosen[i]) return i;
   return 0;
 }
 
 /// The file: the magic, the fit's code version (kCode), which constants were chosen (an index
-/// into kChosen) and their validation error (two doubles), then the constants.
+/// into kChosen) and their validation error (two doubles), then the constants (the springs',
+/// then the cells' with a volume term).
 bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k, CachedFit& info) {
   std::ifstream in(file, std::ios::binary);
   if (!in) return false;
@@ -77,7 +80,7 @@ bool read_cache(const std::filesystem::path& file, Eigen::VectorXd& k, CachedFit
   double meta[2];
   std::memcpy(meta, bytes.data() + sizeof kMagic + kCodeSize, sizeof meta);
   std::memcpy(k.data(), bytes.data() + head, want - head);
-  if (!(meta[0] == 0 || meta[0] == 1 || meta[0] == 2)) return false;
+  if (!(meta[0] == 0 || meta[0] == 1 || meta[0] == 2 || meta[0] == 3)) return false;
   info.chosen = kChosen[static_cast<int>(meta[0])];
   info.validation = meta[1];
   return k.allFinite() && (k.array() >= 0).all();
@@ -99,12 +102,14 @@ std::filesystem::path fit_cache_dir() {
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
                                         const std::vector<int>& supports, CachedFit* info, const FitProgress& progress,
-                                        const FitTarget& target) {
+                                        const FitTarget& target, Eigen::VectorXd* cell_stiffness) {
   const std::filesystem::path dir = fit_cache_dir();
+  const bool volume = cell_stiffness != nullptr;
   char name[40];
   std::snprintf(name, sizeof name, "fitted-%016llx.bin",
-                static_cast<unsigned long long>(key(mesh, nu, supports, target.key)));
-  Eigen::VectorXd k(static_cast<Eigen::Index>(unique_edges(mesh).size()));
+                static_cast<unsigned long long>(key(mesh, nu, supports, target.key, volume)));
+  const auto ns = static_cast<Eigen::Index>(unique_edges(mesh).size());
+  Eigen::VectorXd k(ns + (volume ? mesh.num_cells() : 0)); // the springs', then the cells'
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);
   if (!got.hit) {
@@ -112,8 +117,11 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     options.supports = supports;
     options.progress = progress;
     options.target = target;
+    options.volume = volume;
     FitReport report;
-    k = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report); // unit E t, scaled below
+    Eigen::VectorXd cells;
+    k.head(ns) = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report, &cells); // unit E t, scaled below
+    if (volume) k.tail(cells.size()) = cells;
     got.chosen = report.chosen;
     got.validation = report.validation();
     if (!dir.empty()) try {
@@ -129,12 +137,14 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
       }
   }
   if (info) *info = got;
-  return k * (E * (dim == 2 ? t : 1.0));
+  const double scale = E * (dim == 2 ? t : 1.0);
+  if (volume) *cell_stiffness = scale * k.tail(k.size() - ns);
+  return scale * k.head(ns);
 }
 
 template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*, const FitProgress&, const FitTarget&);
+                                                    CachedFit*, const FitProgress&, const FitTarget&, Eigen::VectorXd*);
 template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, const std::vector<int>&,
-                                                    CachedFit*, const FitProgress&, const FitTarget&);
+                                                    CachedFit*, const FitProgress&, const FitTarget&, Eigen::VectorXd*);
 
 } // namespace vtb

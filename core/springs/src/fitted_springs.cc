@@ -16,6 +16,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 namespace vtb {
 namespace {
@@ -35,15 +36,22 @@ template <int dim> struct FitSpace {
   /// Takes the network (no second copy of it while the fit holds its factor).
   explicit FitSpace(SpringNetwork<dim>&& n)
       : net(std::move(n)), rest(Nodal<dim>::Zero(dim, net.num_nodes())), every(every_node(net.num_nodes())),
-        ks(free_block_pattern(net, every, net.num_nodes(), Blocks::lower)) {}
+        ks(free_block_pattern(net, every, net.num_nodes(), Blocks::lower)) {
+    for (const Mat<dim>& Bi : net.volume.rest_inverse) grad.push_back(rest_gradients<dim>(Bi));
+  }
   SpringNetwork<dim> net;
   const Nodal<dim> rest;        ///< zero displacement
   const std::vector<int> every; ///< every node free: the whole network's stiffness (the solver pins)
   SpMat ks;                     ///< its lower triangle (blocks), all the factorisation reads
+  /// The volume term's rest gradients dJ/dx_a per cell (none without the term): its rest
+  /// stiffness k_c g g^T is a spring's k_s g_s g_s^T with g over the cell's dim + 1 nodes.
+  std::vector<Eigen::Matrix<double, dim, dim + 1>> grad;
 };
 
 /// The fit's state at one x: the residual of the network's answers U to the training loads
-/// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs.
+/// and the per-spring factors h_{s,m} = k_s g_s . u_m that its Jacobian needs. With a volume
+/// term, x holds the springs' then the cells' (FitSpace::grad) logs and h the cells' rows after
+/// the springs'.
 template <int dim> class Fit {
 public:
   /// `dir`: the springs' unit rest directions; `k0`: the prior (x = 0).
@@ -53,7 +61,8 @@ public:
   /// Factorises K_s at x and solves the training loads; returns 1/2 ||residual||^2.
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
-    m_space.net.stiffness = m_k;
+    m_space.net.stiffness = m_k.head(num_springs());
+    if (num_cells() > 0) m_space.net.volume.stiffness = m_k.tail(num_cells());
     // sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i) in its pattern: the values setFromTriplets
     // made of force_jacobians' blocks, to the bit, without the triplets (force_jacobian.hh).
     fill_free_stiffness(m_space.net, m_space.rest, m_space.every, false, m_space.ks, Blocks::lower);
@@ -91,6 +100,12 @@ public:
         W.col(m).template segment<dim>(dim * i) -= g;
       }
     }
+    for (int c = 0; c < num_cells(); ++c) {
+      const Eigen::Index row = num_springs() + c;
+      for (Eigen::Index m = 0; m < W.cols(); ++m)
+        for (int a = 0; a <= dim; ++a)
+          W.col(m).template segment<dim>(dim * cell(c)[a]) += (double{m_H(row, m)} * v[row]) * grad(c).col(a);
+    }
     m_solver.solve_in_place(W);
     project_in_place(W);
     W *= -1;
@@ -111,6 +126,12 @@ public:
                m_dir.col(se).dot(Z.col(m).template segment<dim>(dim * j) - Z.col(m).template segment<dim>(dim * i));
       out[se] = -sum;
     }
+    for (int c = 0; c < num_cells(); ++c) {
+      const Eigen::Index row = num_springs() + c;
+      double sum = 0;
+      for (Eigen::Index m = 0; m < Z.cols(); ++m) sum += double{m_H(row, m)} * cell_dot(c, Z.col(m));
+      out[row] = -sum;
+    }
     return out;
   }
 
@@ -120,7 +141,7 @@ private:
   }
   /// diag(k) G^T U: per spring and column, k_s n_s . (u_j - u_i).
   void gather_scaled(const MatrixXd& U, Eigen::MatrixXf& out) const {
-    out.resize(static_cast<Eigen::Index>(edges().size()), U.cols());
+    out.resize(num_springs() + num_cells(), U.cols());
     for (std::size_t s = 0; s < edges().size(); ++s) {
       const auto [i, j] = edges()[s];
       const auto se = static_cast<Eigen::Index>(s);
@@ -129,9 +150,22 @@ private:
             m_dir.col(se).dot(U.col(m).template segment<dim>(dim * j) - U.col(m).template segment<dim>(dim * i)) *
             m_k[se]);
     }
+    for (int c = 0; c < num_cells(); ++c) // and k_c g_c . u_m per cell
+      for (Eigen::Index m = 0; m < U.cols(); ++m)
+        out(num_springs() + c, m) = static_cast<float>(cell_dot(c, U.col(m)) * m_k[num_springs() + c]);
+  }
+  /// g_c . u: the cell's rest gradients against u's columns at its nodes (dJ along u).
+  template <class Column> double cell_dot(int c, const Column& u) const {
+    double sum = 0;
+    for (int a = 0; a <= dim; ++a) sum += grad(c).col(a).dot(u.template segment<dim>(dim * cell(c)[a]));
+    return sum;
   }
 
   const auto& edges() const { return m_space.net.edge; }
+  Eigen::Index num_springs() const { return static_cast<Eigen::Index>(edges().size()); }
+  int num_cells() const { return static_cast<int>(m_space.grad.size()); }
+  const auto& cell(int c) const { return m_space.net.volume.cell[static_cast<std::size_t>(c)]; }
+  const auto& grad(int c) const { return m_space.grad[static_cast<std::size_t>(c)]; }
 
   FitSpace<dim>& m_space;
   const Nodal<dim>& m_dir;
@@ -222,9 +256,54 @@ VectorXd levenberg_marquardt(Fit<dim>& fit, VectorXd x, const FitOptions& o, con
   return x;
 }
 
+/// The fit with a volume term at unit E t (FitOptions::volume): springs and cells from the
+/// element fit's constants (`net`, built with them), held above 1 % of van Gelder's and of
+/// the cell's bulk modulus times its volume; the guard weighs the fit against that prior.
+template <int dim>
+VectorXd fit_with_volume(const Mesh<dim>& mesh, SpringNetwork<dim>&& net, const Nodal<dim>& dir, const Training& tr,
+                         PinnedSolver& solver, double nu, const FitOptions& options, int modes, int free_dofs,
+                         FitReport* report, VectorXd* cell_k) {
+  if (!cell_k) throw std::logic_error("fitted_stiffness: a fit with a volume term needs cell_stiffness");
+  const auto ns = static_cast<Eigen::Index>(net.num_springs());
+  const Eigen::Index nc = net.volume.size();
+  // At unit E t: the bulk modulus (plane stress in 2D) times the cell's volume |det D_m| / dim!.
+  const double bulk = dim == 2 ? 1.0 / (2 * (1 - nu)) : 1.0 / (3 * (1 - 2 * nu));
+  VectorXd prior(ns + nc);
+  prior.head(ns) = net.stiffness.cwiseMax(0.01 * van_gelder_stiffness(mesh, 1.0, 1.0));
+  for (Eigen::Index c = 0; c < nc; ++c)
+    prior[ns + c] = std::max(net.volume.stiffness[c],
+                             0.01 * bulk / (std::abs(net.volume.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0)));
+  FitReport rep;
+  rep.modes = modes;
+  rep.prior = "volume";
+  rep.validation_van_gelder = std::numeric_limits<double>::quiet_NaN();
+  FitSpace<dim> space(std::move(net));
+  Fit<dim> fit(space, dir, prior, tr, solver);
+  VectorXd x = VectorXd::Zero(ns + nc);
+  rep.lloyd_residual = std::sqrt(2 * fit.evaluate(x) / modes);
+  const bool guarded = tr.Tv.cols() > 0;
+  rep.validation_lloyd = guarded ? fit.held_out_error(tr.Tv, tr.Fv) : std::numeric_limits<double>::quiet_NaN();
+  if (options.start.size() == ns + nc) {
+    x = (options.start.array() / prior.array()).log().max(std::log(options.floor)).matrix();
+    fit.evaluate(x);
+  }
+  FitOptions lm = options;
+  lm.patience = options.patience_for(free_dofs);
+  x = levenberg_marquardt(fit, x, lm, tr.Tv, tr.Fv, rep);
+  rep.fitted_residual = std::sqrt(fit.residual().squaredNorm() / modes);
+  VectorXd k = prior.array() * x.array().exp();
+  rep.validation_fitted = guarded ? fit.held_out_error(tr.Tv, tr.Fv) : std::numeric_limits<double>::quiet_NaN();
+  if (guarded && rep.validation_lloyd < rep.validation_fitted) k = prior, rep.chosen = "volume";
+  if (report) *report = rep;
+  if (options.progress) options.progress("done", 1, 1);
+  *cell_k = k.tail(nc);
+  return k.head(ns);
+}
+
 /// The fit at unit E t (fitted_stiffness scales it).
 template <int dim>
-Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const FitOptions& options, FitReport* report) {
+Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const FitOptions& options, FitReport* report,
+                                      VectorXd* cell_k) {
   constexpr double E = 1.0, thickness = 1.0;
   const int n = mesh.num_nodes(), N = dim * n;
   const int free_dofs = N - fit_pinned_dofs(mesh, options.supports);
@@ -238,8 +317,10 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   // (docs/fidelity.md).
   if (options.modes <= 0 && options.target.answers && supports_hold(mesh, options.supports))
     modes = std::clamp(free_dofs / FitOptions::kResolvedModeShare, FitOptions::kMinModes, modes);
-  // The network (van Gelder's constants, no dashpots): its edges, and the assembly's input.
-  SpringNetwork<dim> net = build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, "van-gelder");
+  // The network (van Gelder's constants, or the element fit's with its volume term; no
+  // dashpots): its edges (and cells), and the assembly's input.
+  SpringNetwork<dim> net =
+      build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, options.volume ? "volume" : "van-gelder");
   const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());
   const int held_dofs = N - free_dofs, need = fit_dofs_needed<dim>(options);
@@ -253,6 +334,8 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
                      .normalized();
   const Training tr = training_set(mesh, E, nu, thickness, modes, options);
   PinnedSolver solver(N, tr.pins);
+  if (options.volume)
+    return fit_with_volume(mesh, std::move(net), dir, tr, solver, nu, options, modes, free_dofs, report, cell_k);
   // The prior (start, pull and floor): Lloyd (never below 1 % of van Gelder, as Lloyd may zero
   // a spring) or van Gelder, whichever answers the training loads better. On skewed meshes
   // Lloyd's per-element fit can leave near-mechanisms that van Gelder does not.
@@ -306,22 +389,27 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
 
 template <int dim>
 Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double thickness,
-                                 const FitOptions& options, FitReport* report) {
+                                 const FitOptions& options, FitReport* report, Eigen::VectorXd* cell_stiffness) {
   // Every stiffness in the fit (its FEM, its priors, its loads) scales with E t and its
   // displacements do not, so it runs at unit E t and is scaled: the same springs, bit for bit,
   // whatever the stiffness (the cache and a stiffness sweep rely on it).
   const double scale = E * (dim == 2 ? thickness : 1.0);
-  if (options.start.size() == 0) return scale * fit_at_unit_stiffness(mesh, nu, options, report);
   FitOptions unit = options;
   unit.start /= scale;
-  return scale * fit_at_unit_stiffness(mesh, nu, unit, report);
+  const Eigen::VectorXd k = fit_at_unit_stiffness(mesh, nu, unit, report, cell_stiffness);
+  if (options.volume) *cell_stiffness *= scale;
+  return scale * k;
 }
 
 double FitReport::validation() const {
-  return chosen == "lloyd" ? validation_lloyd : chosen == "van-gelder" ? validation_van_gelder : validation_fitted;
+  return chosen == "lloyd" || chosen == "volume" ? validation_lloyd
+         : chosen == "van-gelder"                ? validation_van_gelder
+                                                 : validation_fitted;
 }
 
-template Eigen::VectorXd fitted_stiffness<2>(const Mesh<2>&, double, double, double, const FitOptions&, FitReport*);
-template Eigen::VectorXd fitted_stiffness<3>(const Mesh<3>&, double, double, double, const FitOptions&, FitReport*);
+template Eigen::VectorXd fitted_stiffness<2>(const Mesh<2>&, double, double, double, const FitOptions&, FitReport*,
+                                             Eigen::VectorXd*);
+template Eigen::VectorXd fitted_stiffness<3>(const Mesh<3>&, double, double, double, const FitOptions&, FitReport*,
+                                             Eigen::VectorXd*);
 
 } // namespace vtb

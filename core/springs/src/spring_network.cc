@@ -30,11 +30,18 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
-  else if (calibration == "fitted") {
+  else if (calibration == "fitted" || calibration == "fitted-volume") {
     CachedFit fit;
+    const bool volume = calibration == "fitted-volume";
+    Eigen::VectorXd cell_k;
     try {
       net.stiffness = cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit,
-                                              progress, target);
+                                              progress, target, volume ? &cell_k : nullptr);
+      if (volume) { // the fit's cells are in make_cell_volumes' order: their constants set after it
+        net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
+        net.volume.stiffness = cell_k;
+        net.volume.damping = mat.retardation_time * cell_k;
+      }
       net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
       if (net.calibration_requested != "auto") throw;
@@ -48,7 +55,9 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.calibration_validation = fit.validation;
     if (fit.chosen != "fitted" && net.calibration_note.empty()) {
       net.calibration = fit.chosen;
-      net.calibration_note = "the fit kept " + fit.chosen + "'s constants: they answer its held-out modes better";
+      net.calibration_note = "the fit kept " +
+                             std::string(fit.chosen == "volume" ? "the element fit (volume)" : fit.chosen) +
+                             "'s constants: they answer its held-out modes better";
     }
   } else if (calibration == "volume") {
     Eigen::VectorXd cell_k;
@@ -56,7 +65,7 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, std::move(cell_k), mat.retardation_time);
   } else
     throw InputError("[solver].springs = \"" + std::string(calibration) +
-                     "\": must be auto, lloyd, van-gelder, fitted or volume");
+                     "\": must be auto, lloyd, van-gelder, fitted, volume or fitted-volume");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;

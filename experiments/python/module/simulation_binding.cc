@@ -199,7 +199,7 @@ void def_state(py::class_<Simulation>& cls) {
       .def_property_readonly(
           "springs",
           [](const Simulation& self) { return self.visit([](const auto& s) { return s.model().net.calibration; }); },
-          "The spring constants used (lloyd, van-gelder, fitted, volume)")
+          "The spring constants used (lloyd, van-gelder, fitted, volume, fitted-volume)")
       .def_property_readonly(
           "stable",
           [](const Simulation& self) { return self.visit([](const auto& s) { return s.failure().empty(); }); })

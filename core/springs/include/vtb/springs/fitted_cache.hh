@@ -39,11 +39,12 @@ struct CachedFit {
 /// 64-bit FNV-1a hash of the format version, the points, the cells, nu, the supports, the
 /// fit's options and its target's key (FitTarget: the continuum or P1). A file of the wrong
 /// size or header, or written by another fit_code_version(), is refitted and replaced
-/// (atomically).
+/// (atomically). With cell_stiffness the fit with a volume term (FitOptions::volume; its own
+/// key): the cells' constants go there, in make_cell_volumes' order.
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
                                         CachedFit* info = nullptr, const FitProgress& progress = {},
-                                        const FitTarget& target = {});
+                                        const FitTarget& target = {}, Eigen::VectorXd* cell_stiffness = nullptr);
 
 } // namespace vtb

@@ -115,6 +115,11 @@ struct FitOptions {
   FitProgress progress; ///< empty: nothing is told (not part of the fit's result or cache key)
   /// With supports that hold the body: the training answers' source (empty: P1 on the mesh).
   FitTarget target;
+  /// With a volume term per cell (`springs = "fitted-volume"`, docs/volume_term.md): the
+  /// springs and the cells' k_c identified together, x = log(k / k_prior) over both, the prior
+  /// the element fit's (lloyd_volume_stiffness, each cell at least 1 % of its bulk modulus
+  /// times its volume); the guard weighs the fit against that prior alone.
+  bool volume = false;
 };
 
 struct FitReport {
@@ -126,16 +131,21 @@ struct FitReport {
   /// candidate; NaN when nothing is held out.
   double validation_lloyd = 0, validation_van_gelder = 0, validation_fitted = 0;
   /// The constants returned: "fitted", or "lloyd" / "van-gelder" when a prior answers the
-  /// held-out modes better than the fit (the guard: never worse than the better prior).
+  /// held-out modes better than the fit (the guard: never worse than the better prior). With
+  /// FitOptions::volume the prior is the element fit with its volume term: prior and chosen
+  /// are then "volume", its residual and validation in the *_lloyd fields.
   std::string chosen = "fitted";
   double validation() const; ///< the chosen constants' validation error
 };
 
 /// The fitted spring constants, per edge of unique_edges(mesh) (plane stress with thickness
 /// in 2D). Deterministic: the same mesh and material give the same constants bit for bit.
+/// With options.volume the cells' k_c go to *cell_stiffness (required then), in the order
+/// make_cell_volumes gives the mesh's cells (cell_volumes.hh).
 template <int dim>
 Eigen::VectorXd fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio, double thickness,
-                                 const FitOptions& options = {}, FitReport* report = nullptr);
+                                 const FitOptions& options = {}, FitReport* report = nullptr,
+                                 Eigen::VectorXd* cell_stiffness = nullptr);
 
 /// Whether holding the nodes `supports` removes every rigid motion of the mesh (the rigid
 /// modes restricted to their dofs have full column rank). Where they do, the fit trains on
