@@ -282,6 +282,28 @@ void BM_kernel_forces_box1701(benchmark::State& st) {
 BENCHMARK(BM_kernel_forces_plate517)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_kernel_forces_box1701)->Unit(benchmark::kMicrosecond);
 
+/// The volume term's force pass alone (add_volume_forces, the chunked kernel of
+/// cell_volumes.cc) on the same meshes, beside BM_kernel_forces_* (the springs' pass).
+template <int dim> void volume_forces(benchmark::State& st, const Model<dim>& model) {
+  const State<dim> s = midrun_state(model);
+  Nodal<dim> f = Nodal<dim>::Zero(dim, model.num_nodes());
+  for (auto _ : st) {
+    add_volume_forces(model.net.volume, model.net.rest, s.u, s.v, f, 1e-3);
+    benchmark::DoNotOptimize(f.data());
+  }
+  st.counters["cells"] = model.net.volume.size();
+}
+void BM_kernel_volume_forces_plate517(benchmark::State& st) {
+  static const Model<2> volume = bench_model<2>(Eigen::Vector2i(46, 10), true, nullptr, "volume");
+  volume_forces(st, volume);
+}
+void BM_kernel_volume_forces_box1701(benchmark::State& st) {
+  static const Model<3> volume = bench_model<3>(Eigen::Vector3i(20, 8, 8), true, nullptr, "volume");
+  volume_forces(st, volume);
+}
+BENCHMARK(BM_kernel_volume_forces_plate517)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_kernel_volume_forces_box1701)->Unit(benchmark::kMicrosecond);
+
 /// The 2D tensor filter's force pass: the forces and the springs' turns its rotations read
 /// (add_internal_forces_and_turns), against BM_kernel_forces_plate517 alone.
 void BM_kernel_forces_and_turns_plate517(benchmark::State& st) {
