@@ -59,6 +59,10 @@ Action add_run(CLI::App& app) {
     if (!r.calibration.empty())
       springs =
           " " + r.calibration + (r.calibration_requested != r.calibration ? " (" + r.calibration_requested + ")" : "");
+    std::string volume_cells; // the volume term's cells beside the springs (docs/volume_term.md)
+    for (const auto& [key, value] : r.extra)
+      if (key == "volume_cells")
+        volume_cells = " and " + std::to_string(static_cast<long>(value)) + " cells' volume term";
     if (!r.calibration_note.empty()) std::cout << "vtb run: " << r.calibration_note << "\n";
     if (!r.calibration_target.empty() && r.calibration_target.rfind("the continuum", 0) != 0)
       std::cout << "vtb run: the fit trained on " << r.calibration_target << "\n";
@@ -97,8 +101,8 @@ Action add_run(CLI::App& app) {
                   << "; vtb compare --reference fem measures the run\n";
     }
     std::cout << "vtb run: " << scene.name << " with " << r.solver << filter << ", " << r.nodes << " nodes, "
-              << r.springs << springs << " springs" << load_check << ", dt = " << r.dt << " s, " << r.steps_taken
-              << " steps; precompute " << r.precompute_seconds * 1e3 << " ms, step median "
+              << r.springs << springs << " springs" << volume_cells << load_check << ", dt = " << r.dt << " s, "
+              << r.steps_taken << " steps; precompute " << r.precompute_seconds * 1e3 << " ms, step median "
               << r.step_seconds.median * 1e6 << " us, p99 " << r.step_seconds.p99 * 1e6 << " us; max strain "
               << r.max_strain << "; outputs in " << out.string() << "\n";
     if (run.solver.kind != solvers::kFem || !run.solver.fem.nonlinear())

@@ -8,6 +8,7 @@
 // round-off ~ eps E / h (~ 1e-10 of it); 1e-7 of the largest force bounds both, while a sign
 // error or a dropped term is O(1) of it.
 #include "vtb/solvers/integrator.hh"
+#include "vtb/solvers/simulation.hh"
 #include "vtb/springs/calibration.hh"
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/spring_network.hh"
@@ -16,6 +17,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 
 namespace vtb {
@@ -196,6 +199,36 @@ TEST(CellVolumes, TheTensorFilterRefusesTheTermInOneLineAndAutoRunsTheScalarFilt
   EXPECT_EQ(chosen_filter(model, "auto"), "full");
   const Model<2> springs = test::model_from(test::pulled_plate(12, 3, "[solver]\nsprings = \"lloyd\"\n"));
   EXPECT_EQ(chosen_filter(springs, "auto"), "tensor") << "the springs alone keep auto's lag-free filter";
+}
+
+TEST(CellVolumes, TheRunReportsTheTermsCellsAndTheSmallestVolumeRatio) {
+  // summary.json's extras for a spring run: `volume_cells` (the term's cells, only with the
+  // term), `min_volume_ratio` and `inverted_cells` (every spring run). The plate pulled at its
+  // right end stretches: its cells grow (J >= 1 up to the Poisson contraction), none inverts,
+  // and the smallest J is within the run's max strain of 1 (a cell's J - 1 is a sum of at most
+  // dim strains of that size).
+  for (const std::string springs : {"volume", "lloyd"}) {
+    const Model<2> model = test::model_from(test::pulled_plate(12, 3, "[solver]\nsprings = \"" + springs + "\"\n"));
+    IntegratorOptions o;
+    o.kind = "implicit-euler";
+    o.dt = 1e-3;
+    Trajectory<2> tr;
+    const RunReport r = simulate(model, o, tr, false);
+    ASSERT_TRUE(r.stable) << springs;
+    const auto extra = [&](const std::string& key) {
+      const auto it = std::find_if(r.extra.begin(), r.extra.end(), [&](const auto& e) { return e.first == key; });
+      return it == r.extra.end() ? std::nan("") : it->second;
+    };
+    if (springs == "volume")
+      EXPECT_EQ(extra("volume_cells"), model.mesh.num_cells());
+    else
+      EXPECT_TRUE(std::isnan(extra("volume_cells"))) << "no term, no count";
+    EXPECT_EQ(extra("inverted_cells"), 0) << springs;
+    const double J = extra("min_volume_ratio");
+    EXPECT_GT(r.max_strain, 0) << springs;
+    EXPECT_LE(J, 1.0) << springs;
+    EXPECT_GE(J, 1.0 - 2 * r.max_strain) << springs;
+  }
 }
 
 } // namespace

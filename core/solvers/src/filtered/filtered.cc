@@ -76,8 +76,9 @@ FilteredImplicit<dim>::FilteredImplicit(const Model<dim>& model, const Integrato
   const auto nf = static_cast<Eigen::Index>(model.free_nodes.size());
   if (m_filter == solvers::kFilterTensor || m_filter == solvers::kFilterTensorMultigrid) {
     if (!model.net.volume.empty())
-      throw InputError("[solver].filter = \"" + m_filter +
-                       "\": the tensor filter does not take springs = \"volume\"'s cell term; use auto, full, "
+      throw InputError("[solver].filter = \"" + m_filter + "\": the tensor filter does not take springs = \"" +
+                       model.net.calibration +
+                       "\"'s cell term; use auto, full, "
                        "multigrid or neighbors");
     const bool multigrid = m_filter == solvers::kFilterTensorMultigrid;
     m_tensor = std::make_unique<TensorFilter<dim>>(model, o.dt, multigrid);
