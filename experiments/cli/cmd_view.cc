@@ -15,7 +15,7 @@ Action add_view(CLI::App& app) {
   struct Opts {
     std::string scene, screenshot, drag, solver, filter;
     int frames = 0;
-    bool device = false;
+    std::string device;       ///< empty: off; "procat-sim" (the bare flag) or "plugin:PATH"
     std::optional<double> dt; ///< absent: the scene's
   };
   auto o = std::make_shared<Opts>();
@@ -32,9 +32,10 @@ Action add_view(CLI::App& app) {
   for (const char* f : solvers::kFilterChoices) filters += (filters.empty() ? "" : " | ") + std::string(f);
   cmd->add_option("--filter", o->filter, "Start with this filter: " + filters);
   cmd->add_option("--dt", o->dt, "Start with this time step (s)");
-  cmd->add_flag("--device", o->device,
+  cmd->add_flag("--device{procat-sim}", o->device,
                 "Device mode: the mouse, or the --drag path, is the hand on the simulated ProCAT (3D: in the scene's "
-                "[haptics.plane])");
+                "[haptics.plane]); --device=plugin:PATH: a driver's shared library (device_abi.h) is the device, "
+                "opened with the scene's [haptics].plugin_config, and its handle moves the tool");
   return [o]() {
     const Scene scene = read_scene(o->scene);
     viewer::ViewOptions v;
@@ -44,7 +45,8 @@ Action add_view(CLI::App& app) {
     if (!o->solver.empty()) v.solver = o->solver;
     if (!o->filter.empty()) v.filter = o->filter;
     v.dt = o->dt;
-    v.device = o->device;
+    v.device = !o->device.empty();
+    v.driver = o->device;
     v.yardstick = harness::continuum_yardstick();
     try {
       return viewer::run_viewer(scene, v);

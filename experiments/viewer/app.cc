@@ -47,10 +47,12 @@ SimControls initial_controls(const Scene& scene, const ViewOptions& options, std
 
 template <int dim>
 App<dim>::App(GLFWwindow* window, const Scene& scene, std::unique_ptr<LiveSim<dim>> sim, std::string note,
-              const ViewOptions& options)
+              const ViewOptions& options, std::unique_ptr<HapticDevice> driver)
     : m_window(window), m_sim(std::move(sim)), m_surface(make_surface(m_sim->model().mesh)), m_edit(m_sim->controls()),
       m_message(std::move(note)) {
   m_scene = &scene;
+  m_has_driver = driver != nullptr;
+  m_driver = std::move(driver);
   m_scripted = options.frames > 0; // a scripted run ignores the (absent) mouse
   m_wall_start = glfwGetTime();
   const auto& model = m_sim->model();
@@ -91,7 +93,7 @@ template <int dim> void App<dim>::start_drag(const Eigen::Vector3d& from, const 
 }
 
 template <int dim> void App<dim>::set_device_mode(bool on) {
-  if (on && !m_device) m_device = std::make_unique<DeviceMode<dim>>(m_sim->model().mesh, *m_scene);
+  if (on && !m_device) m_device = std::make_unique<DeviceMode<dim>>(m_sim->model().mesh, *m_scene, std::move(m_driver));
   m_device_on = on;
   m_sim->set_hook(on ? m_device.get() : nullptr);
 }

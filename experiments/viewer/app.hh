@@ -29,7 +29,7 @@ public:
   /// Takes the session's simulation (built before the window, so that bad input is found
   /// first) and the note of initial_controls.
   App(GLFWwindow* window, const Scene& scene, std::unique_ptr<LiveSim<dim>> sim, std::string note,
-      const ViewOptions& options);
+      const ViewOptions& options, std::unique_ptr<HapticDevice> driver = nullptr);
 
   /// One frame: advance the physics by sim_seconds within wall_budget, then draw.
   void frame(double sim_seconds, double wall_budget);
@@ -90,6 +90,8 @@ private:
   bool m_device_on = false;
   bool m_scripted = false;
   const Scene* m_scene = nullptr;
+  std::unique_ptr<HapticDevice> m_driver; ///< open_device_driver's, until device mode first takes it
+  bool m_has_driver = false;
   double m_wall_start = 0;
 };
 

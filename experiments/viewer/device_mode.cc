@@ -1,10 +1,13 @@
 #include "device_mode.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/haptics/coupling.hh"
+#include "vtb/haptics/devices/plugin_device.hh"
 #include "vtb/haptics/local_model.hh"
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace vtb::viewer {
 namespace {
@@ -18,9 +21,28 @@ HandScript still_hand(const Scene& scene) {
 
 } // namespace
 
+std::unique_ptr<HapticDevice> open_device_driver(const Scene& scene, const std::string& driver) {
+  if (driver.empty() || driver == "procat-sim") return nullptr;
+  if (driver.rfind("plugin:", 0) != 0 || driver.size() == 7)
+    throw InputError("--device=" + driver +
+                     ": the viewer takes procat-sim or plugin:PATH (the UDP bridge, the replay and the null device "
+                     "run in `vtb haptics`)");
+  DeviceSpec spec;
+  if (scene.haptics) {
+    spec.max_force = scene.haptics->max_force;
+    spec.rate_hz = scene.haptics->rate;
+  }
+  return PluginDevice::load(driver.substr(7), scene.haptics ? scene.haptics->plugin_config : "", spec);
+}
+
 template <int dim>
-DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene)
-    : m_params{scene.haptics ? scene.haptics->max_force : 4.0, 0.2, 0.03, 0.05},
+DeviceMode<dim>::DeviceMode(const Mesh<dim>& mesh, const Scene& scene, std::unique_ptr<HapticDevice> driver)
+    : m_driver(std::move(driver)),
+      // A driver's limit is the smaller of the scene's and its own (plugin_device.hh).
+      m_params{m_driver        ? m_driver->spec().max_force
+               : scene.haptics ? scene.haptics->max_force
+                               : 4.0,
+               0.2, 0.03, 0.05},
       m_k(std::min(scene.haptics ? scene.haptics->coupling_stiffness : 400.0, DeviceSpec{}.max_stiffness)),
       m_b(scene.haptics ? scene.haptics->coupling_damping : 2.0),
       m_period(1.0 / (scene.haptics ? scene.haptics->rate : 1000.0)), m_plane(device_plane(scene, mesh)),
@@ -73,12 +95,12 @@ void DeviceMode<dim>::after_step(const Model<dim>& model, const State<dim>& s, c
   // their velocities to each tick's time (the tick at the step's end sees them as they are).
   const int n = ticks_in(m_dt);
   const double h = m_dt / n;
-  if (!m_device) { // the handle starts where the hand is (not dragged in from the origin)
+  if (!m_driver && !m_device) { // the handle starts where the hand is (not dragged in from the origin)
     m_hand.waypoints = {m_hand_device, m_hand_device};
     m_device.emplace(DeviceSpec{}, m_hand);
   }
-  SimulatedProCAT& device = *m_device;
-  device.move_hand_to(m_hand_device, m_dt); // over the step's ticks: the hand moves, it does not jump
+  if (m_device) m_device->move_hand_to(m_hand_device, m_dt); // over the step's ticks: the hand moves, it does not jump
+  HapticDevice& device = m_driver ? *m_driver : static_cast<HapticDevice&>(*m_device);
   m_x = model.net.rest + s.u;
   const bool finite = m_x.allFinite() && s.v.allFinite();
   if (finite) m_contact.refit(m_x);
@@ -86,6 +108,7 @@ void DeviceMode<dim>::after_step(const Model<dim>& model, const State<dim>& s, c
   for (int k = 1; k <= n; ++k) {
     Eigen::Vector2d pos, vel;
     device.read(pos, vel);
+    m_handle_device = pos;
     const Vec<dim> handle = m_plane.to_world(pos);
     const Vec<dim> raw =
         m_probe.cycle(m_contact, 0, handle, m_plane.axes * vel,

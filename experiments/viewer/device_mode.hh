@@ -1,6 +1,8 @@
 #pragma once
 /// \file
-/// The viewer's device mode: the mouse is the scripted user's hand on a simulated ProCAT. In 2D
+/// The viewer's device mode: the mouse is the scripted user's hand on a simulated ProCAT, or a
+/// driver loaded at run time (`--device=plugin:PATH`, device_abi.h) is the device and its handle
+/// moves the tool (the mouse then moves nothing). In 2D
 /// the device's plane is the body's; in 3D the scene's [haptics.plane] places it (as in
 /// `vtb haptics`): the mouse moves the hand in that plane, the handle's proxy collides with the
 /// deformed surface (the haptics module's contact, one AABB tree), the virtual coupling's force
@@ -23,9 +25,16 @@
 #include "vtb/haptics/local_model.hh"
 #include "vtb/haptics/probe_coupling.hh"
 
+#include <memory>
 #include <optional>
+#include <string>
 
 namespace vtb::viewer {
+
+/// The device `--device=` names, opened: null for "" or "procat-sim" (the simulated ProCAT),
+/// else "plugin:PATH" opened with the scene's [haptics] limit, rate and plugin_config.
+/// InputError, one line naming it: another kind of device, or a driver that cannot be opened.
+std::unique_ptr<HapticDevice> open_device_driver(const Scene& scene, const std::string& driver);
 
 template <int dim> class DeviceMode final : public StepHook<dim> {
 public:
@@ -34,17 +43,23 @@ public:
   /// their pull index, below it).
   static constexpr int kDeviceGroup = 1000;
   /// The scene's [haptics] settings when it has them, else the defaults of docs/scenes.md.
-  DeviceMode(const Mesh<dim>& mesh, const Scene& scene);
+  /// `driver`: null (the simulated ProCAT, held by the mouse), or open_device_driver's.
+  DeviceMode(const Mesh<dim>& mesh, const Scene& scene, std::unique_ptr<HapticDevice> driver = nullptr);
 
   void before_step(const Model<dim>& model, State<dim>& s, double dt) override;
   void after_step(const Model<dim>& model, const State<dim>& s, const Integrator<dim>& integrator) override;
 
-  /// Where the user's hand holds the handle: a body point, taken to the device's plane.
+  /// Where the user's hand holds the handle: a body point, taken to the device's plane (a
+  /// driver's handle is moved by its user, not by this).
   void set_hand(const Vec<dim>& p) { m_hand_device = m_plane.to_device(p); }
+  /// The device's name: "procat-sim", or what the driver calls itself.
+  std::string device_name() const { return m_driver ? m_driver->name() : "procat-sim"; }
   const DevicePlane<dim>& plane() const { return m_plane; }
 
-  Vec<dim> hand() const { return m_plane.to_world(m_hand_device); }
-  Vec<dim> handle() const { return m_plane.to_world(m_device ? m_device->true_position() : m_hand_device); }
+  Vec<dim> hand() const { return m_driver ? handle() : m_plane.to_world(m_hand_device); }
+  Vec<dim> handle() const {
+    return m_plane.to_world(m_driver ? m_handle_device : m_device ? m_device->true_position() : m_hand_device);
+  }
   const Vec<dim>& proxy() const { return m_proxy; }
   bool touching() const { return m_probe.contact().touching; }
   /// The tool tip's footprint at the last tick (nodes and weights; empty when not touching).
@@ -67,13 +82,15 @@ private:
   /// Servo ticks in a step of dt: at least one.
   int ticks_in(double dt) const;
 
+  std::unique_ptr<HapticDevice> m_driver; ///< a driver loaded at run time, or null (the simulated ProCAT)
   typename BasicForceShaper<dim>::Params m_params;
   double m_k, m_b, m_period;
   DevicePlane<dim> m_plane;
   HandScript m_hand;
   Eigen::Vector2d m_hand_device = Eigen::Vector2d::Zero();
-  std::optional<SimulatedProCAT> m_device; ///< made at the first tick, with the handle in the hand
-  Contacts<dim> m_contact;                 ///< one probe
+  std::optional<SimulatedProCAT> m_device; ///< made at the first tick, with the handle in the hand (no driver)
+  Eigen::Vector2d m_handle_device = Eigen::Vector2d::Zero(); ///< the driver's handle at the last tick
+  Contacts<dim> m_contact;                                   ///< one probe
   ProbeCoupling<dim> m_probe;
   BasicForceShaper<dim> m_shaper;
   Nodal<dim> m_x;

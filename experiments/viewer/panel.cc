@@ -161,7 +161,10 @@ template <int dim> void App<dim>::draw_device_panel() {
   ImGui::Separator();
   ImGui::TextDisabled("device");
   bool on = m_device_on;
-  if (ImGui::Checkbox("device mode: the mouse holds the ProCAT", &on)) set_device_mode(on);
+  if (ImGui::Checkbox(!m_has_driver ? "device mode: the mouse holds the ProCAT"
+                                    : "device mode: the driver's handle",
+                      &on))
+    set_device_mode(on);
   if (!m_device_on || !m_device) return;
   const DeviceMode<dim>& d = *m_device;
   if constexpr (dim == 3) {
@@ -170,6 +173,7 @@ template <int dim> void App<dim>::draw_device_panel() {
                        pl.origin.y(), pl.origin.z(), pl.axes(0, 0), pl.axes(1, 0), pl.axes(2, 0), pl.axes(0, 1),
                        pl.axes(1, 1), pl.axes(2, 1));
   }
+  ImGui::Text("device: %s", d.device_name().c_str());
   const double wall = glfwGetTime() - m_wall_start;
   ImGui::Text("servo: 1 kHz of simulated time (lockstep)");
   ImGui::Text("%ld ticks, %.0f per wall second", d.ticks(), wall > 0 ? d.ticks() / wall : 0.0);

@@ -85,9 +85,9 @@ void write_png(GLFWwindow* w, const std::string& path) {
 }
 
 template <int dim>
-int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live, std::string note,
-            const ViewOptions& o) {
-  App<dim> app(win.get(), scene, std::move(live), std::move(note), o);
+int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live, std::string note, const ViewOptions& o,
+            std::unique_ptr<HapticDevice> driver) {
+  App<dim> app(win.get(), scene, std::move(live), std::move(note), o, std::move(driver));
   if (o.device) app.set_device_mode(true);
   if (o.drag && !o.device) app.start_drag(o.drag->first, o.drag->second);
   const bool headless = o.frames > 0;
@@ -129,8 +129,9 @@ int session(Window& win, const Scene& scene, std::unique_ptr<LiveSim<dim>> live,
     for (int k = 0; k < sim.num_pulls(); ++k) std::cout << (k ? ", " : " (") << sim.pull_force(k).norm() << " N";
     std::cout << (sim.num_pulls() ? ")" : "") << "\n";
     if (const DeviceMode<dim>* d = app.device())
-      std::cout << "vtb view: device: " << d->ticks() << " servo ticks, |F| = " << d->force().norm() << " N, saturated "
-                << d->saturated() << ", " << (d->touching() ? "in contact" : "free") << "\n";
+      std::cout << "vtb view: device: " << d->device_name() << ", " << d->ticks()
+                << " servo ticks, |F| = " << d->force().norm() << " N, saturated " << d->saturated() << ", "
+                << (d->touching() ? "in contact" : "free") << "\n";
     if (!sim.failure().empty()) std::cout << "vtb view: unstable: " << sim.failure() << "\n";
     if (!o.screenshot.empty()) std::cout << "vtb view: wrote " << o.screenshot << "\n";
   }
@@ -216,8 +217,10 @@ int run_viewer(const Scene& scene, const ViewOptions& o) {
         if (o.drag && !o.device) check_drag_start(sim->model(), o.drag->first);
         if (o.device) device_plane(scene, sim->model().mesh); // a plane the scene cannot hold is bad input now
         if (o.device && !o.dt && !scene.solver.dt_given) use_physics_rate(scene, *sim, note);
+        // A driver that cannot be opened is bad input too; opened once, it sends 0 N at close.
+        auto driver = o.device ? open_device_driver(scene, o.driver) : nullptr;
         Window win(o, "vtb view: " + scene.name);
-        return session<dim>(win, scene, std::move(sim), std::move(note), o);
+        return session<dim>(win, scene, std::move(sim), std::move(note), o, std::move(driver));
       },
       mesh);
 }

@@ -26,6 +26,7 @@ struct ViewOptions {
   std::optional<double> dt;
   bool device =
       false; ///< device mode: the mouse (or the drag) is the hand on the simulated ProCAT (3D: in [haptics.plane])
+  std::string driver; ///< device mode's device: "" or "procat-sim", or "plugin:PATH" (a driver moves the handle)
   int width = 1280, height = 760;
   Yardstick yardstick; ///< what the panel's load check measures the springs against (empty: P1 on the mesh)
 };

@@ -5,6 +5,7 @@
 #include "../../experiments/viewer/viewer.hh"
 #include "support/fresh_dir.hh"
 #include "support/small_models.hh"
+#include "vtb/base/input_error.hh"
 #include "vtb/springs/load_check.hh"
 #include "vtb/stepper/live_sim.hh"
 
@@ -341,6 +342,73 @@ TEST(Viewer, DeviceModePressesTheSurfaceThroughTheProcatWithinItsLimit) {
     return b.y1;
   };
   EXPECT_GT(top(pressed), top(rest) + 3) << "the edge under the handle is pushed down";
+}
+
+TEST(Viewer, DeviceModeDrivesAPlugInLoadedAtRunTime) {
+  // `--device=plugin:PATH`: the example driver of experiments/devices (its "hardware" moves the
+  // handle on a straight press, the drag's of the test above, over 0.75 s, and holds) is the
+  // device; the mouse moves nothing. Same press, same coupling: the held force is the simulated
+  // ProCAT's within the difference of a handle held rigidly against one held through a grip
+  // spring (a few %: the grip is 2,000 N/m against the coupling's 400 N/m on a soft plate),
+  // so a bound of 25 % says it is the same press, not a different one. Every tick's command
+  // reaches the driver (its log, written at close), none above its 3 N limit, none non-finite.
+  const test::FreshDir dir;
+  Scene press = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_press.toml");
+  viewer::ViewOptions o;
+  o.frames = 90;
+  o.device = true;
+  o.drag = viewer::parse_drag("0.05,0.08:0.05,0.045");
+  std::string sim_text;
+  shot(press, o, dir, "sim.png", &sim_text);
+  const double simulated = device_force(sim_text);
+  const std::filesystem::path log = dir / "driver.log";
+  press.haptics->plugin_config = "from=0.05,0.08 to=0.05,0.045 seconds=0.75 log=" + log.string();
+  o.drag.reset();
+  o.driver = std::string("plugin:") + VTB_EXAMPLE_DEVICE_PLUGIN;
+  std::string text;
+  shot(press, o, dir, "driver.png", &text);
+  EXPECT_NE(text.find("vtb view: device: example-press, "), std::string::npos) << text;
+  const double force = device_force(text);
+  EXPECT_NE(text.find("saturated 0, in contact"), std::string::npos) << text;
+  EXPECT_NEAR(force, simulated, 0.25 * simulated) << text;
+  long ticks = 0, commands = -1, nonfinite = -1;
+  double max_force = -1, max_stiffness = -1;
+  ASSERT_EQ(std::sscanf(text.c_str() + text.find("vtb view: device: example-press, "),
+                        "vtb view: device: example-press, %ld servo ticks", &ticks),
+            1);
+  std::ifstream in(log);
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line)) << "the driver's log at close: " << log;
+  ASSERT_EQ(std::sscanf(line.c_str(), "commands %ld max_force %lf nonfinite %ld max_stiffness %lf", &commands,
+                        &max_force, &nonfinite, &max_stiffness),
+            4)
+      << line;
+  EXPECT_GE(commands, ticks) << "every tick commands the driver (and 0 N at close)";
+  EXPECT_LE(max_force, 3.0) << "the driver's own limit";
+  EXPECT_GE(max_force, force);
+  EXPECT_EQ(nonfinite, 0);
+}
+
+TEST(Viewer, DeviceModeRefusesADriverItCannotOpenInOneLine) {
+  // A driver the viewer does not take, or a library that is not there: one line naming it.
+  const Scene press = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_press.toml");
+  const test::FreshDir dir;
+  viewer::ViewOptions o;
+  o.frames = 2;
+  o.device = true;
+  for (const std::string driver : {"udp:127.0.0.1:9000", "plugin:/nonexistent/libdriver.so"}) {
+    o.driver = driver;
+    o.screenshot = (dir / "x.png").string();
+    try {
+      viewer::run_viewer(press, o);
+      ADD_FAILURE() << driver << " was taken";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+      EXPECT_NE(what.find(driver.substr(driver.find(':') + 1)), std::string::npos) << what;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.png")) << "nothing written";
+  }
 }
 
 /// How many pixels of the drawing area differ between two pictures of the same size.
