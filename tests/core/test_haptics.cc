@@ -250,6 +250,36 @@ TEST(Haptics, LockstepRunsAreDeterministicAndReplayReproducesTheHandle) {
   }
 }
 
+TEST(Haptics, AReplayedTraceGivesTheRecordedForces) {
+  // The recorded handle played back (device = "replay", lockstep) drives the same press and
+  // feels the same forces, sample by sample. The replay reports the recorded positions (the
+  // encoder's, multiples of its 2 um count, written to 10 significant digits: off by at most
+  // 5e-11 m at 0.1 m) and estimates the velocity from them with the simulated device's own
+  // estimator (adaptive windowing on that count), so the coupling (400 N/m, 2 N s/m) sees the
+  // same handle to 400 * 5e-11 = 2e-8 N; 1e-7 N is that with margin. (With a first difference
+  // for the velocity instead, as before, the press's contact transients differed by 0.067 N
+  // of 0.13 N.)
+  HapticsOptions o;
+  o.lockstep = true;
+  const Scene scene = press_scene();
+  const HapticsReport a = run_haptics(scene, o);
+  const test::FreshDir fresh;
+  write_haptics(a, fresh / "out", "press");
+  HapticsOptions r = o;
+  r.device = "replay";
+  r.replay = fresh / "out" / "haptics.csv";
+  const HapticsReport b = run_haptics(scene, r);
+  ASSERT_EQ(a.t.size(), b.t.size());
+  const ProbeTrace &pa = a.probes[0], &pb = b.probes[0];
+  ASSERT_GT(pa.max_force, 0.03) << "the press touches";
+  double worst = 0;
+  for (std::size_t k = 0; k < a.t.size(); ++k)
+    worst = std::max(worst, std::hypot(pa.fx[k] - pb.fx[k], pa.fy[k] - pb.fy[k]));
+  constexpr double kPrinted = 1e-7; // N, from haptics.csv's 10 digits (above)
+  EXPECT_LT(worst, kPrinted) << "the largest force " << pa.max_force << " N";
+  EXPECT_NEAR(pb.max_force, pa.max_force, kPrinted);
+}
+
 /// Peak-to-peak amplitude of the free handle on a sampled-and-held virtual coupling
 /// F = -K x - B v (the coupling in contact against a resting proxy, linearised; v is the
 /// device's own velocity estimate, as the servo uses it), in the first and the last second of

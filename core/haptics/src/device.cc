@@ -125,16 +125,26 @@ ReplayDevice::ReplayDevice(const DeviceSpec& spec, const std::filesystem::path& 
     m_pos.emplace_back(x, y);
   }
   if (m_time.size() < 2) throw InputError(csv.string() + ": needs at least two samples");
+  m_velocity.add(m_t, position_at(m_t));
 }
 
-void ReplayDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
-  const auto it = std::upper_bound(m_time.begin(), m_time.end(), m_t);
+Eigen::Vector2d ReplayDevice::position_at(double t) const {
+  const auto it = std::upper_bound(m_time.begin(), m_time.end(), t);
   const std::size_t k = it == m_time.begin() ? 0
                                              : std::min<std::size_t>(static_cast<std::size_t>(it - m_time.begin()) - 1,
                                                                      m_time.size() - 2);
-  const double f = std::clamp((m_t - m_time[k]) / (m_time[k + 1] - m_time[k]), 0.0, 1.0);
-  position = (1 - f) * m_pos[k] + f * m_pos[k + 1];
-  velocity = (m_pos[k + 1] - m_pos[k]) / (m_time[k + 1] - m_time[k]);
+  const double f = std::clamp((t - m_time[k]) / (m_time[k + 1] - m_time[k]), 0.0, 1.0);
+  return (1 - f) * m_pos[k] + f * m_pos[k + 1];
+}
+
+void ReplayDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const {
+  position = position_at(m_t);
+  velocity = m_velocity.velocity();
+}
+
+void ReplayDevice::advance(double dt) {
+  m_t += dt;
+  m_velocity.add(m_t, position_at(m_t));
 }
 
 } // namespace vtb

@@ -111,14 +111,20 @@ public:
   const DeviceSpec& spec() const override { return m_spec; }
   void read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const override;
   void command(const Eigen::Vector2d&) override {}
-  void advance(double dt) override { m_t += dt; }
+  void advance(double dt) override;
   std::string name() const override { return "replay"; }
 
 private:
+  /// The recorded path at time t, linear between samples (held past either end).
+  Eigen::Vector2d position_at(double t) const;
   DeviceSpec m_spec;
   std::vector<double> m_time;
   std::vector<Eigen::Vector2d> m_pos;
   double m_t = 0;
+  /// The velocity as the simulated ProCAT estimates it (its encoder's count), from the
+  /// positions the replay reports at each advance: a recording of the device played back
+  /// reads the velocities it read, so its coupling's damping gives the recorded forces.
+  AdaptiveWindowVelocity m_velocity{SimulatedProCAT::Physical{}.encoder};
 };
 
 } // namespace vtb
