@@ -88,10 +88,13 @@ TEST(DevicePlugin, ANonFiniteReadLatchesAFaultAfterWhichZeroIsSent) {
     auto d = PluginDevice::load(kExample, "nan_after=1 log=" + log.string(), DeviceSpec{});
     Eigen::Vector2d p, v;
     d->read(p, v); // good
+    d->command(Eigen::Vector2d(0.0, 0.0), 0.0, p, 0.0);
+    EXPECT_FALSE(d->zeroed()) << "a live plug-in gets what it is commanded";
     d->read(p, v); // NaN: the fault latches; the last good position is held
     EXPECT_TRUE(p.allFinite());
     EXPECT_EQ(v, Eigen::Vector2d::Zero());
     d->command(Eigen::Vector2d(1.0, 0.0), 400.0, p, 0.0);
+    EXPECT_TRUE(d->zeroed()) << "the session's record logs the 0 N sent";
     stats = d->link_stats();
   }
   EXPECT_EQ(stats.faults, 1);
@@ -259,12 +262,14 @@ TEST(UdpBridge, ASilentLinkGetsZeroForceAfterItsWatchdog) {
   dev->read(p, v);
   dev->command(Eigen::Vector2d(1.0, 0.0), 0.0, p, 1.0);
   EXPECT_EQ(fake->command().a[0], 1.0) << "a live link renders the force";
+  EXPECT_FALSE(dev->zeroed());
   std::this_thread::sleep_for(std::chrono::milliseconds(80)); // past the 50 ms watchdog
   dev->read(p, v);
   dev->command(Eigen::Vector2d(1.0, 0.0), 400.0, p, 1.08);
   const udp::Packet c = fake->command();
   EXPECT_EQ(c.a[0], 0.0);
   EXPECT_EQ(c.c, 0.0) << "nor any stiffness";
+  EXPECT_TRUE(dev->zeroed()) << "the session's record logs the 0 N sent";
   const DeviceLinkStats s = dev->link_stats();
   EXPECT_EQ(s.silent_cycles, 1);
   EXPECT_DOUBLE_EQ(s.first_silent_time, 1.08);

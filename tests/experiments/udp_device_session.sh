@@ -44,5 +44,13 @@ s = json.load(open(sys.argv[1]))
 t = s["device_silent_time"]
 assert 1.5 <= t <= 1.5 + 0.05 + 0.05, f"0 N from t = {t} s; the device stopped at 1.5 s, the watchdog is 50 ms"
 assert s["device_silent_cycles"] > 1000, s["device_silent_cycles"]
+# haptics.csv logs what the device got: 0 N from the first silent cycle on.
+import csv, math, os
+rows = list(csv.DictReader(open(os.path.join(os.path.dirname(sys.argv[1]), "haptics.csv"))))
+after = [r for r in rows if float(r["t"]) >= t]
+assert len(after) > 1000, len(after)
+held = max(math.hypot(float(r["fx"]), float(r["fy"])) for r in after)
+assert held == 0.0, f"haptics.csv logs {held} N after the link fell silent at t = {t} s"
+assert max(math.hypot(float(r["fx"]), float(r["fy"])) for r in rows) > 0.1, "the press was felt before"
 PY
 echo "udp bridge: 2 passed, 0 failed"

@@ -97,7 +97,8 @@ public:
       out[i].history = probe.history();
       if (c.touching) count_footprint(m_rep.probes[i], c.footprint);
       all_zero = all_zero && f.norm() == 0.0;
-      if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, fd);
+      // The record is what the device got: 0 N where the host zeroed it (a silent link).
+      if (record) log(m_rep.probes[i], m_shapers[i], pos, vel, m_devices[i]->zeroed() ? Eigen::Vector2d::Zero() : fd);
       if (m_shapers[i].faulted() && m_rep.fault_time < 0) {
         m_rep.fault_time = m_shapers[i].fault_time();
         m_rep.fault_reason = m_shapers[i].fault_reason();

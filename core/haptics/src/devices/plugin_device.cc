@@ -101,6 +101,7 @@ void PluginDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) co
 void PluginDevice::command(const Eigen::Vector2d& force, double stiffness, const Eigen::Vector2d& anchor, double t) {
   m_t = t;
   vtb_device_command c{};
+  m_zeroed = m_fault;
   const Eigen::Vector2d f = m_fault ? Eigen::Vector2d::Zero() : saturate(force, m_spec.max_force);
   c.force[0] = f.x();
   c.force[1] = f.y();

@@ -156,6 +156,7 @@ void UdpDevice::read(Eigen::Vector2d& position, Eigen::Vector2d& velocity) const
 void UdpDevice::command(const Eigen::Vector2d& force, double stiffness, const Eigen::Vector2d& anchor, double t) {
   m_t = t;
   const bool silent = now_ns(CLOCK_MONOTONIC) - m_last_arrival > static_cast<std::uint64_t>(m_opt.watchdog * 1e9);
+  m_zeroed = silent;
   if (silent) {
     ++m_stats.silent_cycles;
     if (m_stats.first_silent_time < 0) m_stats.first_silent_time = t;

@@ -54,6 +54,9 @@ public:
   /// What the run line and summary.json call it.
   virtual std::string name() const { return "device"; }
   virtual DeviceLinkStats link_stats() const { return {}; }
+  /// The last command went out as 0 N whatever was commanded (a silent link, a faulted
+  /// plug-in): the session's record logs what the device got.
+  virtual bool zeroed() const { return false; }
 };
 
 /// The scripted user: a hand that moves along waypoints (piecewise linear over `duration`)

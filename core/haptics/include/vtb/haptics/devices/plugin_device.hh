@@ -37,6 +37,7 @@ public:
   void advance(double dt) override;
   std::string name() const override { return m_name; }
   DeviceLinkStats link_stats() const override { return m_stats; }
+  bool zeroed() const override { return m_zeroed; }
   /// The ABI's table, to check what a plug-in declared (tests).
   const vtb_device_api& api() const { return *m_api; }
 
@@ -50,6 +51,7 @@ private:
   double m_t = 0;
   mutable DeviceLinkStats m_stats;
   mutable bool m_fault = false;
+  bool m_zeroed = false; ///< the last command was sent as 0 N (the fault)
   mutable Eigen::Vector2d m_last_position = Eigen::Vector2d::Zero();
 };
 

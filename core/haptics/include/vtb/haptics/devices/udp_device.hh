@@ -47,6 +47,7 @@ public:
   void advance(double dt) override { m_t += dt; }
   std::string name() const override { return "udp:" + m_where; }
   DeviceLinkStats link_stats() const override;
+  bool zeroed() const override { return m_zeroed; }
 
 private:
   void drain() const;
@@ -61,6 +62,7 @@ private:
   mutable udp::Packet m_last{};             ///< the newest state taken
   mutable std::uint64_t m_last_arrival = 0; ///< its arrival, ns on the monotonic clock
   mutable DeviceLinkStats m_stats;
+  bool m_zeroed = false;          ///< the last command went out as 0 N (the link was silent)
   mutable bool m_started = false; ///< the servo's first read done (the counts start there)
   mutable std::vector<double> m_rtt_us;
   mutable Eigen::Vector2d m_position = Eigen::Vector2d::Zero(), m_velocity = Eigen::Vector2d::Zero();
