@@ -316,6 +316,16 @@ double device_force(const std::string& text) {
   return force;
 }
 
+/// A scripted device session's options: 90 frames (1.5 s), device mode, the hand along `drag`
+/// over the first half and held (ViewOptions::drag).
+viewer::ViewOptions device_press(const char* drag) {
+  viewer::ViewOptions o;
+  o.frames = 90;
+  o.device = true;
+  o.drag = viewer::parse_drag(drag);
+  return o;
+}
+
 TEST(Viewer, DeviceModePressesTheSurfaceThroughTheProcatWithinItsLimit) {
   // The paper's interaction: the hand (the scripted drag) moves the ProCAT's handle 5 mm into
   // the top edge of the press scene's plate and holds. The proxy stays on the top edge, the
@@ -354,10 +364,7 @@ TEST(Viewer, DeviceModeDrivesAPlugInLoadedAtRunTime) {
   // reaches the driver (its log, written at close), none above its 3 N limit, none non-finite.
   const test::FreshDir dir;
   Scene press = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_press.toml");
-  viewer::ViewOptions o;
-  o.frames = 90;
-  o.device = true;
-  o.drag = viewer::parse_drag("0.05,0.08:0.05,0.045");
+  viewer::ViewOptions o = device_press("0.05,0.08:0.05,0.045");
   std::string sim_text;
   shot(press, o, dir, "sim.png", &sim_text);
   const double simulated = device_force(sim_text);
@@ -463,10 +470,7 @@ TEST(Viewer, DeviceModeOnALargeBodyStepsItAtTheRateItAffords) {
   Eigen::VectorXi divisions(3);
   divisions << 48, 12, 16;
   slab.mesh.divisions = divisions;
-  viewer::ViewOptions o;
-  o.frames = 90;
-  o.device = true;
-  o.drag = viewer::parse_drag("0.1,0.025,0.05:0.1,0.025,0.015");
+  viewer::ViewOptions o = device_press("0.1,0.025,0.05:0.1,0.025,0.015");
   std::string text;
   shot(slab, o, dir, "large.png", &text);
   double dt = 0;
@@ -499,10 +503,7 @@ TEST(Viewer, DeviceModeDrawsTheToolTipAndItsFootprint) {
   // strong red), so the count separates them: measured 156 against 1 pixel.
   const test::FreshDir dir;
   Scene slab = read_scene(std::filesystem::path(VTB_SOURCE_DIR) / "experiments/scenes/haptic_slab_press.toml");
-  viewer::ViewOptions o;
-  o.frames = 90;
-  o.device = true;
-  o.drag = viewer::parse_drag("0.1,0.025,0.05:0.1,0.025,0.015");
+  viewer::ViewOptions o = device_press("0.1,0.025,0.05:0.1,0.025,0.015");
   const Image tipped = shot(slab, o, dir, "tip.png");
   slab.haptics->tip_radius = 0.0;
   const Image point = shot(slab, o, dir, "point.png");
