@@ -94,6 +94,8 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
                bool correct = true) {
   Stepper<dim> stepper(model, kind, filter, correct);
   const auto* cg = dynamic_cast<const ImplicitEulerCG<dim>*>(stepper.integ.get());
+  const auto* filtered = dynamic_cast<const FilteredImplicit<dim>*>(stepper.integ.get());
+  const long extra_before = filtered ? filtered->extra_corrections() : 0;
   long iterations = 0;
   for (auto _ : st) {
     const bool due = stepper.step();
@@ -108,6 +110,11 @@ void run_steps(benchmark::State& st, const Model<dim>& model, const std::string&
   st.counters["springs"] = model.net.num_springs();
   st.counters["dt"] = stepper.integ->dt();
   if (cg) st.counters["cg_iterations"] = static_cast<double>(iterations) / static_cast<double>(stepper.n);
+  // The tensor filter's conjugate-gradient steps past its one correction, per step (each one
+  // more V-cycle).
+  if (filtered)
+    st.counters["extra_corrections"] =
+        static_cast<double>(filtered->extra_corrections() - extra_before) / static_cast<double>(stepper.n);
 }
 
 const Model<2>& plate126() {

@@ -33,7 +33,6 @@
 #include <Eigen/CholmodSupport>
 #include <Eigen/SparseCore>
 
-#include <initializer_list>
 #include <memory>
 #include <stdexcept>
 #include <vector>
@@ -82,7 +81,7 @@ template <int dim> struct SerialBackend {
     make_triangulation(model, refinements, tria, loads_of_id);
   }
   void reinit(dealii::DynamicSparsityPattern& dsp, const dealii::IndexSet& /*owned*/,
-              const dealii::IndexSet& /*relevant*/, std::initializer_list<Matrix*> matrices) {
+              const dealii::IndexSet& /*relevant*/, const std::vector<Matrix*>& matrices) {
     pattern.copy_from(dsp);
     for (auto* A : matrices) A->reinit(pattern);
   }
@@ -122,7 +121,7 @@ template <int dim> struct DistributedBackend {
         dealii::TriangulationDescription::Utilities::create_description_from_triangulation(serial, comm));
   }
   void reinit(dealii::DynamicSparsityPattern& dsp, const dealii::IndexSet& owned, const dealii::IndexSet& relevant,
-              std::initializer_list<Matrix*> matrices) {
+              const std::vector<Matrix*>& matrices) {
     dealii::SparsityTools::distribute_sparsity_pattern(dsp, owned, comm, relevant);
     for (auto* A : matrices) A->reinit(owned, owned, dsp, comm);
   }

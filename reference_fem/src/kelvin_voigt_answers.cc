@@ -9,6 +9,7 @@ namespace vtb::fem {
 
 template <int dim, class Backend>
 Eigen::MatrixXd KelvinVoigtProblem<dim, Backend>::body_force_answers(const Eigen::MatrixXd& g) {
+  m_answers = true;
   m_backend.create(m_model, m_opt.refinements, *m_tria, m_loads_of_id);
   setup_dofs();
   setup_nodes();

@@ -89,7 +89,13 @@ private:
 
   /// K, M, C = tau K + gamma M and the scheme's A = ck K + cm M + cc C, by quadrature of degree
   /// 2p (exact on affine simplices); A0 and M0 with the prescribed rows and columns eliminated.
+  /// Only the matrices the run reads (matrices_read) are allocated and assembled.
   void assemble();
+
+  /// The matrices this run reads (docs/fem.md, "What a run assembles"): a linear static solve
+  /// K (its reactions and A = K u) and A0; a nonlinear static solve only the tangent T; the
+  /// static answers to body forces K, M and A0; a transient all of them.
+  std::vector<Matrix*> matrices_read();
 
   /// Direct or iterative (FemOptions::linear_solver; auto: iterative_by_default), and the AMG's
   /// near-null space, the rigid-body modes at the support points.
@@ -188,6 +194,7 @@ private:
   std::string m_nonlinear_failure; ///< why a nonlinear run stopped, empty while it runs
   double m_failure_time = -1;
   double m_static_time = -1; ///< the time of the last static equilibrium (a static path), -1 before the first
+  bool m_answers = false;    ///< body_force_answers' set-up (its matrices: matrices_read)
   std::ostringstream m_timer_stream;
   dealii::TimerOutput m_timer;
 };

@@ -110,7 +110,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step(do
   for (const auto d : m_owned)
     if (m_support_of[d] >= 0) m_ubar[d] = prescribed(d, t_new);
   m_ubar.compress(dealii::VectorOperation::insert);
-  m_A.vmult(m_tmp, m_ubar);
+  (m_opt.static_solve ? m_K : m_A).vmult(m_tmp, m_ubar); // static: A = K (matrices_read)
   m_rhs -= m_tmp;
   zero_prescribed(m_rhs);
   m_solver.solve(m_delta, m_rhs);
