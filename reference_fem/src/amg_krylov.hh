@@ -21,6 +21,8 @@
 #include <Teuchos_ParameterList.hpp>
 #include <ml_MultiLevelPreconditioner.h>
 
+#include <cmath>
+
 #include <mpi.h>
 
 #include <memory>
@@ -127,7 +129,7 @@ public:
       m_copy->copy_from(A);
     m_amg->initialize(*m_copy, p);
     ++m_stats.setups;
-    m_first_after_setup = -1;
+    m_first_rate = -1;
   }
 
   /// x = A^-1 b from x = 0: CG, then (if CG did not converge) GMRES from CG's last iterate.
@@ -156,11 +158,13 @@ public:
   }
 
   /// For a sequence of matrices of one pattern (Newton's tangents): keeps the hierarchy while the
-  /// iteration count stays within 1.5x (plus 5) of the first solve after its setup, else rebuilds.
+  /// last solve took at most 1.5x (plus 5) the iterations the first solve after its setup would
+  /// have taken to the last one's tolerance (iterations per decade of residual reduction, so that
+  /// a Newton whose tolerances vary compares like with like), else rebuilds.
   void update(const Matrix& A) {
-    if (m_A != &A || m_first_after_setup < 0 || m_last > 1.5 * static_cast<double>(m_first_after_setup) + 5) {
+    if (m_A != &A || m_first_rate < 0 || m_last > 1.5 * m_first_rate * m_last_decades + 5) {
       factor(A);
-      m_first_after_setup = -1;
+      m_first_rate = -1;
     }
   }
 
@@ -171,7 +175,8 @@ private:
   static constexpr unsigned int kMaxIterations = 2000;
   void count(unsigned int it) {
     m_last = it;
-    if (m_first_after_setup < 0) m_first_after_setup = it;
+    m_last_decades = std::max(1.0, -std::log10(m_tolerance));
+    if (m_first_rate < 0) m_first_rate = static_cast<double>(it) / m_last_decades;
     ++m_stats.solves;
     m_stats.iterations += it;
     m_stats.max_iterations = std::max<long>(m_stats.max_iterations, it);
@@ -183,7 +188,8 @@ private:
   std::unique_ptr<dealii::TrilinosWrappers::SparseMatrix> m_copy;
   std::unique_ptr<dealii::TrilinosWrappers::PreconditionAMG> m_amg; ///< made in factor (after ensure_mpi)
   KrylovStats m_stats;
-  long m_last = 0, m_first_after_setup = -1;
+  long m_last = 0;
+  double m_last_decades = 1, m_first_rate = -1; ///< the first solve after the setup: iterations per decade
 };
 
 /// A backend's direct solver or AmgKrylov, chosen once per run (KelvinVoigtProblem::choose_solvers).

@@ -145,6 +145,8 @@ private:
   /// update 1e-10 of the displacement; false when neither within 25 iterations, or non-finite.
   /// A correction that inverts a cell (a non-finite residual) is halved, up to 10 times.
   bool newton(double load_scale);
+  /// The iterative corrections' forcing terms (newton): the first, the largest, and the finest.
+  static constexpr double kFirstForcing = 1e-2, kFinestForcing = 1e-8;
 
   /// The nonlinear step: backward Euler with Newton, or the static solve by load continuation
   /// (the loads and prescribed values scaled from 0 to 1 in increments that grow after a

@@ -178,7 +178,8 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_c
   m_constraints.close();
 }
 
-template <int dim, class Backend> std::vector<typename Backend::Matrix*> KelvinVoigtProblem<dim, Backend>::matrices_read() {
+template <int dim, class Backend>
+std::vector<typename Backend::Matrix*> KelvinVoigtProblem<dim, Backend>::matrices_read() {
   // A static solve's scheme has A = K (ck 1, cm = cc = 0) and no history: step() multiplies
   // with K there, and neither C, M nor M0 is read (record's reactions are K u - f, Newton's
   // residual f_int - f). On a 421,749-dof P2 block (docs/fem.md) two matrices instead of seven:
@@ -240,7 +241,8 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::choose_
   m_solver.amg.set_null_space(modes, n_modes, dim);
   m_newton.amg.set_null_space(std::move(modes), n_modes, dim);
   // The linear systems to round-off's reach (the direct solve's answer to 1e-8, test FemAmg.*);
-  // Newton's corrections to 1e-8 of their residual (Newton's own test stops it at 1e-9 of the first).
+  // Newton's corrections to the forcing terms of KelvinVoigtProblem::newton (1e-2 to 1e-8 of their residual); this is
+  // its finest.
   m_solver.amg.set_tolerance(1e-12);
   m_newton.amg.set_tolerance(1e-8);
 }
