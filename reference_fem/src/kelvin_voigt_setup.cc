@@ -227,11 +227,13 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::assembl
 
 template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::choose_solvers() {
   const auto& k = m_opt.linear_solver;
-  const bool iterative =
-      k == "cg" || k == "cg-multigrid" ||
-      (k == "auto" && iterative_by_default(dim, static_cast<long>(m_dofs.n_dofs()), m_backend.ranks()));
-  m_solver.iterative = m_newton.iterative = iterative;
-  if (!iterative) return;
+  const auto by_default = [&](bool tangent) {
+    return k == "cg" || k == "cg-multigrid" ||
+           (k == "auto" && iterative_by_default(dim, static_cast<long>(m_dofs.n_dofs()), m_backend.ranks(), tangent));
+  };
+  m_solver.iterative = by_default(false);
+  m_newton.iterative = by_default(true);
+  if (!m_solver.iterative && !m_newton.iterative) return;
   const auto& X = m_model.mesh.points;
   dealii::Point<dim> centre;
   for (int a = 0; a < dim; ++a) centre[a] = 0.5 * (X.row(a).minCoeff() + X.row(a).maxCoeff());
@@ -249,8 +251,9 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::choose_
 
 template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::report_solvers(RunReport& rep) const {
   const bool newton = m_opt.nonlinear();
-  rep.extra.push_back({"iterative_solver", m_solver.iterative ? 1.0 : 0.0});
-  if (!m_solver.iterative) return;
+  const bool iterative = newton ? m_newton.iterative : m_solver.iterative;
+  rep.extra.push_back({"iterative_solver", iterative ? 1.0 : 0.0});
+  if (!iterative) return;
   const KrylovStats& s = newton ? m_newton.amg.stats() : m_solver.amg.stats();
   rep.extra.push_back({"krylov_solves", static_cast<double>(s.solves)});
   rep.extra.push_back({"krylov_iterations_mean",

@@ -171,6 +171,10 @@ TEST(FemAmg, AutoPicksTheIterativeSolveOnLarge3DSystems) {
   EXPECT_FALSE(fem::iterative_by_default(3, fem::kIterativeFromDofs3D, 1));
   EXPECT_TRUE(fem::iterative_by_default(3, fem::kIterativeFromDofs3D + 1, 1));
   EXPECT_FALSE(fem::iterative_by_default(2, fem::kIterativeFromDofs3D + 1, 1));
+  // Newton's tangent, refactorised every iteration, goes iterative far earlier in 3D only.
+  EXPECT_FALSE(fem::iterative_by_default(3, fem::kIterativeTangentFromDofs3D, 1, true));
+  EXPECT_TRUE(fem::iterative_by_default(3, fem::kIterativeTangentFromDofs3D + 1, 1, true));
+  EXPECT_FALSE(fem::iterative_by_default(2, fem::kIterativeTangentFromDofs3D + 1, 1, true));
 }
 
 TEST(FemAmg, AnUnknownLinearSolverIsRefusedInOneLine) {

@@ -35,11 +35,13 @@ struct FemOptions : FemSettings {
 };
 
 /// `linear_solver = "auto"`: whether a system of this many dofs goes to AMG-preconditioned CG
-/// rather than a direct factorisation (the crossover measured in docs/fem.md).
-bool iterative_by_default(int dim, long dofs, int ranks);
+/// rather than a direct factorisation (the crossover measured in docs/fem.md); `tangent`: Newton's
+/// tangent, refactorised at every iteration, where the iterative solve wins far earlier in 3D.
+bool iterative_by_default(int dim, long dofs, int ranks, bool tangent = false);
 inline constexpr long kIterativeFromDofs2D = 2000000;
 inline constexpr long kIterativeFromDofs3D = 110000;
 inline constexpr long kIterativeFromDofs3DDistributed = 5000;
+inline constexpr long kIterativeTangentFromDofs3D = 4000;
 
 FemOptions options_from(const SolverDesc& solver);
 /// Throws InputError unless the degree is 1 or 2, dt > 0, and nonlinear kinematics come with
