@@ -35,8 +35,7 @@ bool iterative_by_default(int dim, long dofs, int ranks, bool tangent) {
   if (dim == 2) return dofs > kIterativeFromDofs2D;
   // Newton's tangent, refactorised at every iteration, against AMG-preconditioned CG with
   // inexact corrections: on a graded neo-Hookean disc press (P2, static) 3.0 s against 2.2 s
-  // at 4,500 dofs and 16.0 s against 9.3 s at 13,077; at 55k dofs UMFPACK had not finished in
-  // 19 min (docs/fem.md).
+  // at 4,500 dofs and 16.0 s against 9.3 s at 13,077 (docs/fem.md).
   if (tangent) return dofs > kIterativeTangentFromDofs3D;
   return dofs > (ranks > 1 ? kIterativeFromDofs3DDistributed : kIterativeFromDofs3D);
 }
