@@ -193,8 +193,9 @@ std::vector<typename Backend::Matrix*> KelvinVoigtProblem<dim, Backend>::matrice
 
 template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::assemble() {
   const auto read = matrices_read();
-  if (read.size() == 1 && read.front() == &m_T) return; // the tangent is Newton's to assemble
-  const bool transient = read.size() > 3;
+  const auto reads = [&](const Matrix& A) { return std::find(read.begin(), read.end(), &A) != read.end(); };
+  if (!reads(m_K)) return; // a nonlinear static solve: the tangent is Newton's to assemble
+  const bool mass = reads(m_M), damping = reads(m_C), step = reads(m_A), mass0 = reads(m_M0);
   const double ck = m_scheme.ck(), cm = m_scheme.cm(), cc = m_scheme.cc();
   const dealii::QGaussSimplex<dim> quad(static_cast<unsigned int>(m_opt.degree + 1));
   dealii::FEValues<dim> fev(m_mapping, m_fe, quad,
@@ -214,12 +215,10 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::assembl
     a.add(cc, c);
     cell->get_dof_indices(local);
     none.distribute_local_to_global(k, local, m_K);
-    if (m_answers || transient) none.distribute_local_to_global(m, local, m_M);
-    if (transient) {
-      none.distribute_local_to_global(c, local, m_C);
-      none.distribute_local_to_global(a, local, m_A);
-      m_constraints.distribute_local_to_global(m, local, m_M0);
-    }
+    if (mass) none.distribute_local_to_global(m, local, m_M);
+    if (damping) none.distribute_local_to_global(c, local, m_C);
+    if (step) none.distribute_local_to_global(a, local, m_A);
+    if (mass0) m_constraints.distribute_local_to_global(m, local, m_M0);
     m_constraints.distribute_local_to_global(a, local, m_A0);
   }
   for (auto* A : read) A->compress(dealii::VectorOperation::add);
