@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The multirate haptic loop measured (docs/haptics.md, "Multirate, measured"): the slab press
+# The multirate haptic loop measured (docs/decisions/haptics_multirate_physics_at_the_bodys_rate_with_a_local_model.md): the slab press
 # (`haptic_slab_press`) with its mesh replaced by CGAL slabs of about 10k and 20k nodes, and the
 # soft tissue block (`haptic_tissue_press`), each with its scene's settings: lockstep at 1 kHz
 # with the lag-free filter (the reference), real time, and real time beside one busy process.
