@@ -127,6 +127,18 @@ TEST(RunOutputs, AStepBudgetCountsTheStepsOverItAndPicksTheMostAccurateFilterTha
   EXPECT_FALSE(w.contains("steps_over_budget"));
 }
 
+TEST(RunOutputs, AStepBudgetWithAVolumeTermPicksAmongTheFiltersThatTakeIt) {
+  // The tensor filter has no cell blocks for the volume term, and refuses it by name; auto
+  // within a budget (what a haptic session's physics does) must not pick it for such springs.
+  // With a budget every step meets, the most accurate filter that takes the term: full in 2D.
+  const test::FreshDir fresh;
+  const auto [r, j] =
+      run_pulled_plate("kind = \"filtered\"\nsprings = \"volume\"\ndt = 1e-2\nstep_budget = 1000.0\n", fresh / "loose");
+  ASSERT_TRUE(r.stable);
+  EXPECT_EQ(j["filter"], "full") << j.dump();
+  EXPECT_EQ(j["filter_requested"], "auto");
+}
+
 } // namespace
 } // namespace vtb
 

@@ -36,7 +36,7 @@ inline constexpr Entry kEntries[] = {
      true, true},
     {kFiltered,
      "the paper's filtered implicit scheme with the scene's filter (auto: tensor, tensor-multigrid from 1,000 free "
-     "nodes in 3D, multigrid from 4,000)",
+     "nodes in 3D, multigrid from 12,000)",
      kFiltered, "", "dt, filter, momentum_correction, strain_limit", true, true, true, true},
     {kFilteredFull, "the filtered scheme with the full inverse W (stable at any dt)", kFiltered, kFilterFull,
      "dt, momentum_correction, strain_limit", false, true, true, false},
