@@ -469,7 +469,7 @@ TEST(FittedSprings, AreTheDefaultWithinAutosBudgetAndLloydBeyondIt) {
   const SpringNetwork<2> tiny = build_network(generate_rectangle({0.1, 0.02}, {2, 1}), mat, "auto");
   EXPECT_EQ(tiny.calibration, "lloyd");
   EXPECT_NE(tiny.calibration_note.find("too small to fit (6 nodes)"), std::string::npos) << tiny.calibration_note;
-  const Mesh3 big = generate_box({0.4, 0.1, 0.1}, {48, 16, 16}); // 14,161 nodes
+  const Mesh3 big = generate_box({0.4, 0.1, 0.1}, {80, 26, 26}); // 59,049 nodes
   ASSERT_GT(big.num_nodes(), kAutoFitNodes3D);
   const SpringNetwork<3> beyond = build_network(big, mat, "auto");
   EXPECT_EQ(beyond.calibration, "lloyd");

@@ -159,10 +159,10 @@ template <int dim> int fit_pinned_dofs(const Mesh<dim>& mesh, const std::vector<
 
 /// Whether `springs = "auto"` fits this mesh: empty if so, else why not (one phrase). Its
 /// budget is a node count, not a clock, so that a scene gets the same springs on any machine:
-/// 3D meshes up to kAutoFitNodes3D nodes (the fit's cost grows with the 3D factor's fill:
-/// docs/fidelity.md's cost ladder; with the early stop a 10k-node slab takes under a minute),
-/// 2D up to kAutoFitNodes2D, and meshes large enough to fit.
-inline constexpr int kAutoFitNodes2D = 20000, kAutoFitNodes3D = 12000;
+/// 3D meshes up to kAutoFitNodes3D nodes (an organ-size body: a 50k-node fit takes 5-6 min
+/// and 1.3-1.6 GB, docs/fidelity.md's cost ladder, once per mesh and cached), 2D up to
+/// kAutoFitNodes2D, and meshes large enough to fit.
+inline constexpr int kAutoFitNodes2D = 20000, kAutoFitNodes3D = 50000;
 template <int dim> std::string fit_affordable(const Mesh<dim>& mesh, const std::vector<int>& supports);
 
 } // namespace vtb

@@ -17,8 +17,8 @@
 namespace vtb {
 
 /// Above this many free dofs the check is not made (two sparse factorisations: 1.5-2.4 s and
-/// a 412 MB peak at 30k dofs, a 10k-node 3D mesh; the fit's own budget, kAutoFitNodes3D, is
-/// 36k dofs).
+/// a 412 MB peak at 30k dofs, a 10k-node 3D mesh, growing with the factor's 3D fill; the fit
+/// goes further, to kAutoFitNodes3D nodes).
 inline constexpr int kLoadCheckDofs = 40000;
 
 /// Issue 25's goal for the default springs, met by the fitted springs on every case of
