@@ -13,24 +13,18 @@ namespace vtb {
 
 namespace {
 
-/// The filters auto may pick on this model, most accurate first: the tensor filter (its
-/// factor below kTensorCycleFreeNodes3D free nodes in 3D, its block V-cycle from there; not
-/// with a volume term), then the full filter (its factor, below kLargeFreeNodes3D in 3D) and
-/// its V-cycle (3D).
+/// The filters auto may pick on this model, most accurate first: the tensor filter (in 3D its
+/// factor below kTensorCycleFreeNodes3D free nodes, its block V-cycle from there), then the
+/// full filter (in 3D its factor below kLargeFreeNodes3D) and its V-cycle (3D). The tensor
+/// filter has no cell blocks for the volume term (chosen_filter): with it, the scalar ones alone.
 template <int dim> std::vector<std::string> candidates(const Model<dim>& model) {
   const std::size_t free = model.free_nodes.size();
-  if constexpr (dim == 2) {
-    if (!model.net.volume.empty()) return {solvers::kFilterFull};
-    return {solvers::kFilterTensor, solvers::kFilterFull};
-  }
-  // The tensor filter has no cell blocks for the volume term (chosen_filter): with it, the
-  // scalar filters alone.
   const bool tensor = model.net.volume.empty();
   std::vector<std::string> c;
-  if (tensor && free < kTensorCycleFreeNodes3D) c.emplace_back(solvers::kFilterTensor);
-  if (tensor) c.emplace_back(solvers::kFilterTensorMultigrid);
-  if (free < kLargeFreeNodes3D) c.emplace_back(solvers::kFilterFull);
-  c.emplace_back(solvers::kFilterMultigrid);
+  if (tensor && (dim == 2 || free < kTensorCycleFreeNodes3D)) c.emplace_back(solvers::kFilterTensor);
+  if (tensor && dim == 3) c.emplace_back(solvers::kFilterTensorMultigrid);
+  if (dim == 2 || free < kLargeFreeNodes3D) c.emplace_back(solvers::kFilterFull);
+  if (dim == 3) c.emplace_back(solvers::kFilterMultigrid);
   return c;
 }
 
