@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Deadline misses of the real-time servo loop on a loaded machine, per servo-thread set-up
-# (docs/decisions/haptics_servo_fifo_priority_and_pinning_not_memory_locking.md). Load: one busy process per core. Each
+# (docs/decisions/haptics_servo_fifo_priority_windowed_velocity_ten_period_watchdog.md). Load: one busy process per core. Each
 # set-up runs REPEATS sessions of the scene (3 s, 3000 servo cycles at 1 kHz).
 # Usage: scripts/haptics_under_load.sh [SCENE] [REPEATS]   (prints a table; writes nothing else)
 set -euo pipefail
