@@ -27,4 +27,11 @@ void unit_pairs(int n, double* ab);
 double largest_sin2(int n, const double* p, const double* q, const std::array<int, 2>* edge, const double* turn,
                     const double* trigger, bool& outgrown, bool& rare);
 
+/// The same in 3D from each spring's d = rest + u_j - u_i (`rest`, `ref`: 3 values per spring,
+/// `u`: 3 per node) and t = (R_i + R_j) D (`rotation`: 9 per node, column-major; D from `ref`),
+/// with the same `outgrown` and `rare` (the caller's exact pass then takes them all): a gather
+/// per chunk of springs, then four springs per vector.
+double largest_sin2_3d(int n, const std::array<int, 2>* edge, const double* rest, const double* ref, const double* u,
+                       const double* rotation, const double* trigger, bool& outgrown, bool& rare);
+
 } // namespace vtb::detail

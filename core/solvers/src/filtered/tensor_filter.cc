@@ -283,6 +283,17 @@ template <int dim> double TensorFilter<dim>::scan(const Nodal<dim>& u, bool* out
                              m_trigger[static_cast<std::size_t>(s)]);
     }
   } else {
+    // Four springs per vector (detail::largest_sin2_3d); the rare spring past 90 degrees (or of
+    // length 0, or not finite) sends the scan to the tracker's exact pass, as in 2D.
+    bool rare = false;
+    const double sin2 =
+        detail::largest_sin2_3d(ns, m_model.net.edge.data(), m_spring_rest.data(), m_spring_ref.data(), u.data(),
+                                m_rotation.data()->data(), m_trigger.data(), out, rare);
+    if (!rare) {
+      if (outgrown) *outgrown = out;
+      return MismatchTracker::from_sin2(sin2);
+    }
+    out = false;
     for (int s = 0; s < ns; ++s) out |= add_spring(worst, s, u, m_trigger[static_cast<std::size_t>(s)]);
   }
   if (outgrown) *outgrown = out;
