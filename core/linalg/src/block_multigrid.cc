@@ -105,8 +105,8 @@ template <int W, int NB, int WC, int NBC>
   }
 }
 
-// The 3D sweeps (finest: 3 values on 4 lanes; coarse: 6 rigid modes on 8), built for AVX2 and
-// the baseline (vector_clones.hh).
+// The 3D sweeps (finest: 3 values on 4 lanes; coarse: 6 rigid modes on 8), built for AVX-512F, AVX2
+// and the baseline (vector_clones.hh).
 VTB_VECTOR_CLONES_WIDE void down_fine3(const Arrays& L, const double* b, double* x, double* bc) {
   forward_and_restrict<4, 3, 8, 6>(L, b, x, bc);
 }

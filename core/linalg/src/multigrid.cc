@@ -97,11 +97,13 @@ template <int W>
   }
 }
 
-// The 4-lane (3D) sweeps, built for AVX2 and the baseline (vector_clones.hh).
-VTB_VECTOR_CLONES_WIDE void presmooth_and_restrict4(const LevelArrays& L, int nc, const double* b, double* x, double* bc) {
+// The 4-lane (3D) sweeps, built for AVX-512F, AVX2 and the baseline (vector_clones.hh).
+VTB_VECTOR_CLONES_WIDE void presmooth_and_restrict4(const LevelArrays& L, int nc, const double* b, double* x,
+                                                    double* bc) {
   presmooth_and_restrict<4>(L, nc, b, x, bc);
 }
-VTB_VECTOR_CLONES_WIDE void prolongate_and_postsmooth4(const LevelArrays& L, const double* xc, const double* b, double* x) {
+VTB_VECTOR_CLONES_WIDE void prolongate_and_postsmooth4(const LevelArrays& L, const double* xc, const double* b,
+                                                       double* x) {
   prolongate_and_postsmooth<4>(L, xc, b, x);
 }
 

@@ -59,8 +59,7 @@ struct LargestSin2 {
 };
 
 /// Adds four pairs' d . t, |d x t|^2 and |d|^2 |t|^2 (`lane`: which of them are springs).
-[[gnu::always_inline]] inline void add_terms(LargestSin2& b, Doubles dot, Doubles c2, Doubles d, Doubles T,
-                                             Mask lane) {
+[[gnu::always_inline]] inline void add_terms(LargestSin2& b, Doubles dot, Doubles c2, Doubles d, Doubles T, Mask lane) {
   const double inf = std::numeric_limits<double>::infinity();
   const Mask ok = (dot > 0) & (d > 0) & (d < inf); // false for NaN
   const Doubles nu = ok ? c2 : 0.0, de = ok ? d : 1.0;
@@ -134,8 +133,8 @@ VTB_VECTOR_CLONES double largest_sin2(int n, const double* p, const double* q, c
 }
 
 VTB_VECTOR_CLONES double largest_sin2_3d(int n, const std::array<int, 2>* edge, const double* rest, const double* ref,
-                                         const double* u, const double* rotation, const double* trigger,
-                                         bool& outgrown, bool& rare) {
+                                         const double* u, const double* rotation, const double* trigger, bool& outgrown,
+                                         bool& rare) {
   // A chunk at a time: the gathers (d, and the ends' rotations summed times D) into lanes of
   // four springs, then the vector terms. Springs past n in the last chunk's lanes are zeros,
   // masked out.

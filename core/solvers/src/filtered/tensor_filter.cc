@@ -286,9 +286,8 @@ template <int dim> double TensorFilter<dim>::scan(const Nodal<dim>& u, bool* out
     // Four springs per vector (detail::largest_sin2_3d); the rare spring past 90 degrees (or of
     // length 0, or not finite) sends the scan to the tracker's exact pass, as in 2D.
     bool rare = false;
-    const double sin2 =
-        detail::largest_sin2_3d(ns, m_model.net.edge.data(), m_spring_rest.data(), m_spring_ref.data(), u.data(),
-                                m_rotation.data()->data(), m_trigger.data(), out, rare);
+    const double sin2 = detail::largest_sin2_3d(ns, m_model.net.edge.data(), m_spring_rest.data(), m_spring_ref.data(),
+                                                u.data(), m_rotation.data()->data(), m_trigger.data(), out, rare);
     if (!rare) {
       if (outgrown) *outgrown = out;
       return MismatchTracker::from_sin2(sin2);
