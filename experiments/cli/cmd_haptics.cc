@@ -26,7 +26,7 @@ Action add_haptics(CLI::App& app) {
   cmd->add_option("--fault", o->fault, "Inject a fault: stall@T (physics stops) or nan@T (physics returns NaN)");
   cmd->add_option("--device", o->device,
                   "The device, overriding [haptics].device: procat-sim, replay, null, plugin:PATH (a driver's shared "
-                  "library, docs/haptics.md) or udp:HOST:PORT (a device in another process)");
+                  "library, docs/devices.md) or udp:HOST:PORT (a device in another process)");
   cmd->add_option("--replay", o->replay, "Recorded handle trajectory (t,hx,hy CSV) for device = \"replay\"");
   cmd->add_flag("--lockstep", o->lockstep, "Interleave servo and physics in simulated time (deterministic)");
   cmd->add_flag("--lock-memory", o->lock_memory, "mlockall for the session (no page faults in the servo loop)");

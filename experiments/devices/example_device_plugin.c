@@ -1,4 +1,4 @@
-/* An example device plug-in for vtb (docs/haptics.md, "Writing a device driver"): the shape a
+/* An example device plug-in for vtb (docs/devices.md, "Writing a device driver"): the shape a
  * driver for a vendor's C SDK takes. Its "hardware" is a handle moved along a straight press and
  * held: replace read() and write() with the SDK's calls. Built with the tests
  * (libvtb_example_device.so); run it with

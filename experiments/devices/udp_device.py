@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A haptic device in another process, speaking vtb's UDP bridge (docs/haptics.md, "The UDP bridge").
+"""A haptic device in another process, speaking vtb's UDP bridge (docs/devices.md, "The UDP bridge").
 
 Start vtb first, then this:
     build/bin/vtb haptics SCENE --device udp:127.0.0.1:47000 &
@@ -16,7 +16,7 @@ import argparse, json, socket, struct, sys, time, tomllib
 MAGIC, VERSION, STATE, COMMAND = 0x44425456, 1, 1, 2
 SO_TIMESTAMPNS = getattr(socket, "SO_TIMESTAMPNS", 35)  # Linux's values where Python lacks the names
 SCM_TIMESTAMPNS = SO_TIMESTAMPNS
-PACKET = struct.Struct("<IHHIIQQQ5d")  # 80 bytes, little-endian: docs/haptics.md byte by byte
+PACKET = struct.Struct("<IHHIIQQQ5d")  # 80 bytes, little-endian: docs/devices.md byte by byte
 
 
 class Handle:

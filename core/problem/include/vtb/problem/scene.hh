@@ -109,7 +109,7 @@ struct DevicePlaneDesc {
 
 struct HapticsDesc {
   /// procat-sim | replay | null | plugin (a driver's shared library, device_abi.h) | udp (a device
-  /// in another process, docs/haptics.md "The UDP bridge")
+  /// in another process, docs/devices.md "The UDP bridge")
   std::string device = "procat-sim";
   std::filesystem::path plugin;            ///< device = "plugin": the library, resolved against the scene's folder
   std::string plugin_config;               ///< handed to the plug-in's open as it is

@@ -1,4 +1,4 @@
-/* The device plug-in interface of vtb (C ABI, docs/haptics.md "Writing a device driver").
+/* The device plug-in interface of vtb (C ABI, docs/devices.md "Writing a device driver").
  *
  * A plug-in is a shared library that exports one function, `vtb_device_entry`, which vtb loads
  * at run time (`[haptics] device = "plugin"`, `plugin = PATH`, or `vtb haptics --device

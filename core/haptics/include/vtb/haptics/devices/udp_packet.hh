@@ -1,6 +1,6 @@
 #pragma once
 /// \file
-/// The UDP bridge's datagram (docs/haptics.md, "The UDP bridge", byte by byte): 80 bytes,
+/// The UDP bridge's datagram (docs/devices.md, "The UDP bridge", byte by byte): 80 bytes,
 /// little-endian, the same layout both ways. The device sends its handle's state; vtb answers
 /// each servo cycle with the command. Each side numbers its packets and echoes the newest it
 /// has taken, with that packet's time stamp and how long it waited there before the reply left,
