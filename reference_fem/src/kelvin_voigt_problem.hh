@@ -137,6 +137,8 @@ private:
   /// The nonlinear solid's internal force f_int(u, v) into f and, with `tangent`, its tangent
   /// into m_T (nonlinear.hh; constrained rows and columns eliminated).
   void nonlinear_force(const Vector& u, const Vector& v, Vector& f, double rate, bool tangent);
+  /// smallest_volume_ratio (nonlinear.hh) of u over every rank's cells.
+  double volume_ratio(const Vector& u);
 
   /// Newton on the residual of the step, from m_ubar (prescribed values in place):
   ///   backward Euler: M (v+ - v) / dt + gamma M v+ + f_int(u+, v+) - f = 0, v+ = (u+ - u) / dt;
@@ -147,6 +149,14 @@ private:
   bool newton(double load_scale);
   /// The iterative corrections' forcing terms (newton): the first, the largest, and the finest.
   static constexpr double kFirstForcing = 1e-2, kFinestForcing = 1e-8;
+  /// Newton's work over the run, for summary.json (report_solvers).
+  struct NewtonStats {
+    long iterations = 0, backtracks = 0, increments = 0, cuts = 0;
+  };
+  NewtonStats m_newton_stats;
+  /// The smallest det F over the quadrature points: of the last assembly (nonlinear_force),
+  /// and of every equilibrium Newton accepted (summary.json's min_volume_ratio).
+  double m_min_J = 1, m_min_J_accepted = std::numeric_limits<double>::infinity();
 
   /// The nonlinear step: backward Euler with Newton, or the static solve by load continuation
   /// (the loads and prescribed values scaled from 0 to 1 in increments that grow after a

@@ -252,6 +252,18 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::report_
   const bool newton = m_opt.nonlinear();
   const bool iterative = newton ? m_newton.iterative : m_solver.iterative;
   rep.extra.push_back({"iterative_solver", iterative ? 1.0 : 0.0});
+  if (newton) {
+    rep.extra.push_back({"newton_iterations", static_cast<double>(m_newton_stats.iterations)});
+    rep.extra.push_back({"newton_backtracks", static_cast<double>(m_newton_stats.backtracks)});
+    // The smallest det F at a quadrature point of any accepted state: how near the solid came to
+    // inverting (the springs' min_volume_ratio measures their cells the same way).
+    const double smallest = -m_backend.max(-m_min_J_accepted); // +inf before an accepted state
+    rep.extra.push_back({"min_volume_ratio", std::isfinite(smallest) ? smallest : 1.0});
+    if (m_opt.static_solve) {
+      rep.extra.push_back({"load_increments", static_cast<double>(m_newton_stats.increments)});
+      rep.extra.push_back({"load_increment_cuts", static_cast<double>(m_newton_stats.cuts)});
+    }
+  }
   if (!iterative) return;
   const KrylovStats& s = newton ? m_newton.amg.stats() : m_solver.amg.stats();
   rep.extra.push_back({"krylov_solves", static_cast<double>(s.solves)});

@@ -18,6 +18,8 @@
 #include <deal.II/lac/full_matrix.h>
 #include <deal.II/lac/vector.h>
 
+#include <algorithm>
+#include <limits>
 #include <vector>
 
 namespace vtb::fem {
@@ -30,7 +32,29 @@ template <int dim, class Vector, class Matrix> struct NonlinearTargets {
   Matrix* tangent = nullptr;
   double rate = 0;          ///< dv/du along the step: 1/dt (backward Euler) or 0 (static)
   bool neo_hookean = false; ///< the law (stress_laws.hh): neo-Hookean, else St. Venant-Kirchhoff
+  double* min_J = nullptr;  ///< if set: lowered to the smallest det F over the quadrature points (owned cells)
 };
+
+/// The smallest det F = det(I + grad u) over the quadrature points of the locally owned cells (the
+/// points assemble_nonlinear evaluates the law at): a pass of gradients alone, so that a Newton
+/// correction that would invert a cell is cut back before the tangent is assembled at it. u must
+/// see every dof of the owned cells.
+template <int dim, class GhostedVector>
+double smallest_volume_ratio(const dealii::Mapping<dim>& mapping, const dealii::FESystem<dim>& fe,
+                             const dealii::DoFHandler<dim>& dofs, int degree, const GhostedVector& u) {
+  const dealii::QGaussSimplex<dim> quad(static_cast<unsigned int>(degree + 2));
+  dealii::FEValues<dim> fev(mapping, fe, quad, dealii::update_gradients);
+  const dealii::FEValuesExtractors::Vector disp(0);
+  std::vector<dealii::Tensor<2, dim>> grad_u(quad.size());
+  double smallest = std::numeric_limits<double>::infinity();
+  for (const auto& cell : dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    fev.reinit(cell);
+    fev[disp].get_function_gradients(u, grad_u);
+    for (const auto& g : grad_u) smallest = std::min(smallest, dealii::determinant(dealii::unit_symmetric_tensor<dim>() + g));
+  }
+  return smallest;
+}
 
 /// u and v must see every dof of the locally owned cells (ghosted vectors under MPI).
 template <int dim, class GhostedVector, class Vector, class Matrix>
@@ -67,6 +91,7 @@ void assemble_nonlinear(const dealii::Mapping<dim>& mapping, const dealii::FESys
       const StressPoint<dim> sp(dealii::unit_symmetric_tensor<dim>() + grad_u[q], grad_v[q], out.neo_hookean, lambda,
                                 mu, tau, out.rate);
       const dealii::Tensor<2, dim>& P = sp.P();
+      if (out.min_J) *out.min_J = std::min(*out.min_J, dealii::determinant(sp.F()));
       for (unsigned int i = 0; i < nd; ++i) r[i] += (P * fev.shape_grad(i, q))[comp[i]] * jxw;
       if (!out.tangent) continue;
       // dP is linear in G: its values on the dim^2 unit directions e_a e_b^T give it for every

@@ -60,6 +60,7 @@ public:
   }
 
   const dealii::Tensor<2, dim>& P() const { return m_P; }
+  const dealii::Tensor<2, dim>& F() const { return m_F; }
 
   /// dP along a displacement-gradient direction G (grad v moving by rate G).
   dealii::Tensor<2, dim> dP(const dealii::Tensor<2, dim>& G) const {

@@ -32,6 +32,9 @@ struct FemOptions : FemSettings {
   /// The AMG's near-null space with the rotations (default) or the translations alone: only
   /// tests turn them off, to show what the rotations are for.
   bool amg_rotations = true;
+  /// The static load continuation's secant predictor (KelvinVoigtProblem::step_nonlinear): only
+  /// tests turn it off, to show that it changes Newton's work and not the answer.
+  bool secant_predictor = true;
 };
 
 /// `linear_solver = "auto"`: whether a system of this many dofs goes to AMG-preconditioned CG
