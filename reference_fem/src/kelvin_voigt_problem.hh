@@ -144,8 +144,9 @@ private:
   ///   backward Euler: M (v+ - v) / dt + gamma M v+ + f_int(u+, v+) - f = 0, v+ = (u+ - u) / dt;
   ///   static: f_int(u+, 0) - load_scale f = 0.
   /// Converged when the free dofs' residual is 1e-9 of its first value (or of the load), or the
-  /// update 1e-10 of the displacement; false when neither within 25 iterations, or non-finite.
-  /// A correction that inverts a cell (a non-finite residual) is halved, up to 10 times.
+  /// update 1e-10 of the displacement; false when neither within 25 iterations (30 in a static
+  /// increment), or non-finite. A correction that inverts a quadrature point (det F <= 0, or a
+  /// non-finite residual) is halved, up to 10 times.
   bool newton(double load_scale);
   /// The iterative corrections' forcing terms (newton): the first, the largest, and the finest.
   static constexpr double kFirstForcing = 1e-2, kFinestForcing = 1e-8;

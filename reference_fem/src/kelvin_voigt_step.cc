@@ -158,9 +158,11 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
   const double dt = m_opt.dt, rate = dynamic ? 1 / dt : 0.0;
   const double mass_weight = dynamic ? 1 / (dt * dt) + m_mat.mass_damping / dt : 0.0;
   double first = -1, last_r = -1, forcing = kFirstForcing;
-  // A static increment that has not converged in 12 iterations is halved (cheaper than more
-  // iterations far from the solution); a residual 1e6 times the first has diverged.
-  const int iterations = dynamic ? 25 : 12;
+  // A static increment that has not converged in 30 iterations is halved; a residual 1e6 times
+  // the first has diverged. (At 12, the former cap, a graded neo-Hookean disc press of 49,026
+  // dofs cut its increments 8 times and took 770 s; at 30, no cut and 100 s: from the secant
+  // predictor's start Newton converges, if in more than 12 iterations on the deepest increment.)
+  const int iterations = dynamic ? 25 : 30;
   int backtracks = 0;
   for (int it = 0; it < iterations; ++it) {
     m_dv = m_ubar;
@@ -213,18 +215,22 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     m_newton.update(m_T);
     m_newton.solve(m_delta, m_rhs);
     m_ubar -= m_delta;
+    // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin
+    // cantilever, cond ~ 1e9): a whole correction of 1e-10 of the displacement has converged too.
+    const bool negligible = m_delta.l2_norm() <= 1e-10 * m_ubar.l2_norm();
     // A correction that inverts a cell is halved before anything is assembled at it (a pass of
     // gradients, a fraction of an assembly with the tangent); the residual's NaN test above
-    // stays the law's own guard.
+    // stays the law's own guard. A halved correction is no sign of convergence: the next
+    // iteration assembles at it.
+    bool halved = false;
     while (m_opt.kinematics == Kinematics::neo_hookean && backtracks < 10 && !(volume_ratio(m_ubar) > 0)) {
       ++backtracks;
       ++m_newton_stats.backtracks;
       m_delta *= 0.5;
       m_ubar += m_delta;
+      halved = true;
     }
-    // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin
-    // cantilever, cond ~ 1e9): an update of 1e-10 of the displacement has converged too.
-    if (m_delta.l2_norm() <= 1e-10 * m_ubar.l2_norm()) return true;
+    if (negligible && !halved) return true;
   }
   return false;
 }
@@ -253,8 +259,8 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
     // one, so that Newton starts near the path. Where it fails (the extrapolated guess inverts a
     // cell, or Newton does not converge from it), the same increment starts again from the last
     // equilibrium before it is halved. On a graded neo-Hookean disc press (1,387 nodes, P2,
-    // 0.48 E under the disc) the path took 4 increments and 36 s with it, 13 and 217 s without
-    // (docs/fem.md).
+    // 0.48 E under the disc) the path took 4 increments and 35 s with it, 9 increments (6 cuts)
+    // and 239 s without (docs/fem.md).
     double s_prev = -1;
     bool predict = true;
     Vector previous = accepted;

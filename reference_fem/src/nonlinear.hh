@@ -51,7 +51,8 @@ double smallest_volume_ratio(const dealii::Mapping<dim>& mapping, const dealii::
     if (!cell->is_locally_owned()) continue;
     fev.reinit(cell);
     fev[disp].get_function_gradients(u, grad_u);
-    for (const auto& g : grad_u) smallest = std::min(smallest, dealii::determinant(dealii::unit_symmetric_tensor<dim>() + g));
+    for (const auto& g : grad_u)
+      smallest = std::min(smallest, dealii::determinant(dealii::unit_symmetric_tensor<dim>() + g));
   }
   return smallest;
 }
