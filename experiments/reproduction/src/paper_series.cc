@@ -394,9 +394,16 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     out.number("vtbDeepPOneThirty" + T, gap("neo-hookean-p1", 0.3), 2); // the discretisation's share
     std::vector<double> svk = column(t, "depth_ratio", rows(nu, "svk-p1")),
                         levels = column(t, "level", rows(nu, "svk-p1"));
-    double svk_last = 0;
-    for (std::size_t k = 0; k < svk.size(); ++k)
-      if (std::isfinite(svk[k])) svk_last = levels[k];
+    // Where St. Venant-Kirchhoff collapses: the last level of a path that stops (Newton finds no
+    // equilibrium past the limit point; the levels after it are missing), or, where Newton finds
+    // the collapsed equilibrium beyond it and the path goes on, the level after which the depth
+    // jumps most between two levels.
+    std::size_t reached = 0;
+    while (reached < svk.size() && std::isfinite(svk[reached])) ++reached;
+    const bool stopped = reached < column(t, "level", rows(nu, "linear-p2")).size();
+    double svk_last = stopped && reached > 0 ? levels[reached - 1] : 0, jump = -1;
+    for (std::size_t k = 0; !stopped && k + 1 < reached; ++k)
+      if (svk[k + 1] - svk[k] > jump) jump = svk[k + 1] - svk[k], svk_last = levels[k];
     out.number("vtbDeepSvkLast" + T, svk_last, 3);
     const std::vector<double> lf = column(t, "force", rows(nu, "linear-p2")),
                               ld = column(t, "depth_ratio", rows(nu, "linear-p2"));
