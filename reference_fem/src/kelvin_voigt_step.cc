@@ -164,6 +164,12 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
   // predictor's start Newton converges, if in more than 12 iterations on the deepest increment.)
   const int iterations = dynamic ? 25 : 30;
   int backtracks = 0;
+  const auto halve = [&] { // the last correction, taken back by half
+    ++backtracks;
+    ++m_newton_stats.backtracks;
+    m_delta *= 0.5;
+    m_ubar += m_delta;
+  };
   for (int it = 0; it < iterations; ++it) {
     m_dv = m_ubar;
     m_dv -= m_u;
@@ -185,10 +191,8 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
       // halving it, up to 10 times (1/1024 of the step), before the increment itself is halved.
       // (A backtrack on a rising residual as well was measured and not kept: on a graded
       // neo-Hookean disc press it took 15 iterations and 9 halvings where full steps took 12.)
-      if (it == 0 || ++backtracks > 10) return false;
-      ++m_newton_stats.backtracks;
-      m_delta *= 0.5;
-      m_ubar += m_delta;
+      if (it == 0 || backtracks >= 10) return false;
+      halve();
       --it;
       continue;
     }
@@ -224,10 +228,7 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     // iteration assembles at it.
     bool halved = false;
     while (m_opt.kinematics == Kinematics::neo_hookean && backtracks < 10 && !(volume_ratio(m_ubar) > 0)) {
-      ++backtracks;
-      ++m_newton_stats.backtracks;
-      m_delta *= 0.5;
-      m_ubar += m_delta;
+      halve();
       halved = true;
     }
     if (negligible && !halved) return true;
@@ -263,6 +264,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
     // and 239 s without (docs/fem.md).
     double s_prev = -1;
     bool predict = true;
+    const auto secant = [&] { return predict && s_prev >= 0 && m_opt.secant_predictor; };
     Vector previous = accepted;
     // A law that softens to a limit point (St. Venant-Kirchhoff collapses under compression)
     // makes the increments shrink without end: 40 increments (a smooth path takes 5 to 20) say so.
@@ -274,7 +276,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
       const double s1 = std::min(1.0, s + ds);
       // The increment's start: the last equilibrium, or the secant's extrapolation from it
       // (u(s1) ~ u(s) + (s1 - s) / (s - s_prev) (u(s) - u(s_prev))) unless that inverts a cell.
-      for (const bool extrapolate : {predict && s_prev >= 0 && m_opt.secant_predictor, false}) {
+      for (const bool extrapolate : {secant(), false}) {
         m_ubar = accepted;
         if (extrapolate) {
           m_tmp = accepted;
@@ -302,7 +304,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
         predict = true;
         m_min_J_accepted = std::min(m_min_J_accepted, m_min_J);
         ++m_newton_stats.increments;
-      } else if (predict && s_prev >= 0 && m_opt.secant_predictor) {
+      } else if (secant()) {
         predict = false; // the same increment again from the last equilibrium (not a new increment)
         --increments;
       } else if ((ds /= 2) < 1e-4) {
