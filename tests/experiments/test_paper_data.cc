@@ -152,6 +152,26 @@ TEST(PaperData, FitCostComesFromTheFixture) {
   EXPECT_NE(sentence.find(held), std::string::npos) << held << " in " << sentence;
 }
 
+TEST(PaperData, DeepPressRefinementComesFromTheFixture) {
+  // How far one refinement moves the neo-Hookean reference: the refined solve's depth at 0.5 F30
+  // against the path's on the mesh at that level, in per cent, per material (A: nu 0.3, B: 0.45).
+  const std::string numbers = data_files().at("numbers.tex");
+  const auto t = harness::CsvTable::read(kFixture / "deep_press.csv");
+  for (const auto& [nu, tag] : {std::pair{"0.3", "A"}, std::pair{"0.45", "B"}}) {
+    double mesh = 0, refined = 0;
+    for (std::size_t r = 0; r < t.rows(); ++r)
+      if (t.text(r, "poisson_ratio") == nu && t.number(r, "level") == 0.5) {
+        if (t.text(r, "model") == "neo-hookean-p2") mesh = t.number(r, "depth");
+        if (t.text(r, "model") == "neo-hookean-p2-refined") refined = t.number(r, "depth");
+      }
+    ASSERT_GT(mesh, 0) << nu;
+    ASSERT_GT(refined, 0) << "the fixture holds the refined solve for nu " << nu;
+    const std::string macro = std::string("\\newcommand\\vtbDeepRefinedHalf") + tag + "{" +
+                              harness::tex_number(100 * (refined / mesh - 1), 2) + "}";
+    EXPECT_NE(numbers.find(macro), std::string::npos) << macro;
+  }
+}
+
 TEST(PaperData, TransientTableComesFromTheFixture) {
   // One row per dt (three in the fixture), each starting with dt in ms and holding the tensor
   // filter's tip error in percent as the CSV has it.

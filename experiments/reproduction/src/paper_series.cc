@@ -392,6 +392,16 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     out.number("vtbDeepFitVolumeInverted" + T, inverted("springs-fitted-volume"), 6);
     out.number("vtbDeepLinearThirty" + T, gap("linear-p2", 0.3), 2);
     out.number("vtbDeepPOneThirty" + T, gap("neo-hookean-p1", 0.3), 2); // the discretisation's share
+    // How far one uniform refinement moves the neo-Hookean reference's depth at 0.5 F30 (the
+    // harness's one refined solve against the path's level on the mesh), in per cent.
+    const auto depth_at = [&](const char* model, double level) {
+      const std::vector<double> d = column(t, "depth", rows(nu, model)), l = column(t, "level", rows(nu, model));
+      for (std::size_t k = 0; k < l.size(); ++k)
+        if (std::abs(l[k] - level) < 1e-9) return d[k];
+      return std::nan("");
+    };
+    out.number("vtbDeepRefinedHalf" + T,
+               100 * (depth_at("neo-hookean-p2-refined", 0.5) / depth_at("neo-hookean-p2", 0.5) - 1), 2);
     std::vector<double> svk = column(t, "depth_ratio", rows(nu, "svk-p1")),
                         levels = column(t, "level", rows(nu, "svk-p1"));
     // Where St. Venant-Kirchhoff collapses: the last level of a path that stops (Newton finds no

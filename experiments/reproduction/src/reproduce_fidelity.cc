@@ -369,6 +369,22 @@ density = 1.0
         *log << "  nu " << nu << ": " << name << " to " << 2.0 * tr.t.back() << " F30 in " << seconds() << " s\n"
              << std::flush;
     }
+    // How converged the neo-Hookean reference is: P2 refined once, one static solve at 0.5 F30
+    // (about 16 % deep; a path refined once costs 8x the dofs at every level), beside the path's
+    // P2 on the mesh at that level. At F30 one refinement moved it by a fifth (docs/fem.md).
+    {
+      fem::FemOptions refined;
+      refined.static_solve = true;
+      refined.degree = 2;
+      refined.refinements = 1;
+      refined.kinematics = fem::Kinematics::neo_hookean;
+      Trajectory<3> tr;
+      fem::simulate<3>(scaled(static_cast<const Problem<3>&>(model), 0.5 * f30), scene.material, refined, tr);
+      const double d = depth(tr, tr.t.size() - 1);
+      row("neo-hookean-p2-refined", 0.5, 0.5 * f30, d, std::isfinite(d));
+      if (log)
+        *log << "  nu " << nu << ": neo-hookean-p2 refined once at 0.5 F30 in " << seconds() << " s\n" << std::flush;
+    }
     // The springs at rest under each level (at twice the continua's, for they soften early):
     // implicit Euler through the scene's 0.3 s ramp to 2 s; at rest when the last two samples
     // (0.1 s apart) agree to 1e-3. The paper's pair network ("springs": the scene's auto, the
