@@ -71,7 +71,9 @@ template <int dim> double max_omega_squared(const Model<dim>& model, bool exact)
     block[static_cast<std::size_t>(s)] =
         spring_jacobian<dim>(net.rest.col(i), net.rest.col(j), net.rest_length[s], net.stiffness[s], true);
   }
-  // The volume term's rest stiffness k_c g g^T (g: the cell's rest gradients), rank one per cell.
+  // The volume term's rest stiffness k_c g g^T (g: the cell's rest gradients, b_a), rank one per
+  // cell, and its shear part's Gauss-Newton blocks m_c (b_a . b_b) I (the bound of
+  // dense_scaled_stiffness, which takes the same blocks).
   std::vector<Eigen::Matrix<double, dim, dim + 1>> grad(static_cast<std::size_t>(net.volume.size()));
   for (std::size_t c = 0; c < grad.size(); ++c) grad[c] = rest_gradients<dim>(net.volume.rest_inverse[c]);
   Eigen::VectorXd scale(net.mass.size()); // 1/sqrt(m) per node
@@ -105,6 +107,18 @@ template <int dim> double max_omega_squared(const Model<dim>& model, bool exact)
       for (int p = 0; p <= dim; ++p) {
         const int a = model.free_index[static_cast<std::size_t>(cell[p])];
         if (a >= 0) y.col(a) += (scale[cell[p]] * rate) * g.col(p);
+      }
+      if (net.volume.has_shear()) {    // its shear part's m_c (b_a . b_b) I (the same blocks as above)
+        Mat<dim> B = Mat<dim>::Zero(); // sum_b (M^-1/2 x)_b b_b^T, then B b_a per node
+        for (int p = 0; p <= dim; ++p) {
+          const int a = model.free_index[static_cast<std::size_t>(cell[p])];
+          if (a >= 0) B += (scale[cell[p]] * x.col(a)) * g.col(p).transpose();
+        }
+        B *= net.volume.shear[c];
+        for (int p = 0; p <= dim; ++p) {
+          const int a = model.free_index[static_cast<std::size_t>(cell[p])];
+          if (a >= 0) y.col(a) += scale[cell[p]] * (B * g.col(p));
+        }
       }
     }
     lambda = (x.array() * y.array()).sum() / x.squaredNorm();

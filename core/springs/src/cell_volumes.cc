@@ -5,6 +5,7 @@
 #include "vtb/linalg/vector_clones.hh"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <string>
 
@@ -19,12 +20,14 @@ constexpr int kCellChunk = 64;
 /// The force pass's arithmetic on a chunk of n cells in structure-of-arrays form (component i
 /// of edge k of cell c at e[(k dim + i) kCellChunk + c]): from the edge vectors e_k = x_{k+1} -
 /// x_0 and the velocity differences w_k = v_{k+1} - v_0, the scaled gradients G_a = s dJ/dx_a
-/// (a = 1..dim, out in the same layout) with s = k_c (J - 1) + (c_c + extra k_c) dJ/dt and
+/// (a = 1..dim, out in the same layout) with s = k_c (J - 1) - shift_c + (c_c + extra k_c) dJ/dt
+/// (shift_c: the shear part's m_c, which moves the volume's rest to alpha_c; zero without it) and
 /// dJ/dx_a the columns of cof(D_s) / det(D_m) (volume_ratio_gradients' expressions). No
 /// gather, no branch: the loop vectorises.
 VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
-                                            const double* __restrict damping, double extra, double* __restrict G) {
+                                            const double* __restrict damping, const double* __restrict shift,
+                                            double extra, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], az = e[2 * C + c];
@@ -39,7 +42,7 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
         (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g1z * w[2 * C + c] + g2x * w[3 * C + c] + g2y * w[4 * C + c] +
          g2z * w[5 * C + c] + g3x * w[6 * C + c] + g3y * w[7 * C + c] + g3z * w[8 * C + c]) *
         inv;
-    const double s = (k[c] * (J - 1.0) + (damping[c] + extra * k[c]) * rate) * inv;
+    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y, G[2 * C + c] = s * g1z;
     G[3 * C + c] = s * g2x, G[4 * C + c] = s * g2y, G[5 * C + c] = s * g2z;
     G[6 * C + c] = s * g3x, G[7 * C + c] = s * g3y, G[8 * C + c] = s * g3z;
@@ -48,7 +51,8 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
 
 VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
-                                            const double* __restrict damping, double extra, double* __restrict G) {
+                                            const double* __restrict damping, const double* __restrict shift,
+                                            double extra, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], bx = e[2 * C + c], by = e[3 * C + c];
@@ -56,9 +60,44 @@ VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, c
     const double inv = inverse_rest_det[c];
     const double J = (ax * by - bx * ay) * inv;
     const double rate = (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g2x * w[2 * C + c] + g2y * w[3 * C + c]) * inv;
-    const double s = (k[c] * (J - 1.0) + (damping[c] + extra * k[c]) * rate) * inv;
+    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y;
     G[2 * C + c] = s * g2x, G[3 * C + c] = s * g2y;
+  }
+}
+
+/// The shear part's forces on a chunk of n cells, added to G (the amount taken from f_a, a >= 1):
+/// G_a += sum_k (m e_k + c w_k) S_{k a} with S = D_m^-1 D_m^-T (`metric`: its entries' columns at
+/// the chunk) and c = tau m + extra m: m (F + tau dF/dt) times the rest gradient b_a.
+VTB_VECTOR_CLONES void cell_shear_3d(int n, const double* __restrict e, const double* __restrict w,
+                                     const double* __restrict s00, const double* __restrict s11,
+                                     const double* __restrict s22, const double* __restrict s01,
+                                     const double* __restrict s02, const double* __restrict s12,
+                                     const double* __restrict m, const double* __restrict ms, double extra,
+                                     double* __restrict G) {
+  constexpr int C = kCellChunk;
+  for (int c = 0; c < n; ++c) {
+    const double cm = m[c], cd = ms[c] + extra * m[c];
+    double p[9]; // column k of m D_s + c W_s: component i at p[3 k + i]
+    for (int q = 0; q < 9; ++q) p[q] = cm * e[q * C + c] + cd * w[q * C + c];
+    const double S[3][3] = {{s00[c], s01[c], s02[c]}, {s01[c], s11[c], s12[c]}, {s02[c], s12[c], s22[c]}};
+    for (int a = 0; a < 3; ++a)
+      for (int i = 0; i < 3; ++i) G[(3 * a + i) * C + c] += p[i] * S[0][a] + p[3 + i] * S[1][a] + p[6 + i] * S[2][a];
+  }
+}
+
+VTB_VECTOR_CLONES void cell_shear_2d(int n, const double* __restrict e, const double* __restrict w,
+                                     const double* __restrict s00, const double* __restrict s11,
+                                     const double* __restrict s01, const double* __restrict m,
+                                     const double* __restrict ms, double extra, double* __restrict G) {
+  constexpr int C = kCellChunk;
+  for (int c = 0; c < n; ++c) {
+    const double cm = m[c], cd = ms[c] + extra * m[c];
+    double p[4];
+    for (int q = 0; q < 4; ++q) p[q] = cm * e[q * C + c] + cd * w[q * C + c];
+    const double S[2][2] = {{s00[c], s01[c]}, {s01[c], s11[c]}};
+    for (int a = 0; a < 2; ++a)
+      for (int i = 0; i < 2; ++i) G[(2 * a + i) * C + c] += p[i] * S[0][a] + p[2 + i] * S[1][a];
   }
 }
 
@@ -69,6 +108,7 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
                        Nodal<dim>& f, double extra_damping_per_k) {
   constexpr int C = kCellChunk;
   alignas(64) double e[dim * dim * C], w[dim * dim * C], G[dim * dim * C];
+  alignas(64) const double no_shift[C] = {};
   for (int c0 = 0; c0 < cv.size(); c0 += C) {
     const int n = std::min(C, cv.size() - c0);
     // Gather: the edge vectors and velocity differences, node 0's position and velocity once
@@ -88,10 +128,21 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
       }
     }
     const double *inv = cv.inverse_rest_det.data() + c0, *k = cv.stiffness.data() + c0, *d = cv.damping.data() + c0;
+    // With a shear part the volume pulls toward alpha_c = 1 + m_c / k_c: k_c (J - alpha_c) =
+    // k_c (J - 1) - m_c (at rest its pull -m_c dJ/dx_a cancels the shear's m_c b_a).
+    const double* shift = cv.has_shear() ? cv.shear.data() + c0 : no_shift;
     if constexpr (dim == 3)
-      cell_coefficients_3d(n, e, w, inv, k, d, extra_damping_per_k, G);
+      cell_coefficients_3d(n, e, w, inv, k, d, shift, extra_damping_per_k, G);
     else
-      cell_coefficients_2d(n, e, w, inv, k, d, extra_damping_per_k, G);
+      cell_coefficients_2d(n, e, w, inv, k, d, shift, extra_damping_per_k, G);
+    if (cv.has_shear()) {
+      const double *m = cv.shear.data() + c0, *ms = cv.shear_damping.data() + c0;
+      const auto col = [&](int q) { return cv.shear_metric.col(q).data() + c0; };
+      if constexpr (dim == 3)
+        cell_shear_3d(n, e, w, col(0), col(1), col(2), col(3), col(4), col(5), m, ms, extra_damping_per_k, G);
+      else
+        cell_shear_2d(n, e, w, col(0), col(1), col(2), m, ms, extra_damping_per_k, G);
+    }
     // Scatter: f_a -= G_a, f_0 += their sum (sum_a dJ/dx_a = 0), node 0's summed over its run.
     Vec<dim> sum = Vec<dim>::Zero();
     first = cv.cell[static_cast<std::size_t>(c0)][0];
@@ -117,8 +168,13 @@ template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<
   const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   double e = 0;
   for (int c = 0; c < cv.size(); ++c) {
-    const double J = edge_matrix<dim>(cv.cell[static_cast<std::size_t>(c)], x).determinant() * cv.inverse_rest_det[c];
+    const Mat<dim> Ds = edge_matrix<dim>(cv.cell[static_cast<std::size_t>(c)], x);
+    const double J = Ds.determinant() * cv.inverse_rest_det[c];
     e += 0.5 * cv.stiffness[c] * (J - 1.0) * (J - 1.0);
+    if (cv.has_shear()) {
+      const Mat<dim> F = Ds * cv.rest_inverse[static_cast<std::size_t>(c)];
+      e += cv.shear[c] * (0.5 * (F.squaredNorm() - dim) - (J - 1.0));
+    }
   }
   return e;
 }
@@ -173,6 +229,25 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   return cv;
 }
 
+template <int dim>
+void set_cell_shear(CellVolumes<dim>& cv, double shear_modulus, double fraction, double thickness,
+                    double retardation_time) {
+  const auto n = static_cast<Eigen::Index>(cv.size());
+  cv.shear.resize(n);
+  cv.shear_metric.resize(n, dim == 3 ? 6 : 3);
+  for (Eigen::Index c = 0; c < n; ++c) {
+    const Mat<dim>& Bi = cv.rest_inverse[static_cast<std::size_t>(c)];
+    const double volume = 1.0 / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0));
+    cv.shear[c] = fraction * shear_modulus * volume * (dim == 2 ? thickness : 1.0);
+    const Mat<dim> S = Bi * Bi.transpose();
+    if constexpr (dim == 3)
+      cv.shear_metric.row(c) << S(0, 0), S(1, 1), S(2, 2), S(0, 1), S(0, 2), S(1, 2);
+    else
+      cv.shear_metric.row(c) << S(0, 0), S(1, 1), S(0, 1);
+  }
+  cv.shear_damping = retardation_time * cv.shear;
+}
+
 #define VTB_INSTANTIATE(D)                                                                                             \
   template void add_volume_forces<D>(const CellVolumes<D>&, const Nodal<D>&, const Nodal<D>&, const Nodal<D>&,         \
                                      Nodal<D>&, double);                                                               \
@@ -180,7 +255,8 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   template VolumeRatios volume_ratios<D>(const std::vector<std::array<int, D + 1>>&, const Nodal<D>&,                  \
                                          const Nodal<D>&);                                                             \
   template CellVolumes<D> make_cell_volumes<D>(const std::vector<std::array<int, D + 1>>&, const Nodal<D>&,            \
-                                               Eigen::VectorXd, double);
+                                               Eigen::VectorXd, double);                                               \
+  template void set_cell_shear<D>(CellVolumes<D>&, double, double, double, double);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -321,6 +321,12 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
   // dashpots): its edges (and cells), and the assembly's input.
   SpringNetwork<dim> net =
       build_network(mesh, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, options.volume ? "volume" : "van-gelder");
+  if (options.volume && options.cell_shear > 0) {
+    const double mu = E / (2 * (1 + nu));
+    net.stiffness *= 1 - options.cell_shear;
+    set_cell_shear(net.volume, mu, options.cell_shear, thickness, 0.0);
+    net.volume.stiffness += net.volume.shear;
+  }
   const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());
   const int held_dofs = N - free_dofs, need = fit_dofs_needed<dim>(options);

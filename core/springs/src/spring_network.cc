@@ -30,17 +30,21 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
-  else if (calibration == "fitted" || calibration == "fitted-volume") {
+  else if (calibration == "fitted" || calibration == "fitted-volume" || calibration == "fitted-stable") {
     CachedFit fit;
-    const bool volume = calibration == "fitted-volume";
+    const bool volume = calibration != "fitted";
+    const double shear = calibration == "fitted-stable" ? kStableCellShear : 0.0;
     Eigen::VectorXd cell_k;
     try {
       net.stiffness = cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit,
-                                              progress, target, volume ? &cell_k : nullptr);
+                                              progress, target, volume ? &cell_k : nullptr, shear);
       if (volume) { // the fit's cells are in make_cell_volumes' order: their constants set after it
         net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
         net.volume.stiffness = cell_k;
         net.volume.damping = mat.retardation_time * cell_k;
+        if (shear > 0)
+          set_cell_shear(net.volume, mat.young_modulus / (2 * (1 + mat.poisson_ratio)), shear, mat.thickness,
+                         mat.retardation_time);
       }
       net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
@@ -65,7 +69,7 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, std::move(cell_k), mat.retardation_time);
   } else
     throw InputError("[solver].springs = \"" + std::string(calibration) +
-                     "\": must be auto, lloyd, van-gelder, fitted, volume or fitted-volume");
+                     "\": must be auto, lloyd, van-gelder, fitted, volume, fitted-volume or fitted-stable");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;

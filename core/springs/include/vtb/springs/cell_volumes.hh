@@ -7,6 +7,13 @@
 /// (dJ/dx_a is F's cofactor times a rest gradient), finite through inversion, and the force
 /// pushes every cell toward J = 1 whatever the sign of J: a cell pressed through its base is
 /// pushed back (a pair of central springs is not: it has no orientation).
+/// With a shear part (`springs = "fitted-stable"`) a cell carries Smith, de Goes and Kim's
+/// stable neo-Hookean energy in Voigt form instead,
+///   E_c = m_c / 2 (|F|^2 - dim) + k_c / 2 (J - alpha_c)^2,   alpha_c = 1 + m_c / k_c,
+/// with m_c = mu_c V_c and its dashpot tau m_c on dF/dt: the first term is a set of
+/// zero-rest-length springs on the cell's edges (cotangent weights, a constant Hessian
+/// m_c (b_a . b_b) I), whose stiffness across a compressed edge stays positive where a
+/// rest-length spring's k (1 - L0/L) turns negative; alpha_c keeps the rest state free of force.
 
 #include "vtb/linalg/nodal.hh"
 
@@ -23,7 +30,13 @@ template <int dim> struct CellVolumes {
   Eigen::VectorXd inverse_rest_det;           ///< 1 / det(Dm): the force pass's J and dJ/dx (cell_volumes.cc)
   Eigen::VectorXd stiffness;                  ///< k_c = kappa_c V_c, J
   Eigen::VectorXd damping;                    ///< c_c = tau k_c, J s
+  Eigen::VectorXd shear;                      ///< m_c = mu_c V_c, J (none: size 0)
+  Eigen::VectorXd shear_damping;              ///< tau m_c, J s (size 0 without shear)
+  /// D_m^-1 D_m^-T per cell, its upper triangle's entries (00, 11, 22, 01, 02, 12 in 3D; 00,
+  /// 11, 01 in 2D) in columns: f_a = -m_c D_s (D_m^-1 D_m^-T) e_a (a >= 1) is the shear's force.
+  Eigen::MatrixXd shear_metric;
   bool empty() const { return cell.empty(); }
+  bool has_shear() const { return shear.size() > 0; }
   int size() const { return static_cast<int>(cell.size()); }
 };
 
@@ -85,10 +98,12 @@ template <int dim> inline Mat<dim> volume_ratio_hessian(const Mat<dim>& F, const
 /// For each cell and each ordered pair (a, b) of its nodes (a = b included), the blocks
 /// K = df_a/dx_b and D = df_a/dv_b of the volume term at displacement u:
 ///   K = -k_c (g_a g_b^T + (J - 1) d^2J/dx_a dx_b),   D = -c_c g_a g_b^T
-/// (the dashpot's dependence on positions omitted, as the springs'). With `gauss_newton`, K
-/// keeps its first term alone: -k_c g g^T over the cell is negative semidefinite, as the
-/// springs' clamp keeps theirs (implicit Euler factors it). Calls add(c, a, b, K, D) with the
-/// cell c and its local node indices a, b (global: cv.cell[c][a]). Allocates nothing.
+/// (the dashpot's dependence on positions omitted, as the springs'), and with a shear part
+///   K = -k_c g_a g_b^T - (k_c (J - 1) - m_c) d^2J/dx_a dx_b - m_c (b_a . b_b) I,
+///   D = -c_c g_a g_b^T - tau m_c (b_a . b_b) I.
+/// With `gauss_newton`, K drops its d^2J term: -k_c g g^T - m_c (b . b) I over the cell is
+/// negative semidefinite, as the springs' clamp keeps theirs (implicit Euler factors it). Calls add(c, a, b, K, D) with
+/// the cell c and its local node indices a, b (global: cv.cell[c][a]). Allocates nothing.
 template <int dim, class Add>
 void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, bool gauss_newton,
                          Add&& add) {
@@ -102,12 +117,14 @@ void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, con
     const Mat<dim> F = Ds * Bi;
     const Eigen::Matrix<double, dim, dim + 1> b = rest_gradients<dim>(Bi);
     const double k = cv.stiffness[c], d = cv.damping[c];
+    const double m = cv.has_shear() ? cv.shear[c] : 0.0, ms = cv.has_shear() ? cv.shear_damping[c] : 0.0;
     for (int a = 0; a <= dim; ++a)
       for (int bn = 0; bn <= dim; ++bn) {
         const Mat<dim> gg = g.col(a) * g.col(bn).transpose();
-        Mat<dim> K = -k * gg;
-        if (!gauss_newton && a != bn) K -= k * (J - 1.0) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
-        add(c, a, bn, K, Mat<dim>(-d * gg));
+        const double bb = b.col(a).dot(b.col(bn));
+        Mat<dim> K = -k * gg - m * bb * Mat<dim>::Identity();
+        if (!gauss_newton && a != bn) K -= (k * (J - 1.0) - m) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
+        add(c, a, bn, K, Mat<dim>(-d * gg - ms * bb * Mat<dim>::Identity()));
       }
   }
 }
@@ -119,7 +136,8 @@ template <int dim>
 void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
                        Nodal<dim>& f, double extra_damping_per_k);
 
-/// The volume term's elastic energy sum k_c/2 (J - 1)^2.
+/// The volume term's elastic energy sum k_c/2 (J - 1)^2, with a shear part
+/// + m_c/2 (|F|^2 - dim) - m_c (J - 1) (the stable energy less its constant m_c^2 / 2 k_c).
 template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u);
 
 /// What a run reports of the cells' volume ratios at X + u (every cell of `cells`, with or
@@ -137,5 +155,11 @@ VolumeRatios volume_ratios(const std::vector<std::array<int, dim + 1>>& cells, c
 template <int dim>
 CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
                                    Eigen::VectorXd stiffness, double retardation_time);
+
+/// Gives every cell the shear part m_c = fraction mu |V_c| (mu = E / 2 (1 + nu); times the
+/// thickness in 2D) and its dashpot tau m_c.
+template <int dim>
+void set_cell_shear(CellVolumes<dim>& cv, double shear_modulus, double fraction, double thickness,
+                    double retardation_time);
 
 } // namespace vtb

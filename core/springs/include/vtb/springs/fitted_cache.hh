@@ -40,11 +40,13 @@ struct CachedFit {
 /// fit's options and its target's key (FitTarget: the continuum or P1). A file of the wrong
 /// size or header, or written by another fit_code_version(), is refitted and replaced
 /// (atomically). With cell_stiffness the fit with a volume term (FitOptions::volume; its own
-/// key): the cells' constants go there, in make_cell_volumes' order.
+/// key): the cells' constants go there, in make_cell_volumes' order; `cell_shear` is
+/// FitOptions::cell_shear (in the key where it is not 0).
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
                                         CachedFit* info = nullptr, const FitProgress& progress = {},
-                                        const FitTarget& target = {}, Eigen::VectorXd* cell_stiffness = nullptr);
+                                        const FitTarget& target = {}, Eigen::VectorXd* cell_stiffness = nullptr,
+                                        double cell_shear = 0);
 
 } // namespace vtb

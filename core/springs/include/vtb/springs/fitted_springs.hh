@@ -120,6 +120,12 @@ struct FitOptions {
   /// the element fit's (lloyd_volume_stiffness, each cell at least 1 % of its bulk modulus
   /// times its volume); the guard weighs the fit against that prior alone.
   bool volume = false;
+  /// With the volume term, the fraction of the shear modulus each cell carries in the stable
+  /// energy's shear part (`springs = "fitted-stable"`, cell_volumes.hh; 0: none). Fixed, not
+  /// fitted: it enters the fit's stiffness as a constant background, the springs and the
+  /// cells' k_c identified around it (their prior: the springs' element fit times 1 - fraction,
+  /// the cells' plus fraction mu V, which the shear part's rest pull takes off the volume).
+  double cell_shear = 0;
 };
 
 struct FitReport {

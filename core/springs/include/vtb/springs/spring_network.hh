@@ -22,10 +22,11 @@ template <int dim> struct SpringNetwork {
   Eigen::VectorXd stiffness;            ///< k per spring, N/m
   Eigen::VectorXd damping;              ///< c = tau k per spring, N s/m
   double mass_damping = 0;              ///< gamma, 1/s: force -gamma m v on every node
-  /// The volume term per cell (calibration "volume" or "fitted-volume"; empty otherwise): every force pass,
+  /// The volume term per cell ("volume", "fitted-volume", "fitted-stable"; empty otherwise): every force pass,
   /// Jacobian and integrator takes it beside the springs (cell_volumes.hh).
   CellVolumes<dim> volume;
-  std::string calibration; ///< the constants used: "lloyd" | "van-gelder" | "fitted" | "volume" | "fitted-volume"
+  std::string calibration; ///< the constants used: "lloyd" | "van-gelder" | "fitted" | "volume" | "fitted-volume" |
+                           ///< "fitted-stable"
   std::string calibration_requested; ///< the scene's [solver].springs: the above or "auto"
   double calibration_seconds = 0;    ///< wall time of the stiffness calibration (the fit, for "fitted")
   bool calibration_cached = false;   ///< the fit's constants came from the fit cache (fitted_cache.hh)
@@ -55,10 +56,15 @@ template <int dim> struct SpringNetwork {
   int num_springs() const { return static_cast<int>(edge.size()); }
 };
 
+/// The fraction of the shear modulus a cell's shear part carries with `springs = "fitted-stable"`
+/// (FitOptions::cell_shear; docs/volume_term.md says what it measured).
+inline constexpr double kStableCellShear = 0.5;
+
 /// Builds the network of a mesh with the scene's material and calibration ("lloyd",
 /// "van-gelder", "fitted", "auto": fitted within auto's budget, fit_affordable, else Lloyd;
 /// "volume": Lloyd's element fit with a volume term per cell; "fitted-volume": the springs and
-/// that term fitted together).
+/// that term fitted together; "fitted-stable": the same with the stable energy's shear part,
+/// kStableCellShear of the shear modulus, in every cell, cell_volumes.hh).
 /// `supports`: the nodes the scene holds (sorted), which the fit trains with; `progress`: told
 /// how a fit advances (fitted_springs.hh).
 template <int dim>
