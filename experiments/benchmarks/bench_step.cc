@@ -196,6 +196,20 @@ void BM_ratio_plate517_volume_over_springs(benchmark::State& st) {
   paired_ratio(st, volume, plate517(), solvers::kFilterFull, solvers::kFilterFull, 100);
 }
 BENCHMARK(BM_ratio_plate517_volume_over_springs)->Unit(benchmark::kMillisecond)->Iterations(200);
+/// The same with the stable energy's shear part in every cell (`springs = "fitted-stable"`'s
+/// term; the element fit's constants and half the shear modulus, no fit: the step's work is the
+/// same whatever the constants).
+template <int dim> Model<dim> with_cell_shear(Model<dim> m) {
+  const MaterialDesc mat{5.0e4, 0.3333, 1000.0, 0.001, 0.05, 0.0}; // bench_model's
+  set_cell_shear(m.net.volume, mat.young_modulus / (2 * (1 + mat.poisson_ratio)), kStableCellShear, mat.thickness,
+                 mat.retardation_time);
+  return m;
+}
+void BM_ratio_plate517_stable_over_springs(benchmark::State& st) {
+  static const Model<2> stable = with_cell_shear(bench_model<2>(Eigen::Vector2i(46, 10), true, nullptr, "volume"));
+  paired_ratio(st, stable, plate517(), solvers::kFilterFull, solvers::kFilterFull, 100);
+}
+BENCHMARK(BM_ratio_plate517_stable_over_springs)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ratio_plate517_tensor_over_full)->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The torque correction's cost: the full filter's step on a free plate with and without it.
@@ -244,6 +258,12 @@ void BM_ratio_slab10k_volume_over_springs(benchmark::State& st) {
   paired_ratio(st, volume, slab10k(), solvers::kFilterMultigrid, solvers::kFilterMultigrid, 5);
 }
 BENCHMARK(BM_ratio_slab10k_volume_over_springs)->Unit(benchmark::kMillisecond)->Iterations(40);
+void BM_ratio_slab10k_stable_over_springs(benchmark::State& st) {
+  static const Mesh3 mesh = mesh_solid("slab", 10000);
+  static const Model<3> stable = with_cell_shear(bench_model<3>(Eigen::Vector3i::Zero(), true, &mesh, "volume"));
+  paired_ratio(st, stable, slab10k(), solvers::kFilterMultigrid, solvers::kFilterMultigrid, 5);
+}
+BENCHMARK(BM_ratio_slab10k_stable_over_springs)->Unit(benchmark::kMillisecond)->Iterations(40);
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
 
