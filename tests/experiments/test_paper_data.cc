@@ -172,6 +172,30 @@ TEST(PaperData, DeepPressRefinementComesFromTheFixture) {
   }
 }
 
+TEST(PaperData, DeepPressStableCellsComeFromTheFixture) {
+  // The network with the stable cells (springs-fitted-stable): its most cells inverted at once
+  // per material is the fixture's largest inverted_cells, and its curve holds every finite depth
+  // of the fixture (and the rest point the plot starts from).
+  const auto files = data_files();
+  const std::string& numbers = files.at("numbers.tex");
+  const auto t = harness::CsvTable::read(kFixture / "deep_press.csv");
+  for (const auto& [nu, tag] : {std::pair{"0.3", "A"}, std::pair{"0.45", "B"}}) {
+    double inverted = -1;
+    long points = 1;
+    for (std::size_t r = 0; r < t.rows(); ++r)
+      if (t.text(r, "poisson_ratio") == nu && t.text(r, "model") == "springs-fitted-stable") {
+        inverted = std::max(inverted, t.number(r, "inverted_cells"));
+        points += std::isfinite(t.number(r, "depth_ratio"));
+      }
+    ASSERT_GE(inverted, 0) << "the fixture holds the stable network for nu " << nu;
+    const std::string macro =
+        std::string("\\newcommand\\vtbDeepStableInverted") + tag + "{" + harness::tex_number(inverted, 6) + "}";
+    EXPECT_NE(numbers.find(macro), std::string::npos) << macro;
+    const std::string& curve = files.at(std::string("deep_") + tag + "_springs-fitted-stable.dat");
+    EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), points + 1) << "a header and one line a point";
+  }
+}
+
 TEST(PaperData, TransientTableComesFromTheFixture) {
   // One row per dt (three in the fixture), each starting with dt in ms and holding the tensor
   // filter's tip error in percent as the CSV has it.

@@ -390,18 +390,23 @@ density = 1.0
     // (0.1 s apart) agree to 1e-3. The paper's pair network ("springs": the scene's auto, the
     // fitted springs) and beside it the networks with the volume term per cell
     // (docs/volume_term.md): "springs-volume" (springs = "volume", the element fit) and
-    // "springs-fitted-volume" (springs = "fitted-volume", fitted as the pair springs are), with
-    // their inverted cells.
-    Scene with_volume = scene, with_fitted_volume = scene;
+    // "springs-fitted-volume" (springs = "fitted-volume", fitted as the pair springs are) and
+    // "springs-fitted-stable" (springs = "fitted-stable": the same with the stable energy's shear
+    // part in every cell), with their inverted cells.
+    Scene with_volume = scene, with_fitted_volume = scene, with_fitted_stable = scene;
     with_volume.solver.springs = "volume";
     with_fitted_volume.solver.springs = "fitted-volume";
+    with_fitted_stable.solver.springs = "fitted-stable";
     const Model<3> volume_model = build_model<3>(with_volume, std::get<Mesh3>(load_mesh(scene)), {}, false);
     const Model<3> fitted_volume_model =
         build_model<3>(with_fitted_volume, std::get<Mesh3>(load_mesh(scene)), {}, false, &yardstick);
+    const Model<3> fitted_stable_model =
+        build_model<3>(with_fitted_stable, std::get<Mesh3>(load_mesh(scene)), {}, false, &yardstick);
     using Entry = std::tuple<const char*, const Scene*, const Model<3>*>;
     for (const auto& [name, springs, spring_model] :
          {Entry{"springs", &scene, &model}, Entry{"springs-volume", &with_volume, &volume_model},
-          Entry{"springs-fitted-volume", &with_fitted_volume, &fitted_volume_model}}) {
+          Entry{"springs-fitted-volume", &with_fitted_volume, &fitted_volume_model},
+          Entry{"springs-fitted-stable", &with_fitted_stable, &fitted_stable_model}}) {
       for (int k = 1; k <= 2 * steps; ++k) {
         const double level = 1.0 * k / steps;
         Model<3> loaded = scaled(*spring_model, level * f30);
