@@ -336,7 +336,8 @@ std::string report_markdown(const ReproduceOptions& o, const TimingPart& part, d
      << kStabilityCriterion
      << ").\n- `decomposition.csv`: the error decomposition.\n- `creep.csv`: the creep strip's tip against the "
         "Kelvin-Voigt law.\n- `scaling.csv`: step time, precompute and heap over a 2D and a 3D mesh ladder.\n"
-        "- `fidelity.csv`: the springs' own error against P1 FEM on the same mesh (both linear and static) per "
+        "- `fidelity.csv`: the springs' own error against the continuum and P1 FEM on the same mesh (both linear and "
+        "static) per "
         "case and calibration (docs/fidelity.md).\n"
         "- `spring_fit.csv`: the spring fit's cost on clamped CGAL slabs (1k and 2k nodes when quick, else 1k to "
         "10k): wall time, steps, held-out error.\n"
