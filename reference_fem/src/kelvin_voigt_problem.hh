@@ -34,6 +34,7 @@
 #include "amg_krylov.hh"
 #include "backends.hh"
 #include "grid.hh"
+#include "level_answer.hh"
 #include "nonlinear.hh"
 #include "time_loop.hh"
 #include "time_scheme.hh"
@@ -72,6 +73,13 @@ public:
   /// are g's, linear over each of the scene's cells (a P1 field, exact on every refinement),
   /// with the supports held at zero. Serial backend only (kelvin_voigt_answers.cc).
   Eigen::MatrixXd body_force_answers(const Eigen::MatrixXd& g);
+
+  /// Nested iteration (docs/fem.md): a static nonlinear solve starts Newton at the whole load
+  /// from `coarse`, the answer of the level one uniform refinement below (P2), and falls back
+  /// to the load continuation from rest where Newton does not converge from it. Before run().
+  void start_from(const LevelAnswer<dim>* coarse) { m_start = coarse; }
+  /// After run(): the displacement at every support point, on every rank (the next level's start).
+  LevelAnswer<dim> answer(double quantum, MPI_Comm comm) const;
 
 private:
   RunReport header() const;
@@ -146,8 +154,13 @@ private:
   /// Converged when the free dofs' residual is 1e-9 of its first value (or of the load), or the
   /// update 1e-10 of the displacement; false when neither within 25 iterations (30 in a static
   /// increment), or non-finite. A correction that inverts a quadrature point (det F <= 0, or a
-  /// non-finite residual) is halved, up to 10 times.
-  bool newton(double load_scale);
+  /// non-finite residual) is halved, up to 10 times. `max_iterations` > 0 replaces 25 / 30.
+  bool newton(double load_scale, int max_iterations = 0);
+  /// Newton's iterations from the coarser level's answer (nested iteration) before the solve
+  /// falls back to the continuation from rest: from a start within the coarse discretisation
+  /// error Newton converged in 10 on the test press; where it wanders (the same press under
+  /// np 2, whose inexact corrections differ) more iterations only cost.
+  static constexpr int kNestedIterations = 12;
   /// The iterative corrections' forcing terms (newton): the first, the largest, and the finest.
   static constexpr double kFirstForcing = 1e-2, kFinestForcing = 1e-8;
   /// Newton's work over the run, for summary.json (report_solvers).
@@ -163,6 +176,10 @@ private:
   /// (the loads and prescribed values scaled from 0 to 1 in increments that grow after a
   /// converged solve and halve after a failed one).
   void step_nonlinear(double t_new);
+  /// m_ubar from m_start (LevelAnswer's rule); false where a fine vertex has no coarse value.
+  bool guess_from_coarse();
+  const LevelAnswer<dim>* m_start = nullptr;
+  bool m_nested_converged = false; ///< Newton converged from the coarse level's answer
 
   /// Stops a nonlinear run as unstable (run() reports why and when): the state turns
   /// non-finite, which the time loop's check catches.

@@ -259,6 +259,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::report_
     // inverting (the springs' min_volume_ratio measures their cells the same way).
     const double smallest = -m_backend.max(-m_min_J_accepted); // +inf before an accepted state
     rep.extra.push_back({"min_volume_ratio", std::isfinite(smallest) ? smallest : 1.0});
+    if (m_start) rep.extra.push_back({"nested_start_converged", m_nested_converged ? 1.0 : 0.0});
     if (m_opt.static_solve) {
       rep.extra.push_back({"load_increments", static_cast<double>(m_newton_stats.increments)});
       rep.extra.push_back({"load_increment_cuts", static_cast<double>(m_newton_stats.cuts)});

@@ -153,7 +153,7 @@ template <int dim, class Backend> double KelvinVoigtProblem<dim, Backend>::volum
   return -m_backend.max(-smallest_volume_ratio<dim>(m_mapping, m_fe, m_dofs, m_opt.degree, m_ghosted));
 }
 
-template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(double load_scale) {
+template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(double load_scale, int max_iterations) {
   const bool dynamic = !m_opt.static_solve;
   const double dt = m_opt.dt, rate = dynamic ? 1 / dt : 0.0;
   const double mass_weight = dynamic ? 1 / (dt * dt) + m_mat.mass_damping / dt : 0.0;
@@ -162,7 +162,7 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
   // the first has diverged. (At 12, the former cap, a graded neo-Hookean disc press of 49,026
   // dofs cut its increments 8 times and took 770 s; at 30, no cut and 100 s: from the secant
   // predictor's start Newton converges, if in more than 12 iterations on the deepest increment.)
-  const int iterations = dynamic ? 25 : 30;
+  const int iterations = max_iterations > 0 ? max_iterations : dynamic ? 25 : 30;
   int backtracks = 0;
   const auto halve = [&] { // the last correction, taken back by half
     ++backtracks;
@@ -264,6 +264,24 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
     // and 239 s without (docs/fem.md).
     double s_prev = -1;
     bool predict = true;
+    // Nested iteration: the whole load at once from the coarser level's answer (start_from).
+    // On the graded neo-Hookean disc press refined once, Newton converges from it where the
+    // continuation from rest takes four increments (docs/fem.md, "Nested iteration").
+    if (!continued && m_start) {
+      if (guess_from_coarse()) {
+        for (const auto d : m_owned)
+          if (m_support_of[d] >= 0) m_ubar[d] = target[d];
+        m_ubar.compress(dealii::VectorOperation::insert);
+        if ((m_opt.kinematics != Kinematics::neo_hookean || volume_ratio(m_ubar) > 0) &&
+            newton(1.0, kNestedIterations)) {
+          s = 1;
+          accepted = m_ubar;
+          m_nested_converged = true;
+          m_min_J_accepted = std::min(m_min_J_accepted, m_min_J);
+          ++m_newton_stats.increments;
+        }
+      }
+    }
     const auto secant = [&] { return predict && s_prev >= 0 && m_opt.secant_predictor; };
     Vector previous = accepted;
     // A law that softens to a limit point (St. Venant-Kirchhoff collapses under compression)
@@ -329,6 +347,44 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::step_no
   m_a.compress(dealii::VectorOperation::insert);
   m_v.compress(dealii::VectorOperation::insert);
   m_u = m_ubar;
+}
+
+template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::guess_from_coarse() {
+  // A fine vertex is a coarse P2 support point; a fine edge's midpoint takes the mean of its
+  // ends (the coarse quadratic along the edge would give more; Newton corrects the rest).
+  std::vector<dof_t> local(m_fe.n_dofs_per_cell());
+  for (const auto& cell : m_dofs.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    cell->get_dof_indices(local);
+    for (const auto d : local) {
+      if (!m_owned.is_element(d)) continue;
+      const int c = m_comp[d];
+      if (const auto v = m_start->at(m_point[d], c)) {
+        m_ubar[d] = *v;
+        continue;
+      }
+      unsigned int nearest = 0;
+      double best = std::numeric_limits<double>::infinity();
+      for (unsigned int l = 0; l < cell->n_lines(); ++l) {
+        const double gap = m_point[d].distance(cell->line(l)->center());
+        if (gap < best) best = gap, nearest = l;
+      }
+      const auto a = m_start->at(cell->line(nearest)->vertex(0), c), b = m_start->at(cell->line(nearest)->vertex(1), c);
+      if (!a || !b) return false;
+      m_ubar[d] = 0.5 * (*a + *b);
+    }
+  }
+  m_ubar.compress(dealii::VectorOperation::insert);
+  return true;
+}
+
+template <int dim, class Backend>
+LevelAnswer<dim> KelvinVoigtProblem<dim, Backend>::answer(double quantum, MPI_Comm comm) const {
+  LevelAnswer<dim> a(quantum);
+  for (const auto d : m_owned)
+    if (m_comp[d] >= 0) a.add(m_point[d], m_comp[d], m_u[d]);
+  a.gather(comm);
+  return a;
 }
 
 template <int dim, class Backend>

@@ -230,3 +230,40 @@ TEST(NeoHookeanFem, AStaticPathPassesThroughEachLoadsEquilibrium) {
 
 } // namespace
 } // namespace vtb
+
+namespace vtb {
+namespace {
+
+TEST(NeoHookeanFem, NestedIterationStartsTheRefinedLevelFromTheCoarseAnswer) {
+  // P2 refined once, static: the solve first runs on the mesh (P2) and starts Newton at the whole
+  // load from that answer instead of continuing from rest. The equilibrium does not depend on
+  // the start: both end at Newton's tolerance (1e-9 of the load), so the answers agree to 1e-7 of
+  // the displacement, while the coarse answer (within the discretisation error of the fine one)
+  // saves the fine level its continuation's increments. The reported move is the probe's change
+  // between the levels, which the P2 run on the mesh gives independently.
+  const Case3 c = press("degree = 2\nrefinements = 1\n");
+  fem::FemOptions nested = fem::options_from(c.scene.solver), from_rest = nested, coarse = nested;
+  from_rest.nested = false;
+  coarse.refinements = 0;
+  Trajectory<3> a, b, k;
+  const RunReport ra = fem::simulate<3>(c.problem, c.scene.material, nested, a);
+  const RunReport rb = fem::simulate<3>(c.problem, c.scene.material, from_rest, b);
+  const RunReport rk = fem::simulate<3>(c.problem, c.scene.material, coarse, k);
+  ASSERT_TRUE(ra.stable && rb.stable && rk.stable);
+  const Eigen::Vector3d ua = a.probe_u.back()[0], ub = b.probe_u.back()[0], uk = k.probe_u.back()[0];
+  EXPECT_LT((ua - ub).norm(), 1e-7 * ub.norm());
+  EXPECT_EQ(extra(ra, "nested_start_converged"), 1.0);
+  EXPECT_EQ(extra(ra, "load_increments"), 1.0);
+  std::cout << "fine-level Newton iterations nested " << extra(ra, "newton_iterations") << " (+ "
+            << extra(ra, "nested_coarse_newton_iterations") << " on the mesh), from rest "
+            << extra(rb, "newton_iterations") << "; the probe moved " << extra(ra, "nested_probe_move") << "\n";
+  EXPECT_LT(extra(ra, "newton_iterations"), extra(rb, "newton_iterations"));
+  EXPECT_EQ(extra(ra, "nested_coarse_dofs"), extra(rk, "dofs"));
+  EXPECT_EQ(extra(ra, "nested_coarse_newton_iterations"), extra(rk, "newton_iterations"));
+  // The move: |u_fine - u_coarse| / |u_fine| at the probe, to the Newton tolerance of both runs.
+  EXPECT_NEAR(extra(ra, "nested_probe_move"), (ua - uk).norm() / ua.norm(), 1e-6);
+  EXPECT_GT(extra(ra, "nested_probe_move"), 0.0); // refinement moves a P2 press's answer
+}
+
+} // namespace
+} // namespace vtb

@@ -35,6 +35,14 @@ struct FemOptions : FemSettings {
   /// The static load continuation's secant predictor (KelvinVoigtProblem::step_nonlinear): only
   /// tests turn it off, to show that it changes Newton's work and not the answer.
   bool secant_predictor = true;
+  /// Nested iteration (docs/fem.md): a static nonlinear P2 solve refined r >= 1 times first
+  /// solves at r - 1 and starts Newton at the whole load from that answer; summary.json says how
+  /// far the probes moved between the two levels. Only tests turn it off.
+  bool nested = true;
+  /// Whether these options solve nested (the rule above).
+  bool nests() const {
+    return nested && static_solve && !static_path && nonlinear() && degree == 2 && refinements >= 1;
+  }
 };
 
 /// `linear_solver = "auto"`: whether a system of this many dofs goes to AMG-preconditioned CG
