@@ -163,3 +163,53 @@ TEST(CellShear, WithTheWholeShearModulusTheRestStiffnessIsTheP1Elements3D) {
 
 } // namespace
 } // namespace vtb
+
+namespace vtb {
+namespace {
+
+template <int dim> void check_dashpot_cap() {
+  // The volume dashpot c_c g g^T (g = dJ/dx) strengthens as a compressed cell's faces widen;
+  // the filtered step holds only the rest dashpot implicitly, and past twice it the explicit
+  // part flips the velocity every step. Capped (volume_dashpot_cap), a pure volume rate v = g
+  // meets the work rate -f . v / |v|^2 = c_c |g|^2 min(1, |g_rest'|^2 / |g'|^2), g' the columns
+  // 1..dim: capped where a squeeze widens the faces, untouched where the cell shrinks evenly
+  // (its faces narrow). One cell, exact arithmetic: 1e-12.
+  const Mesh<dim> m = unit_simplex<dim>();
+  const double c = 2.0;
+  CellVolumes<dim> cv = make_cell_volumes<dim>(m.cells, m.points, Eigen::VectorXd::Constant(1, 1.0), c);
+  Eigen::Matrix<double, dim, dim + 1> g0, g;
+  volume_ratio_gradients<dim>(edge_matrix<dim>(cv.cell[0], [&](int i) { return Vec<dim>(m.points.col(i)); }),
+                              cv.inverse_rest_det[0], g0);
+  const double rest = g0.template rightCols<dim>().squaredNorm();
+  for (const double squeeze : {0.3, 1.0}) { // height to 0.3 and widened (volume kept); shrunk evenly to 0.8
+    Mat<dim> F = Mat<dim>::Identity() / std::sqrt(squeeze);
+    F(dim - 1, dim - 1) = squeeze;
+    if (squeeze == 1.0) F = 0.8 * Mat<dim>::Identity();
+    const Nodal<dim> u = F * m.points - m.points;
+    const auto x = [&](int i) -> Vec<dim> { return m.points.col(i) + u.col(i); };
+    volume_ratio_gradients<dim>(edge_matrix<dim>(cv.cell[0], x), cv.inverse_rest_det[0], g);
+    Nodal<dim> v(dim, dim + 1), f = Nodal<dim>::Zero(dim, dim + 1), f0 = Nodal<dim>::Zero(dim, dim + 1);
+    for (int a = 0; a <= dim; ++a) v.col(cv.cell[0][static_cast<std::size_t>(a)]) = g.col(a);
+    add_volume_forces<dim>(cv, m.points, u, v, f, 0.0);
+    add_volume_forces<dim>(cv, m.points, u, Nodal<dim>::Zero(dim, dim + 1), f0, 0.0); // the elastic part
+    const double rate = -((f - f0).cwiseProduct(v)).sum() / v.squaredNorm();
+    const double now = g.template rightCols<dim>().squaredNorm();
+    const double expected = c * g.squaredNorm() * std::min(1.0, rest / now);
+    EXPECT_NEAR(rate, expected, 1e-12 * expected) << "squeeze " << squeeze;
+    if (squeeze < 1) {
+      EXPECT_GT(now, 1.2 * rest); // the case the cap is for
+    } else {
+      EXPECT_NEAR(rate, c * g.squaredNorm(), 1e-12 * expected); // no cap where the faces narrow
+    }
+  }
+}
+
+TEST(CellVolumeDashpot, NeverDampsACompressedCellMoreThanAtRest2D) {
+  check_dashpot_cap<2>();
+}
+TEST(CellVolumeDashpot, NeverDampsACompressedCellMoreThanAtRest3D) {
+  check_dashpot_cap<3>();
+}
+
+} // namespace
+} // namespace vtb

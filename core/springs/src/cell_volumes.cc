@@ -21,13 +21,14 @@ constexpr int kCellChunk = 64;
 /// of edge k of cell c at e[(k dim + i) kCellChunk + c]): from the edge vectors e_k = x_{k+1} -
 /// x_0 and the velocity differences w_k = v_{k+1} - v_0, the scaled gradients G_a = s dJ/dx_a
 /// (a = 1..dim, out in the same layout) with s = k_c (J - 1) - shift_c + (c_c + extra k_c) dJ/dt
-/// (shift_c: the shear part's m_c, which moves the volume's rest to alpha_c; zero without it) and
+/// (shift_c: the shear part's m_c, which moves the volume's rest to alpha_c; zero without it; the
+/// dashpot times volume_dashpot_cap of |cof(D_m)|^2 `rest_norm2` and |cof(D_s)|^2) and
 /// dJ/dx_a the columns of cof(D_s) / det(D_m) (volume_ratio_gradients' expressions). No
 /// gather, no branch: the loop vectorises.
 VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
                                             const double* __restrict damping, const double* __restrict shift,
-                                            double extra, double* __restrict G) {
+                                            const double* __restrict rest_norm2, double extra, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], az = e[2 * C + c];
@@ -42,7 +43,10 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
         (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g1z * w[2 * C + c] + g2x * w[3 * C + c] + g2y * w[4 * C + c] +
          g2z * w[5 * C + c] + g3x * w[6 * C + c] + g3y * w[7 * C + c] + g3z * w[8 * C + c]) *
         inv;
-    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * rate) * inv;
+    const double norm2 =
+        g1x * g1x + g1y * g1y + g1z * g1z + g2x * g2x + g2y * g2y + g2z * g2z + g3x * g3x + g3y * g3y + g3z * g3z;
+    const double cap = volume_dashpot_cap(rest_norm2[c], norm2);
+    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y, G[2 * C + c] = s * g1z;
     G[3 * C + c] = s * g2x, G[4 * C + c] = s * g2y, G[5 * C + c] = s * g2z;
     G[6 * C + c] = s * g3x, G[7 * C + c] = s * g3y, G[8 * C + c] = s * g3z;
@@ -52,7 +56,7 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
 VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
                                             const double* __restrict damping, const double* __restrict shift,
-                                            double extra, double* __restrict G) {
+                                            const double* __restrict rest_norm2, double extra, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], bx = e[2 * C + c], by = e[3 * C + c];
@@ -60,7 +64,8 @@ VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, c
     const double inv = inverse_rest_det[c];
     const double J = (ax * by - bx * ay) * inv;
     const double rate = (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g2x * w[2 * C + c] + g2y * w[3 * C + c]) * inv;
-    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * rate) * inv;
+    const double cap = volume_dashpot_cap(rest_norm2[c], ax * ax + ay * ay + bx * bx + by * by);
+    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y;
     G[2 * C + c] = s * g2x, G[3 * C + c] = s * g2y;
   }
@@ -127,14 +132,15 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
         for (int i = 0; i < dim; ++i) e[(a * dim + i) * C + c] = ea[i], w[(a * dim + i) * C + c] = wa[i];
       }
     }
-    const double *inv = cv.inverse_rest_det.data() + c0, *k = cv.stiffness.data() + c0, *d = cv.damping.data() + c0;
+    const double *inv = cv.inverse_rest_det.data() + c0, *k = cv.stiffness.data() + c0, *d = cv.damping.data() + c0,
+                 *r0 = cv.rest_cofactor_norm2.data() + c0;
     // With a shear part the volume pulls toward alpha_c = 1 + m_c / k_c: k_c (J - alpha_c) =
     // k_c (J - 1) - m_c (at rest its pull -m_c dJ/dx_a cancels the shear's m_c b_a).
     const double* shift = cv.has_shear() ? cv.shear.data() + c0 : no_shift;
     if constexpr (dim == 3)
-      cell_coefficients_3d(n, e, w, inv, k, d, shift, extra_damping_per_k, G);
+      cell_coefficients_3d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, G);
     else
-      cell_coefficients_2d(n, e, w, inv, k, d, shift, extra_damping_per_k, G);
+      cell_coefficients_2d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, G);
     if (cv.has_shear()) {
       const double *m = cv.shear.data() + c0, *ms = cv.shear_damping.data() + c0;
       const auto col = [&](int q) { return cv.shear_metric.col(q).data() + c0; };
@@ -216,6 +222,7 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   stiffness = std::move(sorted);
   cv.rest_inverse.resize(cells.size());
   cv.inverse_rest_det.resize(static_cast<Eigen::Index>(cells.size()));
+  cv.rest_cofactor_norm2.resize(static_cast<Eigen::Index>(cells.size()));
   const auto X = [&](int i) -> Vec<dim> { return rest.col(i); };
   for (std::size_t c = 0; c < cells.size(); ++c) {
     const Mat<dim> Dm = edge_matrix<dim>(cv.cell[c], X);
@@ -223,6 +230,9 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
       throw InputError("cell " + std::to_string(order[c]) + ": zero volume, the volume term needs a rest shape");
     cv.rest_inverse[c] = Dm.inverse();
     cv.inverse_rest_det[static_cast<Eigen::Index>(c)] = 1.0 / Dm.determinant();
+    Eigen::Matrix<double, dim, dim + 1> g;
+    volume_ratio_gradients<dim>(Dm, 1.0, g); // columns 1..dim: cof(D_m)'s
+    cv.rest_cofactor_norm2[static_cast<Eigen::Index>(c)] = g.template rightCols<dim>().squaredNorm();
   }
   cv.damping = retardation_time * stiffness;
   cv.stiffness = std::move(stiffness);
