@@ -34,7 +34,6 @@
 #include "amg_krylov.hh"
 #include "backends.hh"
 #include "grid.hh"
-#include "level_answer.hh"
 #include "nonlinear.hh"
 #include "time_loop.hh"
 #include "time_scheme.hh"
