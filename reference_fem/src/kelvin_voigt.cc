@@ -46,7 +46,7 @@ RunReport run_level(const Problem<dim>& model, const MaterialDesc& material, con
   if (coarse) problem.start_from(&*coarse);
   RunReport rep = problem.run(out, record_field);
   if (answer) {
-    // The position grid: a billionth of the body's size (LevelAnswer in grid.hh).
+    // Points within a billionth of the body's size are one (LevelAnswer in grid.hh).
     const auto& x = model.mesh.points;
     const double size = (x.rowwise().maxCoeff() - x.rowwise().minCoeff()).norm();
     *answer = problem.answer(1e-9 * size, comm);

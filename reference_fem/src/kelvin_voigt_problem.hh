@@ -78,7 +78,7 @@ public:
   /// to the load continuation from rest where Newton does not converge from it. Before run().
   void start_from(const LevelAnswer<dim>* coarse) { m_start = coarse; }
   /// After run(): the displacement at every support point, on every rank (the next level's start).
-  LevelAnswer<dim> answer(double quantum, MPI_Comm comm) const;
+  LevelAnswer<dim> answer(double tolerance, MPI_Comm comm) const;
 
 private:
   RunReport header() const;

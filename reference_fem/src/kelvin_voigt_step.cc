@@ -379,8 +379,8 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::guess_f
 }
 
 template <int dim, class Backend>
-LevelAnswer<dim> KelvinVoigtProblem<dim, Backend>::answer(double quantum, MPI_Comm comm) const {
-  LevelAnswer<dim> a(quantum);
+LevelAnswer<dim> KelvinVoigtProblem<dim, Backend>::answer(double tolerance, MPI_Comm comm) const {
+  LevelAnswer<dim> a(tolerance);
   for (const auto d : m_owned)
     if (m_comp[d] >= 0) a.add(m_point[d], m_comp[d], m_u[d]);
   a.gather(comm);
