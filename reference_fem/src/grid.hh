@@ -147,22 +147,22 @@ double max_principal_strain(const dealii::Mapping<dim>& mapping, const dealii::F
   return worst;
 }
 
-// LevelAnswer: a solved level's displacement at its support points, found by position, so
-// that the next uniform refinement's Newton starts from it (nested iteration, docs/fem.md
-// "Nested iteration"). Uniform refinement of a simplex puts the fine vertices at the coarse P2
-// support points (vertices and edge midpoints), so a coarse P2 answer gives every fine vertex
-// its value; a fine edge's midpoint takes the mean of its two ends. The points are found with
-// deal.II's R-tree (boost::geometry).
+// LevelAnswer: a solved level's displacement at points found by position, so that the next
+// uniform refinement's Newton starts from it (nested iteration, docs/fem.md "Nested
+// iteration"). The solved level evaluates its field at the points of barycentric coordinates in
+// quarters of each cell: uniform refinement of a simplex puts the fine vertices at halves and
+// the fine edges' midpoints at quarters, so every fine P1 or P2 support point is one of them and
+// the coarse field is carried over exactly (a coarse P2 field is a fine P2 field). The points are
+// found with deal.II's R-tree (boost::geometry).
 template <int dim> class LevelAnswer {
 public:
   /// `tolerance`: how near a queried point must lie to one of this level's points to be it (far
-  /// below any mesh's spacing, far above the rounding of a midpoint computed two ways).
+  /// below any mesh's spacing, far above the rounding of a point mapped from two cells).
   explicit LevelAnswer(double tolerance) : m_tolerance(tolerance) {}
 
-  /// Component c of the displacement at p.
-  void add(const dealii::Point<dim>& p, int c, double value) {
+  /// The displacement at p (a point shared by cells may be added once per cell).
+  void add(const dealii::Point<dim>& p, const dealii::Tensor<1, dim>& value) {
     m_entries.emplace_back(p, static_cast<unsigned int>(m_value.size()));
-    m_comp.push_back(c);
     m_value.push_back(value);
   }
 
@@ -172,40 +172,35 @@ public:
     MPI_Initialized(&mpi);
     if (mpi && dealii::Utilities::MPI::n_mpi_processes(comm) > 1) {
       std::vector<double> mine;
-      for (const auto& [p, k] : m_entries) {
-        for (int a = 0; a < dim; ++a) mine.push_back(p[a]);
-        mine.push_back(m_comp[k]);
-        mine.push_back(m_value[k]);
-      }
-      m_entries.clear(), m_comp.clear(), m_value.clear();
+      for (const auto& [p, k] : m_entries)
+        for (int a = 0; a < 2 * dim; ++a) mine.push_back(a < dim ? p[a] : m_value[k][a - dim]);
+      m_entries.clear(), m_value.clear();
       for (const auto& part : dealii::Utilities::MPI::all_gather(comm, mine))
-        for (std::size_t k = 0; k + dim + 2 <= part.size(); k += dim + 2) {
+        for (std::size_t k = 0; k + 2 * dim <= part.size(); k += 2 * dim) {
           dealii::Point<dim> p;
-          for (int a = 0; a < dim; ++a) p[a] = part[k + static_cast<std::size_t>(a)];
-          add(p, static_cast<int>(part[k + dim]), part[k + dim + 1]);
+          dealii::Tensor<1, dim> v;
+          for (int a = 0; a < dim; ++a) p[a] = part[k + a], v[a] = part[k + dim + a];
+          add(p, v);
         }
     }
     m_tree = dealii::pack_rtree(m_entries);
   }
 
-  /// Component c of the displacement at p, if a point of this level lies within the tolerance.
-  std::optional<double> at(const dealii::Point<dim>& p, int c) const {
-    // A support point carries all dim components: the dim nearest entries are p's own if it has any.
+  /// The displacement at p, if a point of this level lies within the tolerance.
+  std::optional<dealii::Tensor<1, dim>> at(const dealii::Point<dim>& p) const {
     std::vector<Entry> near;
-    m_tree.query(boost::geometry::index::nearest(p, dim), std::back_inserter(near));
-    for (const auto& [q, k] : near)
-      if (m_comp[k] == c && q.distance(p) <= m_tolerance) return m_value[k];
-    return std::nullopt;
+    m_tree.query(boost::geometry::index::nearest(p, 1), std::back_inserter(near));
+    if (near.empty() || near[0].first.distance(p) > m_tolerance) return std::nullopt;
+    return m_value[near[0].second];
   }
 
   std::size_t size() const { return m_value.size(); }
 
 private:
-  using Entry = std::pair<dealii::Point<dim>, unsigned int>; ///< a point and its index in m_comp, m_value
+  using Entry = std::pair<dealii::Point<dim>, unsigned int>; ///< a point and its index in m_value
   double m_tolerance;
   std::vector<Entry> m_entries;
-  std::vector<int> m_comp;
-  std::vector<double> m_value;
+  std::vector<dealii::Tensor<1, dim>> m_value;
   dealii::RTree<Entry> m_tree;
 };
 

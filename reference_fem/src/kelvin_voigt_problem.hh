@@ -78,7 +78,7 @@ public:
   /// to the load continuation from rest where Newton does not converge from it. Before run().
   void start_from(const LevelAnswer<dim>* coarse) { m_start = coarse; }
   /// After run(): the displacement at every support point, on every rank (the next level's start).
-  LevelAnswer<dim> answer(double tolerance, MPI_Comm comm) const;
+  LevelAnswer<dim> answer(double tolerance, MPI_Comm comm);
 
 private:
   RunReport header() const;
@@ -155,16 +155,25 @@ private:
   /// increment), or non-finite. A correction that inverts a quadrature point (det F <= 0, or a
   /// non-finite residual) is halved, up to 10 times. `max_iterations` > 0 replaces 25 / 30.
   bool newton(double load_scale, int max_iterations = 0);
+  /// Newton's residual at m_ubar into r (the step's, as newton describes), zero on the
+  /// prescribed dofs; with `tangent`, its tangent into m_T.
+  void residual(double load_scale, Vector& r, bool tangent);
+  /// Shortens Newton's last correction where it overshoots (newton, from m_ubar = u0 - m_delta,
+  /// g0 = m_delta . R(u0)); residuals alone, no tangent (kelvin_voigt_step.cc).
+  void line_search(double load_scale, double g0);
+  /// The line search's acceptance, |G(eta)| <= kLineSearchRatio G(0), and its residuals at most.
+  static constexpr double kLineSearchRatio = 0.5, kOvershootRatio = 1.0;
+  static constexpr int kLineSearchTrials = 4;
   /// Newton's iterations from the coarser level's answer (nested iteration) before the solve
-  /// falls back to the continuation from rest: from a start within the coarse discretisation
-  /// error Newton converged in 10 on the test press; where it wanders (the same press under
-  /// np 2, whose inexact corrections differ) more iterations only cost.
+  /// falls back to the continuation from rest: from the exact coarse field (LevelAnswer) with the
+  /// line search Newton converged in 8 on the test press (serially and under np 2) and in 4 on
+  /// a cantilever; where it stalls (a graded press refined once, docs/fem.md) more only cost.
   static constexpr int kNestedIterations = 12;
   /// The iterative corrections' forcing terms (newton): the first, the largest, and the finest.
   static constexpr double kFirstForcing = 1e-2, kFinestForcing = 1e-8;
   /// Newton's work over the run, for summary.json (report_solvers).
   struct NewtonStats {
-    long iterations = 0, backtracks = 0, increments = 0, cuts = 0;
+    long iterations = 0, backtracks = 0, increments = 0, cuts = 0, line_searches = 0;
   };
   NewtonStats m_newton_stats;
   /// The smallest det F over the quadrature points: of the last assembly (nonlinear_force),
@@ -217,7 +226,7 @@ private:
   /// The linear step's A0 (symmetric positive definite) and the nonlinear tangent.
   ChosenSolver<typename Backend::SpdSolver, Matrix, Vector> m_solver;
   ChosenSolver<typename Backend::Solver, Matrix, Vector> m_newton;
-  Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv;
+  Vector m_u, m_v, m_a, m_f, m_rhs, m_tmp, m_ubar, m_delta, m_da, m_dv, m_trial;
   Vector m_ghosted, m_ghosted_v, m_frame_prev, m_frame_last, m_frame_mix;
   double m_max_strain = 0, m_max_rotation = 0;
   std::string m_nonlinear_failure; ///< why a nonlinear run stopped, empty while it runs

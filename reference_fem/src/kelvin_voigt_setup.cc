@@ -92,7 +92,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::setup_d
   dealii::DynamicSparsityPattern dsp(m_relevant);
   dealii::DoFTools::make_sparsity_pattern(m_dofs, dsp, dealii::AffineConstraints<double>(), true);
   m_backend.reinit(dsp, m_owned, m_relevant, matrices_read());
-  for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta, &m_da, &m_dv})
+  for (auto* v : {&m_u, &m_v, &m_a, &m_f, &m_rhs, &m_tmp, &m_ubar, &m_delta, &m_da, &m_dv, &m_trial})
     m_backend.reinit(*v, m_owned);
   m_backend.reinit_ghosted(m_ghosted, m_owned, m_relevant);
   m_backend.reinit_ghosted(m_ghosted_v, m_owned, m_relevant);
@@ -255,6 +255,7 @@ template <int dim, class Backend> void KelvinVoigtProblem<dim, Backend>::report_
   if (newton) {
     rep.extra.push_back({"newton_iterations", static_cast<double>(m_newton_stats.iterations)});
     rep.extra.push_back({"newton_backtracks", static_cast<double>(m_newton_stats.backtracks)});
+    rep.extra.push_back({"newton_line_searches", static_cast<double>(m_newton_stats.line_searches)});
     // The smallest det F at a quadrature point of any accepted state: how near the solid came to
     // inverting (the springs' min_volume_ratio measures their cells the same way).
     const double smallest = -m_backend.max(-m_min_J_accepted); // +inf before an accepted state

@@ -265,5 +265,26 @@ TEST(NeoHookeanFem, NestedIterationStartsTheRefinedLevelFromTheCoarseAnswer) {
   EXPECT_GT(extra(ra, "nested_probe_move"), 0.0); // refinement moves a P2 press's answer
 }
 
+TEST(NeoHookeanFem, TheLineSearchIsWhatLetsTheNestedStartConverge) {
+  // The coarse answer carried over exactly leaves a residual where the finer level resolves
+  // more of the disc's rim; Newton's whole first correction from it overshoots (the potential
+  // rises along it) and the start wanders off. The line search shortens that correction and the
+  // start converges; without it the solve falls back to the continuation from rest and ends at
+  // the same equilibrium (Newton's tolerance, 1e-9 of the load: 1e-7 of the displacement).
+  const Case3 c = press("degree = 2\nrefinements = 1\n");
+  fem::FemOptions with = fem::options_from(c.scene.solver), without = with;
+  without.line_search = false;
+  Trajectory<3> a, b;
+  const RunReport ra = fem::simulate<3>(c.problem, c.scene.material, with, a);
+  const RunReport rb = fem::simulate<3>(c.problem, c.scene.material, without, b);
+  ASSERT_TRUE(ra.stable && rb.stable);
+  EXPECT_EQ(extra(ra, "nested_start_converged"), 1.0);
+  EXPECT_GE(extra(ra, "newton_line_searches"), 1.0);
+  EXPECT_EQ(extra(rb, "nested_start_converged"), 0.0);
+  EXPECT_EQ(extra(rb, "newton_line_searches"), 0.0);
+  const Eigen::Vector3d ua = a.probe_u.back()[0], ub = b.probe_u.back()[0];
+  EXPECT_LT((ua - ub).norm(), 1e-7 * ub.norm());
+}
+
 } // namespace
 } // namespace vtb

@@ -35,6 +35,9 @@ struct FemOptions : FemSettings {
   /// The static load continuation's secant predictor (KelvinVoigtProblem::step_nonlinear): only
   /// tests turn it off, to show that it changes Newton's work and not the answer.
   bool secant_predictor = true;
+  /// Newton's line search (KelvinVoigtProblem::line_search): only tests turn it off, to show
+  /// what it changes.
+  bool line_search = true;
   /// Nested iteration (docs/fem.md): a static nonlinear P2 solve refined r >= 1 times first
   /// solves at r - 1 and starts Newton at the whole load from that answer; summary.json says how
   /// far the probes moved between the two levels. Only tests turn it off.
