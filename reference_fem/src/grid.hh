@@ -194,8 +194,6 @@ public:
     return m_value[near[0].second];
   }
 
-  std::size_t size() const { return m_value.size(); }
-
 private:
   using Entry = std::pair<dealii::Point<dim>, unsigned int>; ///< a point and its index in m_value
   double m_tolerance;

@@ -161,7 +161,8 @@ private:
   /// Shortens Newton's last correction where it overshoots (newton, from m_ubar = u0 - m_delta,
   /// g0 = m_delta . R(u0)); residuals alone, no tangent (kelvin_voigt_step.cc).
   void line_search(double load_scale, double g0);
-  /// The line search's acceptance, |G(eta)| <= kLineSearchRatio G(0), and its residuals at most.
+  /// The line search starts where G(1) < -kOvershootRatio G(0) and ends at |G(eta)| <=
+  /// kLineSearchRatio G(0), or after kLineSearchTrials residuals.
   static constexpr double kLineSearchRatio = 0.5, kOvershootRatio = 1.0;
   static constexpr int kLineSearchTrials = 4;
   /// Newton's iterations from the coarser level's answer (nested iteration) before the solve

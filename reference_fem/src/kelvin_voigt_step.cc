@@ -258,7 +258,6 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     }
     m_newton.update(m_T);
     m_newton.solve(m_delta, m_rhs);
-    const double g0 = m_delta * m_rhs; // the line search's slope at the start (line_search)
     m_ubar -= m_delta;
     // Round-off bounds the residual at about cond(K) 1e-16 of the load (6e-7 of it on a thin
     // cantilever, cond ~ 1e9): a whole correction of 1e-10 of the displacement has converged too.
@@ -268,14 +267,13 @@ template <int dim, class Backend> bool KelvinVoigtProblem<dim, Backend>::newton(
     // stays the law's own guard. A halved correction is no sign of convergence: the next
     // iteration assembles at it.
     bool halved = false;
-    double scale = 1;
     while (m_opt.kinematics == Kinematics::neo_hookean && backtracks < 10 && !(volume_ratio(m_ubar) > 0)) {
       halve();
       halved = true;
-      scale *= 0.5;
     }
     if (negligible && !halved) return true;
-    if (m_opt.line_search) line_search(load_scale, scale * g0);
+    // m_rhs still holds the residual at the correction's start, m_delta the step (halved or not).
+    if (m_opt.line_search) line_search(load_scale, m_delta * m_rhs);
   }
   return false;
 }
@@ -409,7 +407,7 @@ LevelAnswer<dim> KelvinVoigtProblem<dim, Backend>::answer(double tolerance, MPI_
   std::vector<dealii::Point<dim>> quarters;
   for (int i = 0; i <= 4; ++i)
     for (int j = 0; i + j <= 4; ++j)
-      for (int k = 0; i + j + k <= 4; k += (dim == 3 ? 1 : 5)) {
+      for (int k = 0; k <= (dim == 3 ? 4 - i - j : 0); ++k) {
         dealii::Point<dim> p;
         p[0] = i / 4.0, p[1] = j / 4.0;
         if constexpr (dim == 3) p[2] = k / 4.0;

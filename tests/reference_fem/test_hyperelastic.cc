@@ -186,19 +186,34 @@ kinematics = "neo-hookean"
   return c;
 }
 
+/// The press under `solver` with a FemOptions switch on and off: both reports and the probe's
+/// last displacement in each.
+struct OnAndOff {
+  RunReport on, off;
+  Eigen::Vector3d u_on, u_off;
+};
+OnAndOff on_and_off(const std::string& solver, bool fem::FemOptions::*option) {
+  const Case3 c = press(solver);
+  fem::FemOptions on = fem::options_from(c.scene.solver), off = on;
+  on.*option = true;
+  off.*option = false;
+  Trajectory<3> a, b;
+  OnAndOff r{fem::simulate<3>(c.problem, c.scene.material, on, a),
+             fem::simulate<3>(c.problem, c.scene.material, off, b),
+             {},
+             {}};
+  if (r.on.stable && r.off.stable) r.u_on = a.probe_u.back()[0], r.u_off = b.probe_u.back()[0];
+  return r;
+}
+
 TEST(NeoHookeanFem, TheSecantPredictorChangesNewtonsWorkNotTheAnswer) {
   // The static continuation starts each increment from the last two equilibria extrapolated to
   // its load factor. The equilibrium does not depend on the guess: both runs end at Newton's
   // tolerance (1e-9 of the load), so the answers agree to 1e-7 of the displacement, while the
   // predictor's start is nearer the path and Newton needs fewer iterations.
-  const Case3 c = press("");
-  fem::FemOptions with = fem::options_from(c.scene.solver), without = with;
-  without.secant_predictor = false;
-  Trajectory<3> a, b;
-  const RunReport ra = fem::simulate<3>(c.problem, c.scene.material, with, a);
-  const RunReport rb = fem::simulate<3>(c.problem, c.scene.material, without, b);
+  const auto [ra, rb, ua, ub] = on_and_off("", &fem::FemOptions::secant_predictor);
   ASSERT_TRUE(ra.stable && rb.stable);
-  EXPECT_LT((a.probe_u.back()[0] - b.probe_u.back()[0]).norm(), 1e-7 * b.probe_u.back()[0].norm());
+  EXPECT_LT((ua - ub).norm(), 1e-7 * ub.norm());
   std::cout << "Newton iterations with the predictor " << extra(ra, "newton_iterations") << ", without "
             << extra(rb, "newton_iterations") << "; increments " << extra(ra, "load_increments") << " and "
             << extra(rb, "load_increments") << "\n";
@@ -271,18 +286,12 @@ TEST(NeoHookeanFem, TheLineSearchIsWhatLetsTheNestedStartConverge) {
   // rises along it) and the start wanders off. The line search shortens that correction and the
   // start converges; without it the solve falls back to the continuation from rest and ends at
   // the same equilibrium (Newton's tolerance, 1e-9 of the load: 1e-7 of the displacement).
-  const Case3 c = press("degree = 2\nrefinements = 1\n");
-  fem::FemOptions with = fem::options_from(c.scene.solver), without = with;
-  without.line_search = false;
-  Trajectory<3> a, b;
-  const RunReport ra = fem::simulate<3>(c.problem, c.scene.material, with, a);
-  const RunReport rb = fem::simulate<3>(c.problem, c.scene.material, without, b);
+  const auto [ra, rb, ua, ub] = on_and_off("degree = 2\nrefinements = 1\n", &fem::FemOptions::line_search);
   ASSERT_TRUE(ra.stable && rb.stable);
   EXPECT_EQ(extra(ra, "nested_start_converged"), 1.0);
   EXPECT_GE(extra(ra, "newton_line_searches"), 1.0);
   EXPECT_EQ(extra(rb, "nested_start_converged"), 0.0);
   EXPECT_EQ(extra(rb, "newton_line_searches"), 0.0);
-  const Eigen::Vector3d ua = a.probe_u.back()[0], ub = b.probe_u.back()[0];
   EXPECT_LT((ua - ub).norm(), 1e-7 * ub.norm());
 }
 
