@@ -210,6 +210,21 @@ void BM_ratio_plate517_stable_over_springs(benchmark::State& st) {
   paired_ratio(st, stable, plate517(), solvers::kFilterFull, solvers::kFilterFull, 100);
 }
 BENCHMARK(BM_ratio_plate517_stable_over_springs)->Unit(benchmark::kMillisecond)->Iterations(200);
+/// And with the volume averaged per node (`springs = "fitted-nodal"`'s term: the shear part,
+/// mu V per cell, the rest of the element fit's constants per node; no fit, as above).
+template <int dim> Model<dim> with_nodal_volume(Model<dim> m) {
+  m = with_cell_shear(std::move(m));
+  const MaterialDesc mat{5.0e4, 0.3333, 1000.0, 0.001, 0.05, 0.0}; // bench_model's
+  const Eigen::VectorXd own =
+      modulus_times_volume(m.net.volume, mat.young_modulus / (2 * (1 + mat.poisson_ratio)), mat.thickness);
+  make_nodal_volumes(m.net.volume, m.net.num_nodes(), &own);
+  return m;
+}
+void BM_ratio_plate517_nodal_over_springs(benchmark::State& st) {
+  static const Model<2> nodal = with_nodal_volume(bench_model<2>(Eigen::Vector2i(46, 10), true, nullptr, "volume"));
+  paired_ratio(st, nodal, plate517(), solvers::kFilterFull, solvers::kFilterFull, 100);
+}
+BENCHMARK(BM_ratio_plate517_nodal_over_springs)->Unit(benchmark::kMillisecond)->Iterations(200);
 BENCHMARK(BM_ratio_plate517_tensor_over_full)->Unit(benchmark::kMillisecond)->Iterations(200);
 
 /// The torque correction's cost: the full filter's step on a free plate with and without it.
@@ -264,6 +279,12 @@ void BM_ratio_slab10k_stable_over_springs(benchmark::State& st) {
   paired_ratio(st, stable, slab10k(), solvers::kFilterMultigrid, solvers::kFilterMultigrid, 5);
 }
 BENCHMARK(BM_ratio_slab10k_stable_over_springs)->Unit(benchmark::kMillisecond)->Iterations(40);
+void BM_ratio_slab10k_nodal_over_springs(benchmark::State& st) {
+  static const Mesh3 mesh = mesh_solid("slab", 10000);
+  static const Model<3> nodal = with_nodal_volume(bench_model<3>(Eigen::Vector3i::Zero(), true, &mesh, "volume"));
+  paired_ratio(st, nodal, slab10k(), solvers::kFilterMultigrid, solvers::kFilterMultigrid, 5);
+}
+BENCHMARK(BM_ratio_slab10k_nodal_over_springs)->Unit(benchmark::kMillisecond)->Iterations(40);
 /// What a scene with no filter key runs (auto: the V-cycle at this size).
 VTB_STEP_BENCH(slab10k, solvers::kFiltered, solvers::kFilterAuto, filtered_auto)
 

@@ -13,6 +13,7 @@
 #include "vtb/springs/force_jacobian.hh"
 #include "vtb/springs/spring_network.hh"
 
+#include "support/central_differences.hh"
 #include "support/small_models.hh"
 
 #include <gtest/gtest.h>
@@ -52,14 +53,7 @@ template <int dim> void check_force_is_minus_the_gradient(unsigned seed) {
     const Nodal<dim> v = Nodal<dim>::Zero(dim, dim + 1);
     Nodal<dim> f = Nodal<dim>::Zero(dim, dim + 1);
     add_volume_forces(cv, m.points, u, v, f, 0.0);
-    const double h = 1e-6;
-    Nodal<dim> fd(dim, dim + 1);
-    for (Eigen::Index k = 0; k < u.size(); ++k) {
-      Nodal<dim> up = u, um = u;
-      up.data()[k] += h;
-      um.data()[k] -= h;
-      fd.data()[k] = -(volume_energy(cv, m.points, up) - volume_energy(cv, m.points, um)) / (2 * h);
-    }
+    const Nodal<dim> fd = test::minus_energy_gradient(cv, m.points, u, 1e-6);
     EXPECT_LT((f - fd).cwiseAbs().maxCoeff(), 1e-7 * std::max(1.0, f.cwiseAbs().maxCoeff())) << "trial " << trial;
     // A translation does no work: the forces sum to zero.
     EXPECT_LT(f.rowwise().sum().norm(), 1e-12 * std::max(1.0, f.cwiseAbs().maxCoeff()));

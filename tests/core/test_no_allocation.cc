@@ -183,7 +183,10 @@ springs = "volume"
   // And with the stable energy's shear part in every cell (springs = "fitted-stable"'s term).
   Model<2> stable = volume;
   set_cell_shear(stable.net.volume, 5.0e4 / (2 * 1.45), kStableCellShear, 0.001, 0.05);
-  for (const Model<2>* m : {&volume, static_cast<const Model<2>*>(&stable)})
+  // And averaged per node (springs = "nodal-volume": its force pass's scratch is the term's own).
+  Model<2> nodal = volume;
+  make_nodal_volumes(nodal.net.volume, nodal.net.num_nodes());
+  for (const Model<2>* m : {&volume, static_cast<const Model<2>*>(&stable), static_cast<const Model<2>*>(&nodal)})
     for (const Case& c : {Case{"explicit", ""}, Case{"filtered", "full"}, Case{"filtered", "neighbors"},
                           Case{"implicit-euler", "", "direct"}, Case{"implicit-euler", "", "cg"}}) {
       const Model<2>& model = *m;
@@ -199,7 +202,8 @@ springs = "volume"
       g_counting = true;
       for (int k = 0; k < 50; ++k) integ->step(s);
       g_counting = false;
-      EXPECT_EQ(g_allocations, 0) << c << (model.net.volume.has_shear() ? " with the shear part" : "");
+      EXPECT_EQ(g_allocations, 0) << c << (model.net.volume.has_shear() ? " with the shear part" : "")
+                                  << (model.net.volume.nodal() ? " per node" : "");
     }
 }
 

@@ -172,28 +172,31 @@ TEST(PaperData, DeepPressRefinementComesFromTheFixture) {
   }
 }
 
-TEST(PaperData, DeepPressStableCellsComeFromTheFixture) {
-  // The network with the stable cells (springs-fitted-stable): its most cells inverted at once
-  // per material is the fixture's largest inverted_cells, and its curve holds every finite depth
-  // of the fixture (and the rest point the plot starts from).
+TEST(PaperData, DeepPressVolumeNetworksComeFromTheFixture) {
+  // The networks with the stable cells (springs-fitted-stable) and with the volume per node
+  // (springs-fitted-nodal): the most cells inverted at once per material is the fixture's
+  // largest inverted_cells, and the curve holds every finite depth of the fixture (and the rest
+  // point the plot starts from).
   const auto files = data_files();
   const std::string& numbers = files.at("numbers.tex");
   const auto t = harness::CsvTable::read(kFixture / "deep_press.csv");
-  for (const auto& [nu, tag] : {std::pair{"0.3", "A"}, std::pair{"0.45", "B"}}) {
-    double inverted = -1;
-    long points = 1;
-    for (std::size_t r = 0; r < t.rows(); ++r)
-      if (t.text(r, "poisson_ratio") == nu && t.text(r, "model") == "springs-fitted-stable") {
-        inverted = std::max(inverted, t.number(r, "inverted_cells"));
-        points += std::isfinite(t.number(r, "depth_ratio"));
-      }
-    ASSERT_GE(inverted, 0) << "the fixture holds the stable network for nu " << nu;
-    const std::string macro =
-        std::string("\\newcommand\\vtbDeepStableInverted") + tag + "{" + harness::tex_number(inverted, 6) + "}";
-    EXPECT_NE(numbers.find(macro), std::string::npos) << macro;
-    const std::string& curve = files.at(std::string("deep_") + tag + "_springs-fitted-stable.dat");
-    EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), points + 1) << "a header and one line a point";
-  }
+  for (const auto& [model, name] :
+       {std::pair{"springs-fitted-stable", "Stable"}, std::pair{"springs-fitted-nodal", "Nodal"}})
+    for (const auto& [nu, tag] : {std::pair{"0.3", "A"}, std::pair{"0.45", "B"}}) {
+      double inverted = -1;
+      long points = 1;
+      for (std::size_t r = 0; r < t.rows(); ++r)
+        if (t.text(r, "poisson_ratio") == nu && t.text(r, "model") == model) {
+          inverted = std::max(inverted, t.number(r, "inverted_cells"));
+          points += std::isfinite(t.number(r, "depth_ratio"));
+        }
+      ASSERT_GE(inverted, 0) << "the fixture holds " << model << " for nu " << nu;
+      const std::string macro =
+          std::string("\\newcommand\\vtbDeep") + name + "Inverted" + tag + "{" + harness::tex_number(inverted, 6) + "}";
+      EXPECT_NE(numbers.find(macro), std::string::npos) << macro;
+      const std::string& curve = files.at(std::string("deep_") + tag + "_" + model + ".dat");
+      EXPECT_EQ(std::count(curve.begin(), curve.end(), '\n'), points + 1) << "a header and one line a point";
+    }
 }
 
 TEST(PaperData, TransientTableComesFromTheFixture) {

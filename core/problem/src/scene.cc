@@ -263,7 +263,8 @@ void read_solver(const TableReader& top, const std::string& name, Scene& s) {
     o.dt = r.number("dt", d.dt, positive);
     o.dt_given = r.node("dt") != nullptr;
     o.springs = r.string("springs", d.springs,
-                         {"auto", "lloyd", "van-gelder", "fitted", "volume", "fitted-volume", "fitted-stable"});
+                         {"auto", "lloyd", "van-gelder", "fitted", "volume", "nodal-volume", "fitted-volume",
+                          "fitted-stable", "fitted-nodal"});
     o.step.filter = r.string("filter", d.step.filter, {solvers::kFilterChoices.begin(), solvers::kFilterChoices.end()});
     o.step.momentum_correction = r.boolean("momentum_correction", d.step.momentum_correction);
     o.step.strain_limit = r.number("strain_limit", d.step.strain_limit, non_negative);

@@ -23,12 +23,14 @@ constexpr int kCellChunk = 64;
 /// (a = 1..dim, out in the same layout) with s = k_c (J - 1) - shift_c + (c_c + extra k_c) dJ/dt
 /// (shift_c: the shear part's m_c, which moves the volume's rest to alpha_c; zero without it; the
 /// dashpot times volume_dashpot_cap of |cof(D_m)|^2 `rest_norm2` and |cof(D_s)|^2) and
-/// dJ/dx_a the columns of cof(D_s) / det(D_m) (volume_ratio_gradients' expressions). No
-/// gather, no branch: the loop vectorises.
+/// dJ/dx_a the columns of cof(D_s) / det(D_m) (volume_ratio_gradients' expressions); averaged
+/// per node, s is the cell's given `pressure` (nodal_forces_pressure). No gather: the loop
+/// vectorises.
 VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
                                             const double* __restrict damping, const double* __restrict shift,
-                                            const double* __restrict rest_norm2, double extra, double* __restrict G) {
+                                            const double* __restrict rest_norm2, double extra,
+                                            const double* __restrict pressure, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], az = e[2 * C + c];
@@ -46,7 +48,8 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
     const double norm2 =
         g1x * g1x + g1y * g1y + g1z * g1z + g2x * g2x + g2y * g2y + g2z * g2z + g3x * g3x + g3y * g3y + g3z * g3z;
     const double cap = volume_dashpot_cap(rest_norm2[c], norm2);
-    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
+    const double s =
+        (pressure ? pressure[c] : k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y, G[2 * C + c] = s * g1z;
     G[3 * C + c] = s * g2x, G[4 * C + c] = s * g2y, G[5 * C + c] = s * g2z;
     G[6 * C + c] = s * g3x, G[7 * C + c] = s * g3y, G[8 * C + c] = s * g3z;
@@ -56,7 +59,8 @@ VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, c
 VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
                                             const double* __restrict damping, const double* __restrict shift,
-                                            const double* __restrict rest_norm2, double extra, double* __restrict G) {
+                                            const double* __restrict rest_norm2, double extra,
+                                            const double* __restrict pressure, double* __restrict G) {
   constexpr int C = kCellChunk;
   for (int c = 0; c < n; ++c) {
     const double ax = e[0 * C + c], ay = e[1 * C + c], bx = e[2 * C + c], by = e[3 * C + c];
@@ -65,7 +69,8 @@ VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, c
     const double J = (ax * by - bx * ay) * inv;
     const double rate = (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g2x * w[2 * C + c] + g2y * w[3 * C + c]) * inv;
     const double cap = volume_dashpot_cap(rest_norm2[c], ax * ax + ay * ay + bx * bx + by * by);
-    const double s = (k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
+    const double s =
+        (pressure ? pressure[c] : k[c] * (J - 1.0) - shift[c] + (damping[c] + extra * k[c]) * cap * rate) * inv;
     G[0 * C + c] = s * g1x, G[1 * C + c] = s * g1y;
     G[2 * C + c] = s * g2x, G[3 * C + c] = s * g2y;
   }
@@ -106,7 +111,65 @@ VTB_VECTOR_CLONES void cell_shear_2d(int n, const double* __restrict e, const do
   }
 }
 
+/// The cells' J_c into cv.cell_ratio and their weighted means J_n into cv.node_ratio; with v,
+/// the same of the cells' dashpot-capped rates dJ_c/dt (cv.cell_rate, cv.node_rate).
+template <int dim>
+void nodal_ratios(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>* v) {
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
+  Eigen::Matrix<double, dim, dim + 1> g;
+  cv.node_ratio.setZero();
+  cv.node_rate.setZero();
+  for (int c = 0; c < cv.size(); ++c) {
+    const auto& cell = cv.cell[static_cast<std::size_t>(c)];
+    const double inv = cv.inverse_rest_det[c];
+    const double J = volume_ratio_gradients<dim>(edge_matrix<dim>(cell, x), inv, g);
+    double rate = 0;
+    if (v) {
+      for (int a = 0; a <= dim; ++a) rate += g.col(a).dot(v->col(cell[static_cast<std::size_t>(a)]));
+      rate *= volume_dashpot_cap(cv.rest_cofactor_norm2[c] * inv * inv, g.template rightCols<dim>().squaredNorm());
+    }
+    for (int a = 0; a <= dim; ++a) {
+      const int n = cell[static_cast<std::size_t>(a)];
+      cv.node_ratio[n] += cv.node_weight(c, a) * J;
+      cv.node_rate[n] += cv.node_weight(c, a) * rate;
+    }
+    cv.cell_ratio[c] = J;
+    cv.cell_rate[c] = rate;
+  }
+}
+
+/// Averaged per node: each cell's whole force coefficient s_c = sum_a w_ca (k_n (J_n - 1) +
+/// (c_n + extra k_n) dJ_n/dt) - m_c into cv.cell_pressure (the force pass's `pressure`).
+template <int dim>
+const double* nodal_forces_pressure(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u,
+                                    const Nodal<dim>& v, double extra) {
+  nodal_ratios(cv, rest, u, &v);
+  for (int c = 0; c < cv.size(); ++c) {
+    double s = (cv.has_shear() ? -cv.shear[c] : 0.0) + cv.own_stiffness[c] * (cv.cell_ratio[c] - 1.0) +
+               (cv.own_damping[c] + extra * cv.own_stiffness[c]) * cv.cell_rate[c];
+    for (int a = 0; a <= dim; ++a) {
+      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
+      s += cv.node_weight(c, a) * (cv.node_stiffness[n] * (cv.node_ratio[n] - 1.0) +
+                                   (cv.node_damping[n] + extra * cv.node_stiffness[n]) * cv.node_rate[n]);
+    }
+    cv.cell_pressure[c] = s;
+  }
+  return cv.cell_pressure.data();
+}
+
 } // namespace
+
+template <int dim> void nodal_pressures(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u) {
+  nodal_ratios<dim>(cv, rest, u, nullptr);
+  for (int c = 0; c < cv.size(); ++c) {
+    double s = cv.own_stiffness[c] * (cv.cell_ratio[c] - 1.0);
+    for (int a = 0; a <= dim; ++a) {
+      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
+      s += cv.node_weight(c, a) * cv.node_stiffness[n] * (cv.node_ratio[n] - 1.0);
+    }
+    cv.cell_pressure[c] = s;
+  }
+}
 
 template <int dim>
 void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
@@ -114,6 +177,7 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
   constexpr int C = kCellChunk;
   alignas(64) double e[dim * dim * C], w[dim * dim * C], G[dim * dim * C];
   alignas(64) const double no_shift[C] = {};
+  const double* pressure = cv.nodal() ? nodal_forces_pressure(cv, rest, u, v, extra_damping_per_k) : nullptr;
   for (int c0 = 0; c0 < cv.size(); c0 += C) {
     const int n = std::min(C, cv.size() - c0);
     // Gather: the edge vectors and velocity differences, node 0's position and velocity once
@@ -138,9 +202,9 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
     // k_c (J - 1) - m_c (at rest its pull -m_c dJ/dx_a cancels the shear's m_c b_a).
     const double* shift = cv.has_shear() ? cv.shear.data() + c0 : no_shift;
     if constexpr (dim == 3)
-      cell_coefficients_3d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, G);
+      cell_coefficients_3d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure ? pressure + c0 : nullptr, G);
     else
-      cell_coefficients_2d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, G);
+      cell_coefficients_2d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure ? pressure + c0 : nullptr, G);
     if (cv.has_shear()) {
       const double *m = cv.shear.data() + c0, *ms = cv.shear_damping.data() + c0;
       const auto col = [&](int q) { return cv.shear_metric.col(q).data() + c0; };
@@ -173,10 +237,14 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
 template <int dim> double volume_energy(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u) {
   const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   double e = 0;
+  if (cv.nodal()) {
+    nodal_ratios<dim>(cv, rest, u, nullptr);
+    e += 0.5 * cv.node_stiffness.dot((cv.node_ratio.array() - 1.0).square().matrix());
+  }
   for (int c = 0; c < cv.size(); ++c) {
     const Mat<dim> Ds = edge_matrix<dim>(cv.cell[static_cast<std::size_t>(c)], x);
     const double J = Ds.determinant() * cv.inverse_rest_det[c];
-    e += 0.5 * cv.stiffness[c] * (J - 1.0) * (J - 1.0);
+    e += 0.5 * (cv.nodal() ? cv.own_stiffness[c] : cv.stiffness[c]) * (J - 1.0) * (J - 1.0);
     if (cv.has_shear()) {
       const Mat<dim> F = Ds * cv.rest_inverse[static_cast<std::size_t>(c)];
       e += cv.shear[c] * (0.5 * (F.squaredNorm() - dim) - (J - 1.0));
@@ -239,16 +307,76 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   return cv;
 }
 
+template <int dim> void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own) {
+  const Eigen::Index nc = cv.size();
+  cv.own_stiffness = own ? *own : Eigen::VectorXd::Zero(nc);
+  cv.own_damping.resize(nc);
+  for (Eigen::Index c = 0; c < nc; ++c)
+    cv.own_damping[c] = cv.stiffness[c] > 0 ? cv.own_stiffness[c] * cv.damping[c] / cv.stiffness[c] : 0.0;
+  Eigen::VectorXd node_volume = Eigen::VectorXd::Zero(num_nodes);
+  cv.node_stiffness = Eigen::VectorXd::Zero(num_nodes);
+  cv.node_damping = Eigen::VectorXd::Zero(num_nodes);
+  cv.node_cells_start.assign(static_cast<std::size_t>(num_nodes) + 1, 0);
+  const auto volume = [&](Eigen::Index c) { return 1.0 / std::abs(cv.inverse_rest_det[c]); }; // dim! V_c
+  for (Eigen::Index c = 0; c < nc; ++c)
+    for (int n : cv.cell[static_cast<std::size_t>(c)]) {
+      node_volume[n] += volume(c) / (dim + 1);
+      cv.node_stiffness[n] += (cv.stiffness[c] - cv.own_stiffness[c]) / (dim + 1);
+      cv.node_damping[n] += (cv.damping[c] - cv.own_damping[c]) / (dim + 1);
+      ++cv.node_cells_start[static_cast<std::size_t>(n) + 1];
+    }
+  for (int n = 0; n < num_nodes; ++n)
+    cv.node_cells_start[static_cast<std::size_t>(n) + 1] += cv.node_cells_start[static_cast<std::size_t>(n)];
+  cv.node_cells.resize(static_cast<std::size_t>(cv.node_cells_start.back()));
+  std::vector<int> fill(cv.node_cells_start.begin(), cv.node_cells_start.end() - 1);
+  cv.node_weight.resize(nc, dim + 1);
+  for (Eigen::Index c = 0; c < nc; ++c) {
+    double k = 0, d = 0;
+    for (int a = 0; a <= dim; ++a) {
+      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
+      cv.node_cells[static_cast<std::size_t>(fill[static_cast<std::size_t>(n)]++)] = static_cast<int>(c);
+      const double w = volume(c) / (dim + 1) / node_volume[n];
+      cv.node_weight(c, a) = w;
+      k += w * cv.node_stiffness[n];
+      d += w * cv.node_damping[n];
+    }
+    cv.stiffness[c] = cv.own_stiffness[c] + k;
+    cv.damping[c] = cv.own_damping[c] + d;
+  }
+  cv.cell_ratio.resize(nc);
+  cv.cell_rate.resize(nc);
+  cv.cell_pressure.resize(nc);
+  cv.node_ratio.resize(num_nodes);
+  cv.node_rate.resize(num_nodes);
+}
+
+template <int dim>
+void set_node_stiffness(CellVolumes<dim>& cv, const Eigen::VectorXd& node_stiffness, double retardation_time) {
+  cv.node_stiffness = node_stiffness;
+  cv.node_damping = retardation_time * node_stiffness;
+  for (int c = 0; c < cv.size(); ++c) {
+    double k = 0;
+    for (int a = 0; a <= dim; ++a)
+      k += cv.node_weight(c, a) * node_stiffness[cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)]];
+    cv.stiffness[c] = cv.own_stiffness[c] + k;
+  }
+  cv.own_damping = retardation_time * cv.own_stiffness;
+  cv.damping = retardation_time * cv.stiffness;
+}
+
+template <int dim> Eigen::VectorXd modulus_times_volume(const CellVolumes<dim>& cv, double modulus, double thickness) {
+  const double scale = modulus * (dim == 2 ? thickness / 2.0 : 1.0 / 6.0); // |det D_m| / dim!
+  return scale * cv.inverse_rest_det.cwiseAbs().cwiseInverse();
+}
+
 template <int dim>
 void set_cell_shear(CellVolumes<dim>& cv, double shear_modulus, double fraction, double thickness,
                     double retardation_time) {
   const auto n = static_cast<Eigen::Index>(cv.size());
-  cv.shear.resize(n);
+  cv.shear = modulus_times_volume(cv, fraction * shear_modulus, thickness);
   cv.shear_metric.resize(n, dim == 3 ? 6 : 3);
   for (Eigen::Index c = 0; c < n; ++c) {
     const Mat<dim>& Bi = cv.rest_inverse[static_cast<std::size_t>(c)];
-    const double volume = 1.0 / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0));
-    cv.shear[c] = fraction * shear_modulus * volume * (dim == 2 ? thickness : 1.0);
     const Mat<dim> S = Bi * Bi.transpose();
     if constexpr (dim == 3)
       cv.shear_metric.row(c) << S(0, 0), S(1, 1), S(2, 2), S(0, 1), S(0, 2), S(1, 2);
@@ -266,7 +394,11 @@ void set_cell_shear(CellVolumes<dim>& cv, double shear_modulus, double fraction,
                                          const Nodal<D>&);                                                             \
   template CellVolumes<D> make_cell_volumes<D>(const std::vector<std::array<int, D + 1>>&, const Nodal<D>&,            \
                                                Eigen::VectorXd, double);                                               \
-  template void set_cell_shear<D>(CellVolumes<D>&, double, double, double, double);
+  template void set_cell_shear<D>(CellVolumes<D>&, double, double, double, double);                                    \
+  template void make_nodal_volumes<D>(CellVolumes<D>&, int, const Eigen::VectorXd*);                                   \
+  template void set_node_stiffness<D>(CellVolumes<D>&, const Eigen::VectorXd&, double);                                \
+  template Eigen::VectorXd modulus_times_volume<D>(const CellVolumes<D>&, double, double);                             \
+  template void nodal_pressures<D>(const CellVolumes<D>&, const Nodal<D>&, const Nodal<D>&);
 VTB_INSTANTIATE(2)
 VTB_INSTANTIATE(3)
 #undef VTB_INSTANTIATE

@@ -35,7 +35,7 @@ struct Fnv {
 /// and a stiffness sweep or the viewer's stiffness slider reads it back scaled.
 template <int dim>
 std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports, const std::string& target,
-                  bool volume, double cell_shear) {
+                  bool volume, double cell_shear, bool nodal) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
@@ -54,6 +54,7 @@ std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supp
   f.add(target.data(), target.size());
   if (volume) f.add("volume", 6); // the springs-only fits' keys stay as they were
   if (cell_shear > 0) f.add(cell_shear);
+  if (nodal) f.add("nodal", 5);
   return f.h;
 }
 
@@ -103,14 +104,16 @@ std::filesystem::path fit_cache_dir() {
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double nu, double t,
                                         const std::vector<int>& supports, CachedFit* info, const FitProgress& progress,
-                                        const FitTarget& target, Eigen::VectorXd* cell_stiffness, double cell_shear) {
+                                        const FitTarget& target, Eigen::VectorXd* cell_stiffness, double cell_shear,
+                                        bool nodal) {
   const std::filesystem::path dir = fit_cache_dir();
   const bool volume = cell_stiffness != nullptr;
   char name[40];
   std::snprintf(name, sizeof name, "fitted-%016llx.bin",
-                static_cast<unsigned long long>(key(mesh, nu, supports, target.key, volume, cell_shear)));
+                static_cast<unsigned long long>(key(mesh, nu, supports, target.key, volume, cell_shear, nodal)));
   const auto ns = static_cast<Eigen::Index>(unique_edges(mesh).size());
-  Eigen::VectorXd k(ns + (volume ? mesh.num_cells() : 0)); // the springs', then the cells'
+  // The springs', then the cells' (or the nodes').
+  Eigen::VectorXd k(ns + (volume ? (nodal ? mesh.num_nodes() : mesh.num_cells()) : 0));
   CachedFit got;
   got.hit = !dir.empty() && read_cache(dir / name, k, got);
   if (!got.hit) {
@@ -120,6 +123,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     options.target = target;
     options.volume = volume;
     options.cell_shear = cell_shear;
+    options.nodal = nodal;
     FitReport report;
     Eigen::VectorXd cells;
     k.head(ns) = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report, &cells); // unit E t, scaled below
@@ -146,9 +150,9 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
 
 template Eigen::VectorXd cached_fitted_stiffness<2>(const Mesh<2>&, double, double, double, const std::vector<int>&,
                                                     CachedFit*, const FitProgress&, const FitTarget&, Eigen::VectorXd*,
-                                                    double);
+                                                    double, bool);
 template Eigen::VectorXd cached_fitted_stiffness<3>(const Mesh<3>&, double, double, double, const std::vector<int>&,
                                                     CachedFit*, const FitProgress&, const FitTarget&, Eigen::VectorXd*,
-                                                    double);
+                                                    double, bool);
 
 } // namespace vtb

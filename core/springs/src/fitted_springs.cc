@@ -36,16 +36,53 @@ template <int dim> struct FitSpace {
   /// Takes the network (no second copy of it while the fit holds its factor).
   explicit FitSpace(SpringNetwork<dim>&& n)
       : net(std::move(n)), rest(Nodal<dim>::Zero(dim, net.num_nodes())), every(every_node(net.num_nodes())),
-        ks(free_block_pattern(net, every, net.num_nodes(), Blocks::lower)) {
-    for (const Mat<dim>& Bi : net.volume.rest_inverse) grad.push_back(rest_gradients<dim>(Bi));
+        ks(free_block_pattern(net, every, net.num_nodes(), Blocks::lower, Stars::exact)) {
+    // The volume term's units: per cell its dim + 1 nodes' rest gradients b_a; averaged per
+    // node, node n's star with g_n = sum_{c at n} w_cn b (node_weight) summed per star node.
+    const CellVolumes<dim>& cv = net.volume;
+    unit_start.push_back(0);
+    if (!cv.nodal()) {
+      for (int c = 0; c < cv.size(); ++c) {
+        const auto b = rest_gradients<dim>(cv.rest_inverse[static_cast<std::size_t>(c)]);
+        for (int a = 0; a <= dim; ++a)
+          unit_node.push_back(cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)]),
+              unit_grad.push_back(b.col(a));
+        unit_start.push_back(static_cast<int>(unit_node.size()));
+      }
+      return;
+    }
+    for (int node = 0; node < net.num_nodes(); ++node) {
+      const auto first = unit_node.size();
+      for (int q = cv.node_cells_start[static_cast<std::size_t>(node)];
+           q < cv.node_cells_start[static_cast<std::size_t>(node) + 1]; ++q) {
+        const int c = cv.node_cells[static_cast<std::size_t>(q)];
+        const auto& cell = cv.cell[static_cast<std::size_t>(c)];
+        const auto b = rest_gradients<dim>(cv.rest_inverse[static_cast<std::size_t>(c)]);
+        const auto self = std::find(cell.begin(), cell.end(), node) - cell.begin();
+        const double w = cv.node_weight(c, self);
+        for (int a = 0; a <= dim; ++a) {
+          const auto at = std::find(unit_node.begin() + static_cast<std::ptrdiff_t>(first), unit_node.end(),
+                                    cell[static_cast<std::size_t>(a)]);
+          if (at == unit_node.end()) {
+            unit_node.push_back(cell[static_cast<std::size_t>(a)]);
+            unit_grad.push_back(w * b.col(a));
+          } else
+            unit_grad[static_cast<std::size_t>(at - unit_node.begin())] += w * b.col(a);
+        }
+      }
+      unit_start.push_back(static_cast<int>(unit_node.size()));
+    }
   }
   SpringNetwork<dim> net;
   const Nodal<dim> rest;        ///< zero displacement
   const std::vector<int> every; ///< every node free: the whole network's stiffness (the solver pins)
   SpMat ks;                     ///< its lower triangle (blocks), all the factorisation reads
-  /// The volume term's rest gradients dJ/dx_a per cell (none without the term): its rest
-  /// stiffness k_c g g^T is a spring's k_s g_s g_s^T with g over the cell's dim + 1 nodes.
-  std::vector<Eigen::Matrix<double, dim, dim + 1>> grad;
+  /// The volume term's units (none without the term): a cell, or averaged per node a node. A
+  /// unit's rest stiffness k g g^T is a spring's k_s g_s g_s^T with g over the unit's nodes
+  /// unit_node[start[u], start[u + 1]) (dJ/dx there: unit_grad).
+  std::vector<int> unit_start, unit_node;
+  std::vector<Vec<dim>> unit_grad;
+  int num_units() const { return static_cast<int>(unit_start.size()) - 1; }
 };
 
 /// The fit's state at one x: the residual of the network's answers U to the training loads
@@ -62,7 +99,10 @@ public:
   double evaluate(const VectorXd& x) {
     m_k = m_k0.array() * x.array().exp();
     m_space.net.stiffness = m_k.head(num_springs());
-    if (num_cells() > 0) m_space.net.volume.stiffness = m_k.tail(num_cells());
+    if (num_cells() > 0 && m_space.net.volume.nodal())
+      set_node_stiffness(m_space.net.volume, m_k.tail(num_cells()), 0.0);
+    else if (num_cells() > 0)
+      m_space.net.volume.stiffness = m_k.tail(num_cells());
     // sum_s k_s g_s g_s^T (g_s = n_s at j, -n_s at i) in its pattern: the values setFromTriplets
     // made of force_jacobians' blocks, to the bit, without the triplets (force_jacobian.hh).
     fill_free_stiffness(m_space.net, m_space.rest, m_space.every, false, m_space.ks, Blocks::lower);
@@ -103,8 +143,8 @@ public:
     for (int c = 0; c < num_cells(); ++c) {
       const Eigen::Index row = num_springs() + c;
       for (Eigen::Index m = 0; m < W.cols(); ++m)
-        for (int a = 0; a <= dim; ++a)
-          W.col(m).template segment<dim>(dim * cell(c)[a]) += (double{m_H(row, m)} * v[row]) * grad(c).col(a);
+        for (int e = unit_begin(c); e < unit_begin(c + 1); ++e)
+          W.col(m).template segment<dim>(dim * unit_node(e)) += (double{m_H(row, m)} * v[row]) * unit_grad(e);
     }
     m_solver.solve_in_place(W);
     project_in_place(W);
@@ -154,18 +194,20 @@ private:
       for (Eigen::Index m = 0; m < U.cols(); ++m)
         out(num_springs() + c, m) = static_cast<float>(cell_dot(c, U.col(m)) * m_k[num_springs() + c]);
   }
-  /// g_c . u: the cell's rest gradients against u's columns at its nodes (dJ along u).
+  /// g_c . u: the unit's rest gradients against u's columns at its nodes (dJ along u).
   template <class Column> double cell_dot(int c, const Column& u) const {
     double sum = 0;
-    for (int a = 0; a <= dim; ++a) sum += grad(c).col(a).dot(u.template segment<dim>(dim * cell(c)[a]));
+    for (int e = unit_begin(c); e < unit_begin(c + 1); ++e)
+      sum += unit_grad(e).dot(u.template segment<dim>(dim * unit_node(e)));
     return sum;
   }
 
   const auto& edges() const { return m_space.net.edge; }
   Eigen::Index num_springs() const { return static_cast<Eigen::Index>(edges().size()); }
-  int num_cells() const { return static_cast<int>(m_space.grad.size()); }
-  const auto& cell(int c) const { return m_space.net.volume.cell[static_cast<std::size_t>(c)]; }
-  const auto& grad(int c) const { return m_space.grad[static_cast<std::size_t>(c)]; }
+  int num_cells() const { return m_space.num_units(); } ///< the volume term's units (cells or nodes)
+  int unit_begin(int c) const { return m_space.unit_start[static_cast<std::size_t>(c)]; }
+  int unit_node(int e) const { return m_space.unit_node[static_cast<std::size_t>(e)]; }
+  const Vec<dim>& unit_grad(int e) const { return m_space.unit_grad[static_cast<std::size_t>(e)]; }
 
   FitSpace<dim>& m_space;
   const Nodal<dim>& m_dir;
@@ -265,14 +307,22 @@ VectorXd fit_with_volume(const Mesh<dim>& mesh, SpringNetwork<dim>&& net, const 
                          FitReport* report, VectorXd* cell_k) {
   if (!cell_k) throw std::logic_error("fitted_stiffness: a fit with a volume term needs cell_stiffness");
   const auto ns = static_cast<Eigen::Index>(net.num_springs());
-  const Eigen::Index nc = net.volume.size();
-  // At unit E t: the bulk modulus (plane stress in 2D) times the cell's volume |det D_m| / dim!.
+  const CellVolumes<dim>& cv = net.volume;
+  const Eigen::Index nc = cv.nodal() ? cv.node_stiffness.size() : cv.size(); // the term's units
+  // At unit E t: the bulk modulus (plane stress in 2D) times the unit's volume: a cell's
+  // |det D_m| / dim!, a node's (dim + 1)-th of its cells'.
   const double bulk = dim == 2 ? 1.0 / (2 * (1 - nu)) : 1.0 / (3 * (1 - 2 * nu));
+  VectorXd volume = VectorXd::Zero(nc);
+  for (int c = 0; c < cv.size(); ++c) {
+    const double v = 1.0 / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0));
+    if (!cv.nodal())
+      volume[c] = v;
+    else
+      for (int n : cv.cell[static_cast<std::size_t>(c)]) volume[n] += v / (dim + 1);
+  }
   VectorXd prior(ns + nc);
   prior.head(ns) = net.stiffness.cwiseMax(0.01 * van_gelder_stiffness(mesh, 1.0, 1.0));
-  for (Eigen::Index c = 0; c < nc; ++c)
-    prior[ns + c] = std::max(net.volume.stiffness[c],
-                             0.01 * bulk / (std::abs(net.volume.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0)));
+  prior.tail(nc) = (cv.nodal() ? cv.node_stiffness : cv.stiffness).cwiseMax(0.01 * bulk * volume);
   FitReport rep;
   rep.modes = modes;
   rep.prior = "volume";
@@ -326,6 +376,10 @@ Eigen::VectorXd fit_at_unit_stiffness(const Mesh<dim>& mesh, double nu, const Fi
     net.stiffness *= 1 - options.cell_shear;
     set_cell_shear(net.volume, mu, options.cell_shear, thickness, 0.0);
     net.volume.stiffness += net.volume.shear;
+  }
+  if (options.volume && options.nodal) { // each cell keeps mu V_c, the nodes the rest (cell_volumes.hh)
+    const Eigen::VectorXd own = modulus_times_volume(net.volume, E / (2 * (1 + nu)), thickness);
+    make_nodal_volumes(net.volume, n, &own);
   }
   const auto& edges = net.edge;
   const auto ns = static_cast<Eigen::Index>(edges.size());

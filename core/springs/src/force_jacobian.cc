@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <stdexcept>
 #include <vector>
 
 namespace vtb {
@@ -30,6 +31,14 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
                             td.emplace_back(dim * i + p, dim * j + q, D(p, q));
                           }
                       });
+  if (!clamp_compression)
+    for_each_nodal_correction(net.volume, net.rest, u, [&](int i, int j, const Mat<dim>& K, const Mat<dim>& D) {
+      for (int p = 0; p < dim; ++p)
+        for (int q = 0; q < dim; ++q) {
+          tk.emplace_back(dim * i + p, dim * j + q, K(p, q));
+          td.emplace_back(dim * i + p, dim * j + q, D(p, q));
+        }
+    });
   for (int i = 0; i < net.num_nodes(); ++i)
     for (int p = 0; p < dim; ++p) td.emplace_back(dim * i + p, dim * i + p, -net.mass_damping * net.mass[i]);
   ForceJacobians<dim> J;
@@ -42,7 +51,7 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
 
 template <int dim>
 Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, const std::vector<int>& free_index,
-                                               int free_count, Blocks blocks) {
+                                               int free_count, Blocks blocks, Stars stars) {
   // Each free node's free neighbours, itself included, in one array cut by start[] (counted,
   // then filled), sorted and made unique per node (parallel springs share a block).
   const auto nf = static_cast<std::size_t>(free_count);
@@ -57,6 +66,27 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
       ++start[static_cast<std::size_t>(a) + 1];
       ++start[static_cast<std::size_t>(b) + 1];
     }
+  // A nodal volume term's stars (Stars::exact): each node's free star nodes, listed per node.
+  const CellVolumes<dim>& cv = net.volume;
+  const bool with_stars = stars == Stars::exact && cv.nodal();
+  std::vector<int> star_start(1, 0), star;
+  if (with_stars)
+    for (int n = 0; n < net.num_nodes(); ++n) {
+      for (int q = cv.node_cells_start[static_cast<std::size_t>(n)];
+           q < cv.node_cells_start[static_cast<std::size_t>(n) + 1]; ++q)
+        for (int node : cv.cell[static_cast<std::size_t>(cv.node_cells[static_cast<std::size_t>(q)])])
+          if (const int a = free_index[static_cast<std::size_t>(node)];
+              a >= 0 && std::find(star.begin() + star_start.back(), star.end(), a) == star.end())
+            star.push_back(a);
+      star_start.push_back(static_cast<int>(star.size()));
+    }
+  const auto for_each_star_pair = [&](auto&& pair) {
+    for (std::size_t n = 0; n + 1 < star_start.size(); ++n)
+      for (int i = star_start[n]; i < star_start[n + 1]; ++i)
+        for (int j = star_start[n]; j < star_start[n + 1]; ++j)
+          pair(star[static_cast<std::size_t>(i)], star[static_cast<std::size_t>(j)]);
+  };
+  for_each_star_pair([&](int a, int) { ++start[static_cast<std::size_t>(a) + 1]; });
   for (std::size_t a = 0; a < nf; ++a) start[a + 1] += start[a];
   std::vector<int> near(static_cast<std::size_t>(start[nf])), fill(start.begin(), start.end() - 1);
   for (std::size_t a = 0; a < nf; ++a) near[static_cast<std::size_t>(fill[a]++)] = static_cast<int>(a);
@@ -65,6 +95,7 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
       near[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b;
       near[static_cast<std::size_t>(fill[static_cast<std::size_t>(b)]++)] = a;
     }
+  for_each_star_pair([&](int a, int b) { near[static_cast<std::size_t>(fill[static_cast<std::size_t>(a)]++)] = b; });
   Eigen::VectorXi per_column(dim * free_count);
   for (std::size_t a = 0; a < nf; ++a) {
     auto first = near.begin() + start[a];
@@ -122,20 +153,33 @@ void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, con
           for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= K(p, q);
         }
       });
+  if (clamp_compression) return;
+  for_each_nodal_correction(net.volume, net.rest, u, [&](int i, int j, const Mat<dim>& K, const Mat<dim>&) {
+    const int a = free_index[static_cast<std::size_t>(i)], b = free_index[static_cast<std::size_t>(j)];
+    if (a < 0 || b < 0 || (blocks == Blocks::lower && a < b)) return;
+    for (int q = 0; q < dim; ++q) {
+      const int col = dim * b + q;
+      const int* at = std::lower_bound(inner + outer[col], inner + outer[col + 1], dim * a);
+      if (at == inner + outer[col + 1] || *at != dim * a)
+        throw std::logic_error("fill_free_stiffness: a nodal volume term needs a pattern with Stars::exact");
+      for (int p = 0; p < dim; ++p) value[(at - inner) + p] -= K(p, q);
+    }
+  });
 }
 
 template <int dim>
 Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u,
                                            const std::vector<int>& free_index, int free_count, bool clamp_compression) {
-  Eigen::SparseMatrix<double> A = free_block_pattern(net, free_index, free_count);
+  Eigen::SparseMatrix<double> A =
+      free_block_pattern(net, free_index, free_count, Blocks::both, clamp_compression ? Stars::bound : Stars::exact);
   fill_free_stiffness(net, u, free_index, clamp_compression, A);
   return A;
 }
 
 template Eigen::SparseMatrix<double> free_block_pattern<2>(const SpringNetwork<2>&, const std::vector<int>&, int,
-                                                           Blocks);
+                                                           Blocks, Stars);
 template Eigen::SparseMatrix<double> free_block_pattern<3>(const SpringNetwork<3>&, const std::vector<int>&, int,
-                                                           Blocks);
+                                                           Blocks, Stars);
 template Eigen::SparseMatrix<double> free_stiffness<2>(const SpringNetwork<2>&, const Nodal<2>&,
                                                        const std::vector<int>&, int, bool);
 template Eigen::SparseMatrix<double> free_stiffness<3>(const SpringNetwork<3>&, const Nodal<3>&,

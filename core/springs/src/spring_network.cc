@@ -30,21 +30,29 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
     net.stiffness = lloyd_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness);
   else if (calibration == "van-gelder")
     net.stiffness = van_gelder_stiffness(mesh, mat.young_modulus, mat.thickness);
-  else if (calibration == "fitted" || calibration == "fitted-volume" || calibration == "fitted-stable") {
+  else if (calibration == "fitted" || calibration == "fitted-volume" || calibration == "fitted-stable" ||
+           calibration == "fitted-nodal") {
     CachedFit fit;
-    const bool volume = calibration != "fitted";
-    const double shear = calibration == "fitted-stable" ? kStableCellShear : 0.0;
+    const bool volume = calibration != "fitted", nodal = calibration == "fitted-nodal";
+    const double shear = calibration == "fitted-stable" || nodal ? kStableCellShear : 0.0;
     Eigen::VectorXd cell_k;
     try {
       net.stiffness = cached_fitted_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, supports, &fit,
-                                              progress, target, volume ? &cell_k : nullptr, shear);
+                                              progress, target, volume ? &cell_k : nullptr, shear, nodal);
       if (volume) { // the fit's cells are in make_cell_volumes' order: their constants set after it
-        net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
-        net.volume.stiffness = cell_k;
-        net.volume.damping = mat.retardation_time * cell_k;
-        if (shear > 0)
-          set_cell_shear(net.volume, mat.young_modulus / (2 * (1 + mat.poisson_ratio)), shear, mat.thickness,
-                         mat.retardation_time);
+        const double mu = mat.young_modulus / (2 * (1 + mat.poisson_ratio));
+        if (nodal) { // each cell keeps mu V_c (cell_volumes.hh), the nodes have the fit's constants
+          net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
+          set_cell_shear(net.volume, mu, shear, mat.thickness, mat.retardation_time);
+          const Eigen::VectorXd own = modulus_times_volume(net.volume, mu, mat.thickness);
+          make_nodal_volumes(net.volume, mesh.num_nodes(), &own);
+          set_node_stiffness(net.volume, cell_k, mat.retardation_time);
+        } else {
+          net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
+          net.volume.stiffness = cell_k;
+          net.volume.damping = mat.retardation_time * cell_k;
+          if (shear > 0) set_cell_shear(net.volume, mu, shear, mat.thickness, mat.retardation_time);
+        }
       }
       net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
@@ -63,13 +71,16 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
                              std::string(fit.chosen == "volume" ? "the element fit (volume)" : fit.chosen) +
                              "'s constants: they answer its held-out modes better";
     }
-  } else if (calibration == "volume") {
+  } else if (calibration == "volume" || calibration == "nodal-volume") {
     Eigen::VectorXd cell_k;
     net.stiffness = lloyd_volume_stiffness(mesh, mat.young_modulus, mat.poisson_ratio, mat.thickness, cell_k);
     net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, std::move(cell_k), mat.retardation_time);
+    if (calibration == "nodal-volume") make_nodal_volumes(net.volume, mesh.num_nodes());
   } else
-    throw InputError("[solver].springs = \"" + std::string(calibration) +
-                     "\": must be auto, lloyd, van-gelder, fitted, volume, fitted-volume or fitted-stable");
+    throw InputError(
+        "[solver].springs = \"" + std::string(calibration) +
+        "\": must be auto, lloyd, van-gelder, fitted, volume, nodal-volume, fitted-volume, fitted-stable or "
+        "fitted-nodal");
   net.calibration_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   net.damping = mat.retardation_time * net.stiffness;
   net.mass_damping = mat.mass_damping;

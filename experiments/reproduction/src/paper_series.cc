@@ -354,8 +354,9 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
   const std::pair<const char*, const char*> materials[] = {{"0.3", "A"}, {"0.45", "B"}};
   for (const auto& [nu, tag] : materials) {
     std::vector<double> nh_depth, nh_force;
-    for (const char* model : {"linear-p2", "springs", "springs-volume", "springs-fitted-volume",
-                              "springs-fitted-stable", "neo-hookean-p2", "neo-hookean-p1", "svk-p1"}) {
+    for (const char* model :
+         {"linear-p2", "springs", "springs-volume", "springs-fitted-volume", "springs-fitted-stable",
+          "springs-fitted-nodal", "neo-hookean-p2", "neo-hookean-p1", "svk-p1"}) {
       const std::vector<double> depth = column(t, "depth_ratio", rows(nu, model));
       const std::vector<double> force = column(t, "force", rows(nu, model));
       std::vector<double> pct{0.0}, mn{0.0}; // the plot's units: % of the layer, mN; every curve starts at rest
@@ -386,6 +387,10 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     out.number("vtbDeepStableTwenty" + T, gap("springs-fitted-stable", 0.2), 2);
     out.number("vtbDeepStableThirty" + T, gap("springs-fitted-stable", 0.3), 2);
     out.number("vtbDeepStableFifty" + T, gap("springs-fitted-stable", 0.5), 2);
+    out.number("vtbDeepNodalTen" + T, gap("springs-fitted-nodal", 0.1), 2);
+    out.number("vtbDeepNodalTwenty" + T, gap("springs-fitted-nodal", 0.2), 2);
+    out.number("vtbDeepNodalThirty" + T, gap("springs-fitted-nodal", 0.3), 2);
+    out.number("vtbDeepNodalFifty" + T, gap("springs-fitted-nodal", 0.5), 2);
     // The most cells inverted at once in any run of a network (summary.json's inverted_cells).
     const auto inverted = [&](const char* model) {
       const std::vector<double> v = column(t, "inverted_cells", rows(nu, model));
@@ -395,6 +400,7 @@ void deep_press(const std::filesystem::path& dir, Out& out) {
     out.number("vtbDeepVolumeInverted" + T, inverted("springs-volume"), 6);
     out.number("vtbDeepFitVolumeInverted" + T, inverted("springs-fitted-volume"), 6);
     out.number("vtbDeepStableInverted" + T, inverted("springs-fitted-stable"), 6);
+    out.number("vtbDeepNodalInverted" + T, inverted("springs-fitted-nodal"), 6);
     out.number("vtbDeepLinearThirty" + T, gap("linear-p2", 0.3), 2);
     out.number("vtbDeepPOneThirty" + T, gap("neo-hookean-p1", 0.3), 2); // the discretisation's share
     // How far one uniform refinement moves the neo-Hookean reference's depth at 0.5 F30 (the

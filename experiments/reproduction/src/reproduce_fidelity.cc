@@ -392,21 +392,32 @@ density = 1.0
     // (docs/volume_term.md): "springs-volume" (springs = "volume", the element fit) and
     // "springs-fitted-volume" (springs = "fitted-volume", fitted as the pair springs are) and
     // "springs-fitted-stable" (springs = "fitted-stable": the same with the stable energy's shear
-    // part in every cell), with their inverted cells.
-    Scene with_volume = scene, with_fitted_volume = scene, with_fitted_stable = scene;
+    // part in every cell), with their inverted cells; and "springs-nodal-volume" (springs =
+    // "nodal-volume": the element fit's constants, the volume averaged per node) and
+    // "springs-fitted-nodal" (springs = "fitted-nodal": the stable cells' shear part, the volume
+    // averaged per node, fitted as the pair springs are).
+    Scene with_volume = scene, with_nodal_volume = scene, with_fitted_volume = scene, with_fitted_stable = scene,
+          with_fitted_nodal = scene;
     with_volume.solver.springs = "volume";
+    with_nodal_volume.solver.springs = "nodal-volume";
+    with_fitted_nodal.solver.springs = "fitted-nodal";
     with_fitted_volume.solver.springs = "fitted-volume";
     with_fitted_stable.solver.springs = "fitted-stable";
     const Model<3> volume_model = build_model<3>(with_volume, std::get<Mesh3>(load_mesh(scene)), {}, false);
+    const Model<3> nodal_volume_model = build_model<3>(with_nodal_volume, std::get<Mesh3>(load_mesh(scene)), {}, false);
     const Model<3> fitted_volume_model =
         build_model<3>(with_fitted_volume, std::get<Mesh3>(load_mesh(scene)), {}, false, &yardstick);
     const Model<3> fitted_stable_model =
         build_model<3>(with_fitted_stable, std::get<Mesh3>(load_mesh(scene)), {}, false, &yardstick);
+    const Model<3> fitted_nodal_model =
+        build_model<3>(with_fitted_nodal, std::get<Mesh3>(load_mesh(scene)), {}, false, &yardstick);
     using Entry = std::tuple<const char*, const Scene*, const Model<3>*>;
     for (const auto& [name, springs, spring_model] :
          {Entry{"springs", &scene, &model}, Entry{"springs-volume", &with_volume, &volume_model},
+          Entry{"springs-nodal-volume", &with_nodal_volume, &nodal_volume_model},
           Entry{"springs-fitted-volume", &with_fitted_volume, &fitted_volume_model},
-          Entry{"springs-fitted-stable", &with_fitted_stable, &fitted_stable_model}}) {
+          Entry{"springs-fitted-stable", &with_fitted_stable, &fitted_stable_model},
+          Entry{"springs-fitted-nodal", &with_fitted_nodal, &fitted_nodal_model}}) {
       for (int k = 1; k <= 2 * steps; ++k) {
         const double level = 1.0 * k / steps;
         Model<3> loaded = scaled(*spring_model, level * f30);

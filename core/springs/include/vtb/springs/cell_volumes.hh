@@ -14,11 +14,17 @@
 /// zero-rest-length springs on the cell's edges (cotangent weights, a constant Hessian
 /// m_c (b_a . b_b) I), whose stiffness across a compressed edge stays positive where a
 /// rest-length spring's k (1 - L0/L) turns negative; alpha_c keeps the rest state free of force.
+/// Averaged per node (`springs = "nodal-volume"`, make_nodal_volumes) the volume energy is
+///   E = sum_n k_n / 2 (J_n - 1)^2,   J_n = sum_{c at n} w_cn J_c,   w_cn = V_c / ((dim + 1) V_n),
+/// V_n = sum_{c at n} V_c / (dim + 1): one volume constraint per node instead of one per cell
+/// (a tetrahedral mesh has five to six cells a node and three dofs), the average nodal pressure
+/// of Bonet and Burton 1998, which does not lock as one volume per linear cell does.
 
 #include "vtb/linalg/nodal.hh"
 
 #include <Eigen/Dense>
 
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -37,7 +43,22 @@ template <int dim> struct CellVolumes {
   /// D_m^-1 D_m^-T per cell, its upper triangle's entries (00, 11, 22, 01, 02, 12 in 3D; 00,
   /// 11, 01 in 2D) in columns: f_a = -m_c D_s (D_m^-1 D_m^-T) e_a (a >= 1) is the shear's force.
   Eigen::MatrixXd shear_metric;
+  /// Averaged per node (none: size 0): w_ca = V_c / ((dim + 1) V_n) of node a of cell c, in
+  /// columns a = 0..dim; then `stiffness` and `damping` hold each cell's bound
+  /// kbar_c = sum_a w_ca k_n(a) (below) and the node's constants k_n, c_n = tau k_n are here.
+  Eigen::MatrixXd node_weight;
+  Eigen::VectorXd node_stiffness, node_damping;
+  /// Averaged per node, the part k'_c each cell keeps of its own volume term (k'_c/2 (J_c - 1)^2
+  /// and its dashpot, make_nodal_volumes' `own`): with `fitted-nodal`, mu V_c, the mu of Smith
+  /// et al.'s lambda + mu, which keeps each cell the right way out inside a star that keeps its
+  /// volume and stays bounded as lambda grows (no locking); the lambda part goes to the nodes.
+  Eigen::VectorXd own_stiffness, own_damping;
+  std::vector<int> node_cells_start, node_cells; ///< the cells at node n: node_cells[start[n], start[n+1])
+  /// The nodal force pass's scratch (sized by make_nodal_volumes; a network steps in one thread):
+  /// per cell J_c, its capped rate and its pressure s_c; per node J_n and its rate.
+  mutable Eigen::VectorXd cell_ratio, cell_rate, cell_pressure, node_ratio, node_rate;
   bool empty() const { return cell.empty(); }
+  bool nodal() const { return node_weight.size() > 0; }
   bool has_shear() const { return shear.size() > 0; }
   int size() const { return static_cast<int>(cell.size()); }
 };
@@ -107,6 +128,11 @@ inline double volume_dashpot_cap(double rest_norm2, double norm2) {
   return norm2 > rest_norm2 ? rest_norm2 / norm2 : 1.0;
 }
 
+/// Averaged per node: J_n at X + u into cv.node_ratio and each cell's elastic pressure
+/// s_c = sum_a w_ca k_n(a) (J_n(a) - 1) + k'_c (J_c - 1) into cv.cell_pressure (the scratch).
+/// Allocates nothing.
+template <int dim> void nodal_pressures(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u);
+
 /// For each cell and each ordered pair (a, b) of its nodes (a = b included), the blocks
 /// K = df_a/dx_b and D = df_a/dv_b of the volume term at displacement u:
 ///   K = -k_c (g_a g_b^T + (J - 1) d^2J/dx_a dx_b),   D = -c_c g_a g_b^T
@@ -117,16 +143,22 @@ inline double volume_dashpot_cap(double rest_norm2, double norm2) {
 /// With `gauss_newton`, K drops its d^2J term: -k_c g g^T - m_c (b . b) I over the cell is
 /// negative semidefinite, as the springs' clamp keeps theirs (implicit Euler factors it). Calls add(c, a, b, K, D) with
 /// the cell c and its local node indices a, b (global: cv.cell[c][a]). Allocates nothing.
+/// Averaged per node, k_c (J - 1) is the cell's nodal pressure s_c = sum_a w_ca k_n(a) (J_n(a) - 1)
+/// and k_c g g^T the bound kbar_c g g^T, which dominates the nodes' sum_n k_n g_n g_n^T
+/// (g_n = sum_c w_cn g_c, Jensen): implicit integrators and filters take the bound, which is
+/// stiffer and so stable; the exact Jacobian adds for_each_nodal_correction.
 template <int dim, class Add>
 void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, bool gauss_newton,
                          Add&& add) {
   Eigen::Matrix<double, dim, dim + 1> g;
   const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
+  if (cv.nodal() && !gauss_newton) nodal_pressures(cv, rest, u);
   for (int c = 0; c < cv.size(); ++c) {
     const auto& cell = cv.cell[static_cast<std::size_t>(c)];
     const Mat<dim>& Bi = cv.rest_inverse[static_cast<std::size_t>(c)];
     const Mat<dim> Ds = edge_matrix<dim>(cell, x);
     const double J = volume_ratio_gradients<dim>(Ds, cv.inverse_rest_det[c], g);
+    const double pressure = cv.nodal() && !gauss_newton ? cv.cell_pressure[c] : cv.stiffness[c] * (J - 1.0);
     const Mat<dim> F = Ds * Bi;
     const Eigen::Matrix<double, dim, dim + 1> b = rest_gradients<dim>(Bi);
     const double k = cv.stiffness[c];
@@ -139,8 +171,59 @@ void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, con
         const Mat<dim> gg = g.col(a) * g.col(bn).transpose();
         const double bb = b.col(a).dot(b.col(bn));
         Mat<dim> K = -k * gg - m * bb * Mat<dim>::Identity();
-        if (!gauss_newton && a != bn) K -= (k * (J - 1.0) - m) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
+        if (!gauss_newton && a != bn) K -= (pressure - m) * volume_ratio_hessian<dim>(F, b.col(a), b.col(bn));
         add(c, a, bn, K, Mat<dim>(-d * gg - ms * bb * Mat<dim>::Identity()));
+      }
+  }
+}
+
+/// Averaged per node: what the exact Jacobian adds to for_each_cell_block's (the bound's)
+/// Gauss-Newton blocks, per node n over the pairs (i, j) of its star (the nodes of its cells):
+///   K = -k_n (g_n,i g_n,j^T - sum_{c at n} w_cn g_c,i g_c,j^T),   D the same with c_n,
+/// g at X + u. Calls add(i, j, K, D) with global node indices; nothing without nodal averaging.
+/// Allocates its star's list (a Jacobian's assembly, not a step).
+template <int dim, class Add>
+void for_each_nodal_correction(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, Add&& add) {
+  if (!cv.nodal()) return;
+  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
+  const int nn = static_cast<int>(cv.node_stiffness.size());
+  std::vector<int> star;
+  std::vector<Vec<dim>> gn;
+  std::vector<Mat<dim>> pair; // sum_c w_cn g_c,i g_c,j^T over the star's pairs, row-major
+  Eigen::Matrix<double, dim, dim + 1> g;
+  for (int n = 0; n < nn; ++n) {
+    star.clear();
+    const int c0 = cv.node_cells_start[static_cast<std::size_t>(n)],
+              c1 = cv.node_cells_start[static_cast<std::size_t>(n) + 1];
+    for (int q = c0; q < c1; ++q)
+      for (int node : cv.cell[static_cast<std::size_t>(cv.node_cells[static_cast<std::size_t>(q)])])
+        if (std::find(star.begin(), star.end(), node) == star.end()) star.push_back(node);
+    const std::size_t s = star.size();
+    gn.assign(s, Vec<dim>::Zero());
+    pair.assign(s * s, Mat<dim>::Zero());
+    for (int q = c0; q < c1; ++q) {
+      const int c = cv.node_cells[static_cast<std::size_t>(q)];
+      const auto& cell = cv.cell[static_cast<std::size_t>(c)];
+      volume_ratio_gradients<dim>(edge_matrix<dim>(cell, x), cv.inverse_rest_det[c], g);
+      int self = 0;
+      while (cell[static_cast<std::size_t>(self)] != n) ++self;
+      const double w = cv.node_weight(c, self);
+      std::array<std::size_t, dim + 1> at;
+      for (int a = 0; a <= dim; ++a)
+        at[static_cast<std::size_t>(a)] = static_cast<std::size_t>(
+            std::find(star.begin(), star.end(), cell[static_cast<std::size_t>(a)]) - star.begin());
+      for (int a = 0; a <= dim; ++a) {
+        gn[at[static_cast<std::size_t>(a)]] += w * g.col(a);
+        for (int b = 0; b <= dim; ++b)
+          pair[at[static_cast<std::size_t>(a)] * s + at[static_cast<std::size_t>(b)]] +=
+              w * g.col(a) * g.col(b).transpose();
+      }
+    }
+    const double k = cv.node_stiffness[n], d = cv.node_damping[n];
+    for (std::size_t i = 0; i < s; ++i)
+      for (std::size_t j = 0; j < s; ++j) {
+        const Mat<dim> G = gn[i] * gn[j].transpose() - pair[i * s + j];
+        add(star[i], star[j], Mat<dim>(-k * G), Mat<dim>(-d * G));
       }
   }
 }
@@ -171,6 +254,22 @@ VolumeRatios volume_ratios(const std::vector<std::array<int, dim + 1>>& cells, c
 template <int dim>
 CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& cells, const Nodal<dim>& rest,
                                    Eigen::VectorXd stiffness, double retardation_time);
+
+/// Averages the volume term per node (E = sum_n k_n / 2 (J_n - 1)^2, above) but for the part
+/// `own` (per cell, none: 0) that each cell keeps (own_stiffness): each node takes a (dim + 1)-th
+/// of the rest of its cells' constants, k_n = sum_{c at n} (k_c - k'_c) / (dim + 1) (c_n
+/// likewise), so a homogeneous J has the same energy as per cell; `stiffness` and `damping`
+/// become the cells' bounds k'_c + kbar_c. num_nodes: the mesh's.
+template <int dim> void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own = nullptr);
+
+/// Sets a nodal term's constants k_n (the fit's) with their dashpots c_n = tau k_n, and the
+/// cells' bounds k'_c + kbar_c, kbar_c = sum_a w_ca k_n(a) (and their dashpots) from them.
+template <int dim>
+void set_node_stiffness(CellVolumes<dim>& cv, const Eigen::VectorXd& node_stiffness, double retardation_time);
+
+/// modulus |V_c| per cell (times the thickness in 2D): mu V_c, the cells' own part of a nodal
+/// term, and set_cell_shear's.
+template <int dim> Eigen::VectorXd modulus_times_volume(const CellVolumes<dim>& cv, double modulus, double thickness);
 
 /// Gives every cell the shear part m_c = fraction mu |V_c| (mu = E / 2 (1 + nu); times the
 /// thickness in 2D) and its dashpot tau m_c.

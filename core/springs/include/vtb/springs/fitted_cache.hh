@@ -41,12 +41,13 @@ struct CachedFit {
 /// size or header, or written by another fit_code_version(), is refitted and replaced
 /// (atomically). With cell_stiffness the fit with a volume term (FitOptions::volume; its own
 /// key): the cells' constants go there, in make_cell_volumes' order; `cell_shear` is
-/// FitOptions::cell_shear (in the key where it is not 0).
+/// FitOptions::cell_shear (in the key where it is not 0); `nodal`: FitOptions::nodal
+/// (cell_stiffness then holds the nodes' k_n).
 template <int dim>
 Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double young_modulus, double poisson_ratio,
                                         double thickness, const std::vector<int>& supports = {},
                                         CachedFit* info = nullptr, const FitProgress& progress = {},
                                         const FitTarget& target = {}, Eigen::VectorXd* cell_stiffness = nullptr,
-                                        double cell_shear = 0);
+                                        double cell_shear = 0, bool nodal = false);
 
 } // namespace vtb

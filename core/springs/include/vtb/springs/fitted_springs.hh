@@ -126,6 +126,9 @@ struct FitOptions {
   /// cells' k_c identified around it (their prior: the springs' element fit times 1 - fraction,
   /// the cells' plus fraction mu V, which the shear part's rest pull takes off the volume).
   double cell_shear = 0;
+  /// With the volume term, averaged per node (cell_volumes.hh): one unknown k_n per node
+  /// instead of one per cell (the prior: the element fit's cells lumped to their nodes).
+  bool nodal = false;
 };
 
 struct FitReport {

@@ -36,7 +36,8 @@ void for_each_jacobian_block(const SpringNetwork<dim>& net, const Nodal<dim>& u,
 ///   K: per spring the blocks -B on (i, i) and (j, j), +B on (i, j) and (j, i), with
 ///      B = spring_jacobian (its transverse term clamped at 0 under compression when
 ///      `clamp_compression`, as implicit Euler uses it);
-///   D: the same pattern with dashpot_jacobian, minus gamma m I on the diagonal.
+///   D: the same pattern with dashpot_jacobian, minus gamma m I on the diagonal;
+///   the volume term's blocks (exact when not `clamp_compression`, a nodal term's stars too).
 /// The dashpot's dependence on positions (through its direction) is omitted from K, as in
 /// every solver here: K is exact at v = 0 or for undamped springs.
 template <int dim> struct ForceJacobians { Eigen::SparseMatrix<double> K, D; };
@@ -51,11 +52,15 @@ ForceJacobians<dim> force_jacobians(const SpringNetwork<dim>& net, const Nodal<d
 /// Euler, CVODE's preconditioner) and the load check share it. `Blocks::lower` keeps a block
 /// only where its row node is at or after its column node: the lower triangle a Cholesky
 /// factorisation reads (CHOLMOD ignores the diagonal blocks' upper entries), half the memory
-/// (the fit's matrix).
+/// (the fit's matrix). `Stars::exact` adds, with a volume term averaged per node, a block for
+/// each pair of nodes in one node's star (the exact Jacobian couples them; the bound that the
+/// integrators take does not).
 enum class Blocks { both, lower };
+enum class Stars { bound, exact };
 template <int dim>
 Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, const std::vector<int>& free_index,
-                                               int free_count, Blocks blocks = Blocks::both);
+                                               int free_count, Blocks blocks = Blocks::both,
+                                               Stars stars = Stars::bound);
 
 /// The springs' stiffness -K (clamp_compression as force_jacobians) at displacement u on the
 /// free dofs, on free_block_pattern: the matrix of the load check's static solve.
@@ -65,7 +70,8 @@ Eigen::SparseMatrix<double> free_stiffness(const SpringNetwork<dim>& net, const 
 /// free_stiffness's values written into A, a free_block_pattern of the same network and
 /// free_index and `blocks` (the fit's assembly at each of its steps, allocation-free). Each
 /// entry sums its springs' blocks in the springs' order, as setFromTriplets sums
-/// force_jacobians' triplets: the same values to the bit.
+/// force_jacobians' triplets: the same values to the bit. Unclamped, a nodal volume term's
+/// exact blocks need a pattern with Stars::exact.
 template <int dim>
 void fill_free_stiffness(const SpringNetwork<dim>& net, const Nodal<dim>& u, const std::vector<int>& free_index,
                          bool clamp_compression, Eigen::SparseMatrix<double>& A, Blocks blocks = Blocks::both);

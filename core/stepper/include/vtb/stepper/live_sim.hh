@@ -31,8 +31,9 @@ inline std::vector<std::string> interactive_solvers() {
 using solvers::kFilterChoices;
 /// The spring calibrations ([solver].springs); "fitted" fits once per mesh, Poisson ratio and
 /// supports (cached); "auto" fits within its budget, else Lloyd.
-inline constexpr std::array<const char*, 7> kSprings = {"auto",   "lloyd",         "van-gelder",   "fitted",
-                                                        "volume", "fitted-volume", "fitted-stable"};
+inline constexpr std::array<const char*, 9> kSprings = {"auto",          "lloyd",         "van-gelder",
+                                                        "fitted",        "volume",        "nodal-volume",
+                                                        "fitted-volume", "fitted-stable", "fitted-nodal"};
 
 /// What the panel controls; applying it rebuilds the model and the integrator.
 struct SimControls {
