@@ -365,8 +365,11 @@ void set_node_stiffness(CellVolumes<dim>& cv, const Eigen::VectorXd& node_stiffn
 }
 
 template <int dim> Eigen::VectorXd modulus_times_volume(const CellVolumes<dim>& cv, double modulus, double thickness) {
-  const double scale = modulus * (dim == 2 ? thickness / 2.0 : 1.0 / 6.0); // |det D_m| / dim!
-  return scale * cv.inverse_rest_det.cwiseAbs().cwiseInverse();
+  Eigen::VectorXd out(cv.size());
+  for (Eigen::Index c = 0; c < out.size(); ++c) // |det D_m| / dim!
+    out[c] =
+        modulus * (1.0 / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0))) * (dim == 2 ? thickness : 1.0);
+  return out;
 }
 
 template <int dim>

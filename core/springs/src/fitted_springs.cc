@@ -312,17 +312,17 @@ VectorXd fit_with_volume(const Mesh<dim>& mesh, SpringNetwork<dim>&& net, const 
   // At unit E t: the bulk modulus (plane stress in 2D) times the unit's volume: a cell's
   // |det D_m| / dim!, a node's (dim + 1)-th of its cells'.
   const double bulk = dim == 2 ? 1.0 / (2 * (1 - nu)) : 1.0 / (3 * (1 - 2 * nu));
-  VectorXd volume = VectorXd::Zero(nc);
+  VectorXd floor = VectorXd::Zero(nc); // 1 % of the bulk modulus times the unit's volume
   for (int c = 0; c < cv.size(); ++c) {
-    const double v = 1.0 / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0));
+    const double f = 0.01 * bulk / (std::abs(cv.inverse_rest_det[c]) * (dim == 2 ? 2.0 : 6.0));
     if (!cv.nodal())
-      volume[c] = v;
+      floor[c] = f;
     else
-      for (int n : cv.cell[static_cast<std::size_t>(c)]) volume[n] += v / (dim + 1);
+      for (int n : cv.cell[static_cast<std::size_t>(c)]) floor[n] += f / (dim + 1);
   }
   VectorXd prior(ns + nc);
   prior.head(ns) = net.stiffness.cwiseMax(0.01 * van_gelder_stiffness(mesh, 1.0, 1.0));
-  prior.tail(nc) = (cv.nodal() ? cv.node_stiffness : cv.stiffness).cwiseMax(0.01 * bulk * volume);
+  prior.tail(nc) = (cv.nodal() ? cv.node_stiffness : cv.stiffness).cwiseMax(floor);
   FitReport rep;
   rep.modes = modes;
   rep.prior = "volume";
