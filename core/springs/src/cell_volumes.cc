@@ -76,6 +76,71 @@ VTB_VECTOR_CLONES void cell_coefficients_2d(int n, const double* __restrict e, c
   }
 }
 
+/// The volume ratios J_c of a chunk of n cells (cell_coefficients_3d's layout and expressions)
+/// into J and, with velocity differences w (else none), their dashpot-capped rates into rate.
+VTB_VECTOR_CLONES void cell_ratios_3d(int n, const double* __restrict e, const double* __restrict w,
+                                      const double* __restrict inverse_rest_det, const double* __restrict rest_norm2,
+                                      double* __restrict J, double* __restrict rate) {
+  constexpr int C = kCellChunk;
+  for (int c = 0; c < n; ++c) {
+    const double ax = e[0 * C + c], ay = e[1 * C + c], az = e[2 * C + c];
+    const double bx = e[3 * C + c], by = e[4 * C + c], bz = e[5 * C + c];
+    const double dx = e[6 * C + c], dy = e[7 * C + c], dz = e[8 * C + c];
+    const double g1x = by * dz - bz * dy, g1y = bz * dx - bx * dz, g1z = bx * dy - by * dx;
+    J[c] = (ax * g1x + ay * g1y + az * g1z) * inverse_rest_det[c];
+    if (!w) continue; // the same branch for every cell: the compiler unswitches it
+    const double g2x = dy * az - dz * ay, g2y = dz * ax - dx * az, g2z = dx * ay - dy * ax;
+    const double g3x = ay * bz - az * by, g3y = az * bx - ax * bz, g3z = ax * by - ay * bx;
+    const double r =
+        (g1x * w[0 * C + c] + g1y * w[1 * C + c] + g1z * w[2 * C + c] + g2x * w[3 * C + c] + g2y * w[4 * C + c] +
+         g2z * w[5 * C + c] + g3x * w[6 * C + c] + g3y * w[7 * C + c] + g3z * w[8 * C + c]) *
+        inverse_rest_det[c];
+    const double norm2 =
+        g1x * g1x + g1y * g1y + g1z * g1z + g2x * g2x + g2y * g2y + g2z * g2z + g3x * g3x + g3y * g3y + g3z * g3z;
+    rate[c] = volume_dashpot_cap(rest_norm2[c], norm2) * r;
+  }
+}
+
+VTB_VECTOR_CLONES void cell_ratios_2d(int n, const double* __restrict e, const double* __restrict w,
+                                      const double* __restrict inverse_rest_det, const double* __restrict rest_norm2,
+                                      double* __restrict J, double* __restrict rate) {
+  constexpr int C = kCellChunk;
+  for (int c = 0; c < n; ++c) {
+    const double ax = e[0 * C + c], ay = e[1 * C + c], bx = e[2 * C + c], by = e[3 * C + c];
+    J[c] = (ax * by - bx * ay) * inverse_rest_det[c];
+    if (!w) continue;
+    const double r =
+        (by * w[0 * C + c] - bx * w[1 * C + c] - ay * w[2 * C + c] + ax * w[3 * C + c]) * inverse_rest_det[c];
+    rate[c] = volume_dashpot_cap(rest_norm2[c], ax * ax + ay * ay + bx * bx + by * by) * r;
+  }
+}
+
+/// Gathers a chunk of n cells from c0 in the kernels' layout: the edge vectors into e and, with
+/// v, the velocity differences into w; node 0's position and velocity once per run of cells
+/// that share it (cells in their lowest node's order, that node first).
+template <int dim>
+void gather_chunk(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>* v, int c0,
+                  int n, double* e, double* w) {
+  constexpr int C = kCellChunk;
+  int first = -1;
+  Vec<dim> x0 = Vec<dim>::Zero(), v0 = Vec<dim>::Zero();
+  for (int c = 0; c < n; ++c) {
+    const auto& cell = cv.cell[static_cast<std::size_t>(c0 + c)];
+    if (cell[0] != first) {
+      first = cell[0];
+      x0 = rest.col(first) + u.col(first);
+      if (v) v0 = v->col(first);
+    }
+    for (int a = 0; a < dim; ++a) {
+      const Vec<dim> ea = rest.col(cell[a + 1]) + u.col(cell[a + 1]) - x0;
+      for (int i = 0; i < dim; ++i) e[(a * dim + i) * C + c] = ea[i];
+      if (!v) continue;
+      const Vec<dim> wa = v->col(cell[a + 1]) - v0;
+      for (int i = 0; i < dim; ++i) w[(a * dim + i) * C + c] = wa[i];
+    }
+  }
+}
+
 /// The shear part's forces on a chunk of n cells, added to G (the amount taken from f_a, a >= 1):
 /// G_a += sum_k (m e_k + c w_k) S_{k a} with S = D_m^-1 D_m^-T (`metric`: its entries' columns at
 /// the chunk) and c = tau m + extra m: m (F + tau dF/dt) times the rest gradient b_a.
@@ -112,29 +177,31 @@ VTB_VECTOR_CLONES void cell_shear_2d(int n, const double* __restrict e, const do
 }
 
 /// The cells' J_c into cv.cell_ratio and their weighted means J_n into cv.node_ratio; with v,
-/// the same of the cells' dashpot-capped rates dJ_c/dt (cv.cell_rate, cv.node_rate).
+/// the same of the cells' dashpot-capped rates dJ_c/dt (cv.cell_rate, cv.node_rate). Chunked
+/// as the force pass; allocates nothing.
 template <int dim>
 void nodal_ratios(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>* v) {
-  const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
-  Eigen::Matrix<double, dim, dim + 1> g;
+  constexpr int C = kCellChunk;
+  alignas(64) double e[dim * dim * C], w[dim * dim * C];
+  for (int c0 = 0; c0 < cv.size(); c0 += C) {
+    const int n = std::min(C, cv.size() - c0);
+    gather_chunk<dim>(cv, rest, u, v, c0, n, e, w);
+    const double *inv = cv.inverse_rest_det.data() + c0, *r0 = cv.rest_cofactor_norm2.data() + c0;
+    double *J = cv.cell_ratio.data() + c0, *rate = cv.cell_rate.data() + c0;
+    if constexpr (dim == 3)
+      cell_ratios_3d(n, e, v ? w : nullptr, inv, r0, J, rate);
+    else
+      cell_ratios_2d(n, e, v ? w : nullptr, inv, r0, J, rate);
+  }
   cv.node_ratio.setZero();
-  cv.node_rate.setZero();
-  for (int c = 0; c < cv.size(); ++c) {
-    const auto& cell = cv.cell[static_cast<std::size_t>(c)];
-    const double inv = cv.inverse_rest_det[c];
-    const double J = volume_ratio_gradients<dim>(edge_matrix<dim>(cell, x), inv, g);
-    double rate = 0;
-    if (v) {
-      for (int a = 0; a <= dim; ++a) rate += g.col(a).dot(v->col(cell[static_cast<std::size_t>(a)]));
-      rate *= volume_dashpot_cap(cv.rest_cofactor_norm2[c] * inv * inv, g.template rightCols<dim>().squaredNorm());
+  if (v) cv.node_rate.setZero();
+  for (int a = 0; a <= dim; ++a) {
+    const double* weight = cv.node_weight.col(a).data();
+    for (int c = 0; c < cv.size(); ++c) {
+      const int node = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
+      cv.node_ratio[node] += weight[c] * cv.cell_ratio[c];
+      if (v) cv.node_rate[node] += weight[c] * cv.cell_rate[c];
     }
-    for (int a = 0; a <= dim; ++a) {
-      const int n = cell[static_cast<std::size_t>(a)];
-      cv.node_ratio[n] += cv.node_weight(c, a) * J;
-      cv.node_rate[n] += cv.node_weight(c, a) * rate;
-    }
-    cv.cell_ratio[c] = J;
-    cv.cell_rate[c] = rate;
   }
 }
 
@@ -180,22 +247,7 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
   const double* pressure = cv.nodal() ? nodal_forces_pressure(cv, rest, u, v, extra_damping_per_k) : nullptr;
   for (int c0 = 0; c0 < cv.size(); c0 += C) {
     const int n = std::min(C, cv.size() - c0);
-    // Gather: the edge vectors and velocity differences, node 0's position and velocity once
-    // per run of cells that share it (cells in their lowest node's order, that node first).
-    int first = cv.cell[static_cast<std::size_t>(c0)][0];
-    Vec<dim> x0 = rest.col(first) + u.col(first), v0 = v.col(first);
-    for (int c = 0; c < n; ++c) {
-      const auto& cell = cv.cell[static_cast<std::size_t>(c0 + c)];
-      if (cell[0] != first) {
-        first = cell[0];
-        x0 = rest.col(first) + u.col(first);
-        v0 = v.col(first);
-      }
-      for (int a = 0; a < dim; ++a) {
-        const Vec<dim> ea = rest.col(cell[a + 1]) + u.col(cell[a + 1]) - x0, wa = v.col(cell[a + 1]) - v0;
-        for (int i = 0; i < dim; ++i) e[(a * dim + i) * C + c] = ea[i], w[(a * dim + i) * C + c] = wa[i];
-      }
-    }
+    gather_chunk<dim>(cv, rest, u, &v, c0, n, e, w);
     const double *inv = cv.inverse_rest_det.data() + c0, *k = cv.stiffness.data() + c0, *d = cv.damping.data() + c0,
                  *r0 = cv.rest_cofactor_norm2.data() + c0;
     // With a shear part the volume pulls toward alpha_c = 1 + m_c / k_c: k_c (J - alpha_c) =
@@ -215,7 +267,7 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
     }
     // Scatter: f_a -= G_a, f_0 += their sum (sum_a dJ/dx_a = 0), node 0's summed over its run.
     Vec<dim> sum = Vec<dim>::Zero();
-    first = cv.cell[static_cast<std::size_t>(c0)][0];
+    int first = cv.cell[static_cast<std::size_t>(c0)][0];
     for (int c = 0; c < n; ++c) {
       const auto& cell = cv.cell[static_cast<std::size_t>(c0 + c)];
       if (cell[0] != first) {
@@ -307,7 +359,9 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
   return cv;
 }
 
-template <int dim> void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own) {
+template <int dim>
+void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own,
+                        const Eigen::VectorXd* node_stiffness, double retardation_time) {
   const Eigen::Index nc = cv.size();
   cv.own_stiffness = own ? *own : Eigen::VectorXd::Zero(nc);
   cv.own_damping.resize(nc);
@@ -330,24 +384,43 @@ template <int dim> void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, 
   cv.node_cells.resize(static_cast<std::size_t>(cv.node_cells_start.back()));
   std::vector<int> fill(cv.node_cells_start.begin(), cv.node_cells_start.end() - 1);
   cv.node_weight.resize(nc, dim + 1);
-  for (Eigen::Index c = 0; c < nc; ++c) {
-    double k = 0, d = 0;
+  for (Eigen::Index c = 0; c < nc; ++c)
     for (int a = 0; a <= dim; ++a) {
       const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
       cv.node_cells[static_cast<std::size_t>(fill[static_cast<std::size_t>(n)]++)] = static_cast<int>(c);
-      const double w = volume(c) / (dim + 1) / node_volume[n];
-      cv.node_weight(c, a) = w;
-      k += w * cv.node_stiffness[n];
-      d += w * cv.node_damping[n];
+      cv.node_weight(c, a) = volume(c) / (dim + 1) / node_volume[n];
     }
-    cv.stiffness[c] = cv.own_stiffness[c] + k;
-    cv.damping[c] = cv.own_damping[c] + d;
+  // The stars: each node's cells' nodes, each once, in the order the cells list them.
+  cv.node_star_start.assign(1, 0);
+  cv.node_star.clear();
+  for (int n = 0; n < num_nodes; ++n) {
+    const auto first = static_cast<std::ptrdiff_t>(cv.node_star.size());
+    for (int q = cv.node_cells_start[static_cast<std::size_t>(n)];
+         q < cv.node_cells_start[static_cast<std::size_t>(n) + 1]; ++q)
+      for (int node : cv.cell[static_cast<std::size_t>(cv.node_cells[static_cast<std::size_t>(q)])])
+        if (std::find(cv.node_star.begin() + first, cv.node_star.end(), node) == cv.node_star.end())
+          cv.node_star.push_back(node);
+    cv.node_star_start.push_back(static_cast<int>(cv.node_star.size()));
   }
   cv.cell_ratio.resize(nc);
   cv.cell_rate.resize(nc);
   cv.cell_pressure.resize(nc);
   cv.node_ratio.resize(num_nodes);
   cv.node_rate.resize(num_nodes);
+  if (node_stiffness) {
+    set_node_stiffness(cv, *node_stiffness, retardation_time);
+    return;
+  }
+  for (Eigen::Index c = 0; c < nc; ++c) { // the cells' bounds of the lumped constants
+    double k = 0, d = 0;
+    for (int a = 0; a <= dim; ++a) {
+      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
+      k += cv.node_weight(c, a) * cv.node_stiffness[n];
+      d += cv.node_weight(c, a) * cv.node_damping[n];
+    }
+    cv.stiffness[c] = cv.own_stiffness[c] + k;
+    cv.damping[c] = cv.own_damping[c] + d;
+  }
 }
 
 template <int dim>
@@ -398,7 +471,7 @@ void set_cell_shear(CellVolumes<dim>& cv, double shear_modulus, double fraction,
   template CellVolumes<D> make_cell_volumes<D>(const std::vector<std::array<int, D + 1>>&, const Nodal<D>&,            \
                                                Eigen::VectorXd, double);                                               \
   template void set_cell_shear<D>(CellVolumes<D>&, double, double, double, double);                                    \
-  template void make_nodal_volumes<D>(CellVolumes<D>&, int, const Eigen::VectorXd*);                                   \
+  template void make_nodal_volumes<D>(CellVolumes<D>&, int, const Eigen::VectorXd*, const Eigen::VectorXd*, double);   \
   template void set_node_stiffness<D>(CellVolumes<D>&, const Eigen::VectorXd&, double);                                \
   template Eigen::VectorXd modulus_times_volume<D>(const CellVolumes<D>&, double, double);                             \
   template void nodal_pressures<D>(const CellVolumes<D>&, const Nodal<D>&, const Nodal<D>&);

@@ -51,8 +51,12 @@ template <int dim> struct FitSpace {
       }
       return;
     }
+    unit_start = cv.node_star_start;
+    unit_node = cv.node_star;
+    unit_grad.assign(unit_node.size(), Vec<dim>::Zero());
     for (int node = 0; node < net.num_nodes(); ++node) {
-      const auto first = unit_node.size();
+      const auto star = unit_node.begin() + unit_start[static_cast<std::size_t>(node)];
+      const auto star_end = unit_node.begin() + unit_start[static_cast<std::size_t>(node) + 1];
       for (int q = cv.node_cells_start[static_cast<std::size_t>(node)];
            q < cv.node_cells_start[static_cast<std::size_t>(node) + 1]; ++q) {
         const int c = cv.node_cells[static_cast<std::size_t>(q)];
@@ -60,17 +64,10 @@ template <int dim> struct FitSpace {
         const auto b = rest_gradients<dim>(cv.rest_inverse[static_cast<std::size_t>(c)]);
         const auto self = std::find(cell.begin(), cell.end(), node) - cell.begin();
         const double w = cv.node_weight(c, self);
-        for (int a = 0; a <= dim; ++a) {
-          const auto at = std::find(unit_node.begin() + static_cast<std::ptrdiff_t>(first), unit_node.end(),
-                                    cell[static_cast<std::size_t>(a)]);
-          if (at == unit_node.end()) {
-            unit_node.push_back(cell[static_cast<std::size_t>(a)]);
-            unit_grad.push_back(w * b.col(a));
-          } else
-            unit_grad[static_cast<std::size_t>(at - unit_node.begin())] += w * b.col(a);
-        }
+        for (int a = 0; a <= dim; ++a)
+          unit_grad[static_cast<std::size_t>(std::find(star, star_end, cell[static_cast<std::size_t>(a)]) -
+                                             unit_node.begin())] += w * b.col(a);
       }
-      unit_start.push_back(static_cast<int>(unit_node.size()));
     }
   }
   SpringNetwork<dim> net;

@@ -66,25 +66,17 @@ Eigen::SparseMatrix<double> free_block_pattern(const SpringNetwork<dim>& net, co
       ++start[static_cast<std::size_t>(a) + 1];
       ++start[static_cast<std::size_t>(b) + 1];
     }
-  // A nodal volume term's stars (Stars::exact): each node's free star nodes, listed per node.
+  // A nodal volume term's stars (Stars::exact, cv.node_star): each node's free star nodes.
   const CellVolumes<dim>& cv = net.volume;
   const bool with_stars = stars == Stars::exact && cv.nodal();
-  std::vector<int> star_start(1, 0), star;
-  if (with_stars)
-    for (int n = 0; n < net.num_nodes(); ++n) {
-      for (int q = cv.node_cells_start[static_cast<std::size_t>(n)];
-           q < cv.node_cells_start[static_cast<std::size_t>(n) + 1]; ++q)
-        for (int node : cv.cell[static_cast<std::size_t>(cv.node_cells[static_cast<std::size_t>(q)])])
-          if (const int a = free_index[static_cast<std::size_t>(node)];
-              a >= 0 && std::find(star.begin() + star_start.back(), star.end(), a) == star.end())
-            star.push_back(a);
-      star_start.push_back(static_cast<int>(star.size()));
-    }
   const auto for_each_star_pair = [&](auto&& pair) {
-    for (std::size_t n = 0; n + 1 < star_start.size(); ++n)
-      for (int i = star_start[n]; i < star_start[n + 1]; ++i)
-        for (int j = star_start[n]; j < star_start[n + 1]; ++j)
-          pair(star[static_cast<std::size_t>(i)], star[static_cast<std::size_t>(j)]);
+    if (!with_stars) return;
+    for (std::size_t n = 0; n + 1 < cv.node_star_start.size(); ++n)
+      for (int i = cv.node_star_start[n]; i < cv.node_star_start[n + 1]; ++i)
+        if (const int a = free_index[static_cast<std::size_t>(cv.node_star[static_cast<std::size_t>(i)])]; a >= 0)
+          for (int j = cv.node_star_start[n]; j < cv.node_star_start[n + 1]; ++j)
+            if (const int b = free_index[static_cast<std::size_t>(cv.node_star[static_cast<std::size_t>(j)])]; b >= 0)
+              pair(a, b);
   };
   for_each_star_pair([&](int a, int) { ++start[static_cast<std::size_t>(a) + 1]; });
   for (std::size_t a = 0; a < nf; ++a) start[a + 1] += start[a];

@@ -45,8 +45,7 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
           net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
           set_cell_shear(net.volume, mu, shear, mat.thickness, mat.retardation_time);
           const Eigen::VectorXd own = modulus_times_volume(net.volume, mu, mat.thickness);
-          make_nodal_volumes(net.volume, mesh.num_nodes(), &own);
-          set_node_stiffness(net.volume, cell_k, mat.retardation_time);
+          make_nodal_volumes(net.volume, mesh.num_nodes(), &own, &cell_k, mat.retardation_time);
         } else {
           net.volume = make_cell_volumes<dim>(mesh.cells, mesh.points, Eigen::VectorXd::Zero(mesh.num_cells()), 0.0);
           net.volume.stiffness = cell_k;

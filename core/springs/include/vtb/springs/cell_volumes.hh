@@ -54,6 +54,10 @@ template <int dim> struct CellVolumes {
   /// volume and stays bounded as lambda grows (no locking); the lambda part goes to the nodes.
   Eigen::VectorXd own_stiffness, own_damping;
   std::vector<int> node_cells_start, node_cells; ///< the cells at node n: node_cells[start[n], start[n+1])
+  /// Node n's star, the nodes of its cells (n included), each once in the order its cells list
+  /// them: node_star[star_start[n], star_start[n+1]). The exact Jacobian's, the Jacobian
+  /// pattern's and the fit's unit of node n.
+  std::vector<int> node_star_start, node_star;
   /// The nodal force pass's scratch (sized by make_nodal_volumes; a network steps in one thread):
   /// per cell J_c, its capped rate and its pressure s_c; per node J_n and its rate.
   mutable Eigen::VectorXd cell_ratio, cell_rate, cell_pressure, node_ratio, node_rate;
@@ -178,30 +182,26 @@ void for_each_cell_block(const CellVolumes<dim>& cv, const Nodal<dim>& rest, con
 }
 
 /// Averaged per node: what the exact Jacobian adds to for_each_cell_block's (the bound's)
-/// Gauss-Newton blocks, per node n over the pairs (i, j) of its star (the nodes of its cells):
+/// Gauss-Newton blocks, per node n over the pairs (i, j) of its star (cv.node_star):
 ///   K = -k_n (g_n,i g_n,j^T - sum_{c at n} w_cn g_c,i g_c,j^T),   D the same with c_n,
 /// g at X + u. Calls add(i, j, K, D) with global node indices; nothing without nodal averaging.
-/// Allocates its star's list (a Jacobian's assembly, not a step).
+/// Allocates its star's sums (a Jacobian's assembly, not a step).
 template <int dim, class Add>
 void for_each_nodal_correction(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, Add&& add) {
   if (!cv.nodal()) return;
   const auto x = [&](int i) -> Vec<dim> { return rest.col(i) + u.col(i); };
   const int nn = static_cast<int>(cv.node_stiffness.size());
-  std::vector<int> star;
   std::vector<Vec<dim>> gn;
   std::vector<Mat<dim>> pair; // sum_c w_cn g_c,i g_c,j^T over the star's pairs, row-major
   Eigen::Matrix<double, dim, dim + 1> g;
   for (int n = 0; n < nn; ++n) {
-    star.clear();
-    const int c0 = cv.node_cells_start[static_cast<std::size_t>(n)],
-              c1 = cv.node_cells_start[static_cast<std::size_t>(n) + 1];
-    for (int q = c0; q < c1; ++q)
-      for (int node : cv.cell[static_cast<std::size_t>(cv.node_cells[static_cast<std::size_t>(q)])])
-        if (std::find(star.begin(), star.end(), node) == star.end()) star.push_back(node);
-    const std::size_t s = star.size();
+    const auto star = cv.node_star.begin() + cv.node_star_start[static_cast<std::size_t>(n)];
+    const auto star_end = cv.node_star.begin() + cv.node_star_start[static_cast<std::size_t>(n) + 1];
+    const auto s = static_cast<std::size_t>(star_end - star);
     gn.assign(s, Vec<dim>::Zero());
     pair.assign(s * s, Mat<dim>::Zero());
-    for (int q = c0; q < c1; ++q) {
+    for (int q = cv.node_cells_start[static_cast<std::size_t>(n)];
+         q < cv.node_cells_start[static_cast<std::size_t>(n) + 1]; ++q) {
       const int c = cv.node_cells[static_cast<std::size_t>(q)];
       const auto& cell = cv.cell[static_cast<std::size_t>(c)];
       volume_ratio_gradients<dim>(edge_matrix<dim>(cell, x), cv.inverse_rest_det[c], g);
@@ -210,8 +210,8 @@ void for_each_nodal_correction(const CellVolumes<dim>& cv, const Nodal<dim>& res
       const double w = cv.node_weight(c, self);
       std::array<std::size_t, dim + 1> at;
       for (int a = 0; a <= dim; ++a)
-        at[static_cast<std::size_t>(a)] = static_cast<std::size_t>(
-            std::find(star.begin(), star.end(), cell[static_cast<std::size_t>(a)]) - star.begin());
+        at[static_cast<std::size_t>(a)] =
+            static_cast<std::size_t>(std::find(star, star_end, cell[static_cast<std::size_t>(a)]) - star);
       for (int a = 0; a <= dim; ++a) {
         gn[at[static_cast<std::size_t>(a)]] += w * g.col(a);
         for (int b = 0; b <= dim; ++b)
@@ -223,7 +223,8 @@ void for_each_nodal_correction(const CellVolumes<dim>& cv, const Nodal<dim>& res
     for (std::size_t i = 0; i < s; ++i)
       for (std::size_t j = 0; j < s; ++j) {
         const Mat<dim> G = gn[i] * gn[j].transpose() - pair[i * s + j];
-        add(star[i], star[j], Mat<dim>(-k * G), Mat<dim>(-d * G));
+        add(star[static_cast<std::ptrdiff_t>(i)], star[static_cast<std::ptrdiff_t>(j)], Mat<dim>(-k * G),
+            Mat<dim>(-d * G));
       }
   }
 }
@@ -256,11 +257,15 @@ CellVolumes<dim> make_cell_volumes(const std::vector<std::array<int, dim + 1>>& 
                                    Eigen::VectorXd stiffness, double retardation_time);
 
 /// Averages the volume term per node (E = sum_n k_n / 2 (J_n - 1)^2, above) but for the part
-/// `own` (per cell, none: 0) that each cell keeps (own_stiffness): each node takes a (dim + 1)-th
-/// of the rest of its cells' constants, k_n = sum_{c at n} (k_c - k'_c) / (dim + 1) (c_n
-/// likewise), so a homogeneous J has the same energy as per cell; `stiffness` and `damping`
-/// become the cells' bounds k'_c + kbar_c. num_nodes: the mesh's.
-template <int dim> void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own = nullptr);
+/// `own` (per cell, none: 0) that each cell keeps (own_stiffness): the weights, the nodes' cells
+/// and stars, the force pass's scratch. The nodes' constants are `node_stiffness` (c_n = tau k_n,
+/// set_node_stiffness) where given; else each node takes a (dim + 1)-th of the rest of its
+/// cells' constants, k_n = sum_{c at n} (k_c - k'_c) / (dim + 1) (c_n likewise), so a
+/// homogeneous J has the same energy as per cell. `stiffness` and `damping` become the cells'
+/// bounds k'_c + kbar_c. num_nodes: the mesh's.
+template <int dim>
+void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::VectorXd* own = nullptr,
+                        const Eigen::VectorXd* node_stiffness = nullptr, double retardation_time = 0.0);
 
 /// Sets a nodal term's constants k_n (the fit's) with their dashpots c_n = tau k_n, and the
 /// cells' bounds k'_c + kbar_c, kbar_c = sum_a w_ca k_n(a) (and their dashpots) from them.
