@@ -195,33 +195,34 @@ void nodal_ratios(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Noda
   }
   cv.node_ratio.setZero();
   if (v) cv.node_rate.setZero();
-  for (int a = 0; a <= dim; ++a) {
-    const double* weight = cv.node_weight.col(a).data();
-    for (int c = 0; c < cv.size(); ++c) {
+  for (int c = 0; c < cv.size(); ++c)
+    for (int a = 0; a <= dim; ++a) {
       const int node = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
-      cv.node_ratio[node] += weight[c] * cv.cell_ratio[c];
-      if (v) cv.node_rate[node] += weight[c] * cv.cell_rate[c];
+      cv.node_ratio[node] += cv.node_weight(c, a) * cv.cell_ratio[c];
+      if (v) cv.node_rate[node] += cv.node_weight(c, a) * cv.cell_rate[c];
     }
-  }
 }
 
-/// Averaged per node: each cell's whole force coefficient s_c = sum_a w_ca (k_n (J_n - 1) +
-/// (c_n + extra k_n) dJ_n/dt) - m_c into cv.cell_pressure (the force pass's `pressure`).
+/// Averaged per node: the nodes' force coefficients P_n = k_n (J_n - 1) + (c_n + extra k_n)
+/// dJ_n/dt into cv.node_pressure (once a node, not once a cell that has it).
 template <int dim>
-const double* nodal_forces_pressure(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u,
-                                    const Nodal<dim>& v, double extra) {
+void nodal_forces_pressure(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u, const Nodal<dim>& v,
+                           double extra) {
   nodal_ratios(cv, rest, u, &v);
-  for (int c = 0; c < cv.size(); ++c) {
+  cv.node_pressure.array() = cv.node_stiffness.array() * (cv.node_ratio.array() - 1.0) +
+                             (cv.node_damping.array() + extra * cv.node_stiffness.array()) * cv.node_rate.array();
+}
+
+/// A chunk's cells' whole force coefficients s_c = sum_a w_ca P_n(a) + k'_c (J_c - 1) + (c'_c +
+/// extra k'_c) dJ_c/dt - m_c into p (the kernels' `pressure`).
+template <int dim> void chunk_pressures(const CellVolumes<dim>& cv, int c0, int n, double extra, double* p) {
+  for (int c = c0; c < c0 + n; ++c) {
     double s = (cv.has_shear() ? -cv.shear[c] : 0.0) + cv.own_stiffness[c] * (cv.cell_ratio[c] - 1.0) +
                (cv.own_damping[c] + extra * cv.own_stiffness[c]) * cv.cell_rate[c];
-    for (int a = 0; a <= dim; ++a) {
-      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
-      s += cv.node_weight(c, a) * (cv.node_stiffness[n] * (cv.node_ratio[n] - 1.0) +
-                                   (cv.node_damping[n] + extra * cv.node_stiffness[n]) * cv.node_rate[n]);
-    }
-    cv.cell_pressure[c] = s;
+    for (int a = 0; a <= dim; ++a)
+      s += cv.node_weight(c, a) * cv.node_pressure[cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)]];
+    p[c - c0] = s;
   }
-  return cv.cell_pressure.data();
 }
 
 } // namespace
@@ -244,19 +245,22 @@ void add_volume_forces(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const
   constexpr int C = kCellChunk;
   alignas(64) double e[dim * dim * C], w[dim * dim * C], G[dim * dim * C];
   alignas(64) const double no_shift[C] = {};
-  const double* pressure = cv.nodal() ? nodal_forces_pressure(cv, rest, u, v, extra_damping_per_k) : nullptr;
+  alignas(64) double chunk_pressure[C];
+  if (cv.nodal()) nodal_forces_pressure(cv, rest, u, v, extra_damping_per_k);
+  const double* pressure = cv.nodal() ? chunk_pressure : nullptr;
   for (int c0 = 0; c0 < cv.size(); c0 += C) {
     const int n = std::min(C, cv.size() - c0);
     gather_chunk<dim>(cv, rest, u, &v, c0, n, e, w);
+    if (pressure) chunk_pressures(cv, c0, n, extra_damping_per_k, chunk_pressure);
     const double *inv = cv.inverse_rest_det.data() + c0, *k = cv.stiffness.data() + c0, *d = cv.damping.data() + c0,
                  *r0 = cv.rest_cofactor_norm2.data() + c0;
     // With a shear part the volume pulls toward alpha_c = 1 + m_c / k_c: k_c (J - alpha_c) =
     // k_c (J - 1) - m_c (at rest its pull -m_c dJ/dx_a cancels the shear's m_c b_a).
     const double* shift = cv.has_shear() ? cv.shear.data() + c0 : no_shift;
     if constexpr (dim == 3)
-      cell_coefficients_3d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure ? pressure + c0 : nullptr, G);
+      cell_coefficients_3d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure, G);
     else
-      cell_coefficients_2d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure ? pressure + c0 : nullptr, G);
+      cell_coefficients_2d(n, e, w, inv, k, d, shift, r0, extra_damping_per_k, pressure, G);
     if (cv.has_shear()) {
       const double *m = cv.shear.data() + c0, *ms = cv.shear_damping.data() + c0;
       const auto col = [&](int q) { return cv.shear_metric.col(q).data() + c0; };
@@ -407,6 +411,7 @@ void make_nodal_volumes(CellVolumes<dim>& cv, int num_nodes, const Eigen::Vector
   cv.cell_pressure.resize(nc);
   cv.node_ratio.resize(num_nodes);
   cv.node_rate.resize(num_nodes);
+  cv.node_pressure.resize(num_nodes);
   if (node_stiffness) {
     set_node_stiffness(cv, *node_stiffness, retardation_time);
     return;

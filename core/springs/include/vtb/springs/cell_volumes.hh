@@ -59,8 +59,9 @@ template <int dim> struct CellVolumes {
   /// pattern's and the fit's unit of node n.
   std::vector<int> node_star_start, node_star;
   /// The nodal force pass's scratch (sized by make_nodal_volumes; a network steps in one thread):
-  /// per cell J_c, its capped rate and its pressure s_c; per node J_n and its rate.
-  mutable Eigen::VectorXd cell_ratio, cell_rate, cell_pressure, node_ratio, node_rate;
+  /// per cell J_c, its capped rate and its pressure s_c; per node J_n, its rate and its force
+  /// coefficient k_n (J_n - 1) + (c_n + extra k_n) dJ_n/dt.
+  mutable Eigen::VectorXd cell_ratio, cell_rate, cell_pressure, node_ratio, node_rate, node_pressure;
   bool empty() const { return cell.empty(); }
   bool nodal() const { return node_weight.size() > 0; }
   bool has_shear() const { return shear.size() > 0; }
