@@ -24,7 +24,7 @@ constexpr int kCellChunk = 64;
 /// (shift_c: the shear part's m_c, which moves the volume's rest to alpha_c; zero without it; the
 /// dashpot times volume_dashpot_cap of |cof(D_m)|^2 `rest_norm2` and |cof(D_s)|^2) and
 /// dJ/dx_a the columns of cof(D_s) / det(D_m) (volume_ratio_gradients' expressions); averaged
-/// per node, s is the cell's given `pressure` (nodal_forces_pressure). No gather: the loop
+/// per node, s is the cell's given `pressure` (chunk_pressures). No gather: the loop
 /// vectorises.
 VTB_VECTOR_CLONES void cell_coefficients_3d(int n, const double* __restrict e, const double* __restrict w,
                                             const double* __restrict inverse_rest_det, const double* __restrict k,
