@@ -87,7 +87,7 @@ Action add_run(CLI::App& app) {
       };
       const bool continuum = std::isfinite(r.mesh_fem_load_error);
       load_check = " (" + pct(r.calibration_load_error) + " from " + (continuum ? "the continuum" : "P1 FEM") +
-                   " on the scene's loads, static" +
+                   " on the scene's loads, static" + (r.calibration_own_loads ? ", which it was trained on" : "") +
                    (continuum ? "; P1 on this mesh " + pct(r.mesh_fem_load_error) : std::string()) + ")";
       std::cout << "vtb run: the springs' load check against " << r.calibration_yardstick << "\n";
       if (r.calibration_load_error > kLoadErrorGoal)

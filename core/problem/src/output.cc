@@ -57,6 +57,7 @@ std::string summary_json(const RunReport& r, const std::string& scene_name) {
     }
     if (std::isfinite(r.calibration_load_error)) {
       j["calibration_load_error"] = r.calibration_load_error;
+      j["calibration_load_trained"] = r.calibration_own_loads; // the fit saw these loads
       j["calibration_yardstick"] = r.calibration_yardstick;
     }
     if (std::isfinite(r.mesh_fem_load_error)) j["mesh_fem_load_error"] = r.mesh_fem_load_error;

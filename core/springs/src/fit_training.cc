@@ -141,6 +141,29 @@ MatrixXd uniform_stress_answers(const Mesh<dim>& mesh, const SpMat& K, const Pin
   return T;
 }
 
+/// The scene's own loads and the target's answers to them, appended to the training pairs:
+/// each scaled so that its load has `load_size` (the modes') times FitOptions::own_load. The
+/// held rows of a load are the supports' reactions, not applied forces. Nothing is appended
+/// where the target does not answer.
+void append_own_loads(Training& tr, const FitOptions& o, double E, double nu, double thickness, double load_size) {
+  const MatrixXd& loads = o.target.own_loads;
+  if (!(o.own_load > 0) || loads.cols() == 0 || !o.target.own_answers) return;
+  MatrixXd f = loads;
+  for (const int d : tr.pins) f.row(d).setZero();
+  MatrixXd u = o.target.own_answers(E, nu, thickness);
+  if (u.rows() != f.rows() || u.cols() != f.cols() || !u.allFinite()) return;
+  for (const int d : tr.pins) u.row(d).setZero();
+  for (Eigen::Index c = 0; c < f.cols(); ++c) {
+    const double size = f.col(c).norm();
+    if (!(size > 0) || !(u.col(c).norm() > 0)) continue;
+    const double s = o.own_load * load_size / size;
+    tr.F.conservativeResize(Eigen::NoChange, tr.F.cols() + 1);
+    tr.T.conservativeResize(Eigen::NoChange, tr.T.cols() + 1);
+    tr.F.rightCols(1) = s * f.col(c);
+    tr.T.rightCols(1) = s * u.col(c);
+  }
+}
+
 } // namespace
 
 template <int dim>
@@ -199,6 +222,7 @@ Training training_set(const Mesh<dim>& mesh, double E, double nu, double thickne
       tr.T = U.leftCols(tr.F.cols());
       tr.Tv = U.rightCols(tr.Fv.cols());
       for (const int d : tr.pins) tr.T.row(d).setZero(), tr.Tv.row(d).setZero();
+      append_own_loads(tr, o, E, nu, thickness, (K * all.col(0)).norm());
     }
   }
   return tr;

@@ -35,7 +35,7 @@ struct Fnv {
 /// and a stiffness sweep or the viewer's stiffness slider reads it back scaled.
 template <int dim>
 std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supports, const std::string& target,
-                  bool volume, double cell_shear, bool nodal) {
+                  bool volume, double cell_shear, bool nodal, const Eigen::MatrixXd& own_loads) {
   Fnv f;
   f.add(kMagic, sizeof kMagic);
   const int d = dim;
@@ -55,6 +55,15 @@ std::uint64_t key(const Mesh<dim>& mesh, double nu, const std::vector<int>& supp
   if (volume) f.add("volume", 6); // the springs-only fits' keys stay as they were
   if (cell_shear > 0) f.add(cell_shear);
   if (nodal) f.add("nodal", 5);
+  if (own_loads.cols() > 0) { // their shape, not their size: the fit scales them to its modes'
+    f.add("own", 3);
+    f.add(FitOptions::kOwnLoadWeight);
+    // Each column at unit length, to 2^-32 (a scaled load's last bits differ: the same key).
+    for (Eigen::Index c = 0; c < own_loads.cols(); ++c) {
+      const Eigen::VectorXd unit = (own_loads.col(c).normalized() * 0x1p32).array().round().matrix();
+      f.add(unit.data(), sizeof(double) * static_cast<std::size_t>(unit.size()));
+    }
+  }
   return f.h;
 }
 
@@ -108,9 +117,11 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
                                         bool nodal) {
   const std::filesystem::path dir = fit_cache_dir();
   const bool volume = cell_stiffness != nullptr;
+  // The volume networks train on the scene's own loads where the continuum answers them.
+  const Eigen::MatrixXd own = trains_on_own_loads(target, volume) ? target.own_loads : Eigen::MatrixXd();
   char name[40];
   std::snprintf(name, sizeof name, "fitted-%016llx.bin",
-                static_cast<unsigned long long>(key(mesh, nu, supports, target.key, volume, cell_shear, nodal)));
+                static_cast<unsigned long long>(key(mesh, nu, supports, target.key, volume, cell_shear, nodal, own)));
   const auto ns = static_cast<Eigen::Index>(unique_edges(mesh).size());
   // The springs', then the cells' (or the nodes').
   Eigen::VectorXd k(ns + (volume ? (nodal ? mesh.num_nodes() : mesh.num_cells()) : 0));
@@ -124,6 +135,7 @@ Eigen::VectorXd cached_fitted_stiffness(const Mesh<dim>& mesh, double E, double 
     options.volume = volume;
     options.cell_shear = cell_shear;
     options.nodal = nodal;
+    if (own.cols() > 0) options.own_load = FitOptions::kOwnLoadWeight;
     FitReport report;
     Eigen::VectorXd cells;
     k.head(ns) = fitted_stiffness(mesh, 1.0, nu, 1.0, options, &report, &cells); // unit E t, scaled below

@@ -43,6 +43,7 @@ template <int dim> RunReport spring_report(const Model<dim>& model, const std::s
   rep.calibration_note = model.net.calibration_note;
   rep.calibration_seconds = model.net.calibration_seconds;
   rep.calibration_cached = model.net.calibration_cached;
+  rep.calibration_own_loads = model.net.calibration_own_loads;
   rep.effective_poisson_ratio = spring_poisson_ratio(dim);
   if (!model.net.volume.empty()) rep.extra.emplace_back("volume_cells", static_cast<double>(model.net.volume.size()));
   return rep;

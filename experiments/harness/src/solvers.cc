@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace vtb::harness {
 
@@ -78,6 +79,17 @@ template <int dim> FitTargetFor<dim> continuum_target() {
       const auto a = fem::continuum_answers<dim>(p, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, F, options);
       return a ? a->u : Eigen::MatrixXd();
     };
+    // The scene's own loads, every one at its full value (the load check's static problem),
+    // and the continuum's answer to them as the scene applies them (a disc as a traction).
+    Nodal<dim> f = Nodal<dim>::Zero(dim, problem.num_nodes());
+    problem.external_forces(std::numeric_limits<double>::infinity(), f);
+    if (!problem.loads.empty() && f.squaredNorm() > 0) {
+      t.own_loads = Eigen::Map<const Eigen::VectorXd>(f.data(), f.size());
+      t.own_answers = [p = problem, options](double E, double nu, double thickness) {
+        const auto a = fem::continuum_static<dim>(p, MaterialDesc{E, nu, 1.0, thickness, 0.0, 0.0}, options);
+        return a ? Eigen::MatrixXd(Eigen::Map<const Eigen::VectorXd>(a->u.data(), a->u.size())) : Eigen::MatrixXd();
+      };
+    }
     return t;
   };
 }

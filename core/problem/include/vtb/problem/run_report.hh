@@ -47,9 +47,10 @@ struct RunReport {
   double max_spring_strain = 0; ///< spring solvers: max over samples of max |l/L0 - 1| (the runaway watch's measure)
   double courant_dt = 0;        ///< predicted stability limit of the explicit scheme (estimate)
   std::string calibration;      ///< spring solvers: the constants used (lloyd, van-gelder, fitted)
-  std::string calibration_requested; ///< the scene's [solver].springs (auto, or one of the above)
-  double calibration_seconds = 0;    ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
-  bool calibration_cached = false;   ///< a fit's constants read from the fit cache instead of fitted
+  std::string calibration_requested;  ///< the scene's [solver].springs (auto, or one of the above)
+  double calibration_seconds = 0;     ///< spring solvers: the stiffness calibration's wall time (the fit, for "fitted")
+  bool calibration_cached = false;    ///< a fit's constants read from the fit cache instead of fitted
+  bool calibration_own_loads = false; ///< the fit trained on the scene's own loads (SpringNetwork's)
   double calibration_validation = std::numeric_limits<double>::quiet_NaN(); ///< the fit's held-out error, if one ran
   /// Spring solvers: the springs' linear static error on the scene's own loads against the
   /// yardstick (the continuum, else P1 FEM on the mesh; load_check.hh), if measured.

@@ -5,8 +5,9 @@
 /// on equilateral triangles; here every spring is chosen so that the network's static answer
 /// to a set of training loads matches the FEM's. The training loads are f_m = K_fem phi_m with
 /// phi_m the lowest non-rigid modes of the free mesh (K_fem phi = lambda M phi), scaled as
-/// FitOptions::weighting says: the FEM's exact answer to f_m is phi_m itself, and no scene's own
-/// load is used. With x = log(k / k_prior) (the prior: Lloyd or van Gelder, see FitReport),
+/// FitOptions::weighting says: the FEM's exact answer to f_m is phi_m itself; the pair springs
+/// use no scene's own load (the volume networks do: FitOptions::own_load). With x = log(k / k_prior) (the prior: Lloyd
+/// or van Gelder, see FitReport),
 ///   min_x  1/2 sum_m || P (K_s(x)^+ f_m) - phi_m ||^2  +  mu/2 ||x||^2 ,  k >= floor k_prior,
 /// P removing rigid motions, K_s the network's stiffness at rest; solved by Levenberg-Marquardt
 /// with a matrix-free CG on the normal equations (each product: one batched solve with the
@@ -43,6 +44,13 @@ struct FitTarget {
   std::string key;
   /// One line for the run: what the fit was trained on ("the continuum (...)", or why P1).
   std::string how;
+  /// The scene's own loads (nodal forces, every load at its full value, one column) and the
+  /// target's static answers to them at (E, nu, thickness), the supports held at zero: with
+  /// FitOptions::own_load > 0 the fit trains on them beside the modes (docs/volume_term.md).
+  /// The answers are asked for only when the fit runs (a cache hit needs the loads alone);
+  /// empty loads or answers: none.
+  Eigen::MatrixXd own_loads;
+  std::function<Eigen::MatrixXd(double young_modulus, double nu, double thickness)> own_answers;
 };
 
 struct FitOptions {
@@ -129,7 +137,19 @@ struct FitOptions {
   /// With the volume term, averaged per node (cell_volumes.hh): one unknown k_n per node
   /// instead of one per cell (the prior: the element fit's cells lumped to their nodes).
   bool nodal = false;
+  /// With a continuum target that answers the scene's own loads (FitTarget::own_loads): their
+  /// weight in the training set, each answer scaled to the modes' load size times this (as
+  /// `uniform_stress`); 0: the scene's loads are not trained on. The volume networks train on
+  /// them (kOwnLoadWeight), the pair springs do not (docs/volume_term.md).
+  double own_load = 0;
+  static constexpr double kOwnLoadWeight = 2;
 };
+
+/// Whether a fit (the volume networks' with `volume`) trains on the scene's own loads: where
+/// the target is the continuum and answers them.
+inline bool trains_on_own_loads(const FitTarget& target, bool volume) {
+  return volume && target.answers && target.own_answers && target.own_loads.cols() > 0;
+}
 
 struct FitReport {
   int modes = 0, iterations = 0, cg_iterations = 0;

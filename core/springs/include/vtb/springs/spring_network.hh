@@ -30,6 +30,9 @@ template <int dim> struct SpringNetwork {
   std::string calibration_requested; ///< the scene's [solver].springs: the above or "auto"
   double calibration_seconds = 0;    ///< wall time of the stiffness calibration (the fit, for "fitted")
   bool calibration_cached = false;   ///< the fit's constants came from the fit cache (fitted_cache.hh)
+  /// The fit trained on the scene's own loads (the volume networks with a continuum target):
+  /// calibration_load_error is then measured on a load the fit saw.
+  bool calibration_own_loads = false;
   /// When a fit ran (or was read): the used constants' relative error on the fit's held-out
   /// modes (FitReport::validation); NaN otherwise.
   double calibration_validation = std::numeric_limits<double>::quiet_NaN();
