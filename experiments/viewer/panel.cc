@@ -133,8 +133,9 @@ template <int dim> void App<dim>::draw_panel() {
   else
     ImGui::Text("springs: %s", net.calibration.c_str());
   if (std::isfinite(net.calibration_load_error) && std::isfinite(net.mesh_fem_load_error))
-    ImGui::Text("%.1f %% from the continuum on the scene's loads\n(P1 on this mesh: %.1f %%)",
-                100 * net.calibration_load_error, 100 * net.mesh_fem_load_error);
+    ImGui::Text("%.1f %% from the continuum on the scene's loads%s\n(P1 on this mesh: %.1f %%)",
+                100 * net.calibration_load_error, net.calibration_own_loads ? ", trained on" : "",
+                100 * net.mesh_fem_load_error);
   else if (std::isfinite(net.calibration_load_error))
     ImGui::Text("%.1f %% from P1 FEM on the scene's loads", 100 * net.calibration_load_error);
   if (!net.calibration_note.empty()) {

@@ -229,12 +229,11 @@ template <int dim> void chunk_pressures(const CellVolumes<dim>& cv, int c0, int 
 
 template <int dim> void nodal_pressures(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u) {
   nodal_ratios<dim>(cv, rest, u, nullptr);
+  cv.node_pressure.array() = cv.node_stiffness.array() * (cv.node_ratio.array() - 1.0); // once a node
   for (int c = 0; c < cv.size(); ++c) {
     double s = cv.own_stiffness[c] * (cv.cell_ratio[c] - 1.0);
-    for (int a = 0; a <= dim; ++a) {
-      const int n = cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)];
-      s += cv.node_weight(c, a) * cv.node_stiffness[n] * (cv.node_ratio[n] - 1.0);
-    }
+    for (int a = 0; a <= dim; ++a)
+      s += cv.node_weight(c, a) * cv.node_pressure[cv.cell[static_cast<std::size_t>(c)][static_cast<std::size_t>(a)]];
     cv.cell_pressure[c] = s;
   }
 }

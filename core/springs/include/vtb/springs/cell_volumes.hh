@@ -134,7 +134,8 @@ inline double volume_dashpot_cap(double rest_norm2, double norm2) {
 }
 
 /// Averaged per node: J_n at X + u into cv.node_ratio and each cell's elastic pressure
-/// s_c = sum_a w_ca k_n(a) (J_n(a) - 1) + k'_c (J_c - 1) into cv.cell_pressure (the scratch).
+/// s_c = sum_a w_ca k_n(a) (J_n(a) - 1) + k'_c (J_c - 1) into cv.cell_pressure (the scratch; each
+/// node's k_n (J_n - 1) formed once, into cv.node_pressure).
 /// Allocates nothing.
 template <int dim> void nodal_pressures(const CellVolumes<dim>& cv, const Nodal<dim>& rest, const Nodal<dim>& u);
 
