@@ -54,7 +54,7 @@ SpringNetwork<dim> build_network(const Mesh<dim>& mesh, const MaterialDesc& mat,
         }
       }
       net.calibration_target = target.answers ? target.how : "P1 FEM on the mesh";
-      net.calibration_own_loads = trains_on_own_loads(target, volume);
+      net.calibration_own_loads = trains_on_own_loads(target, volume) && fit.chosen == "fitted"; // not a prior
     } catch (const InputError& e) { // auto falls back where the fit cannot run (a mesh in pieces)
       if (net.calibration_requested != "auto") throw;
       net.calibration = "lloyd";

@@ -6,8 +6,8 @@
 /// to a set of training loads matches the FEM's. The training loads are f_m = K_fem phi_m with
 /// phi_m the lowest non-rigid modes of the free mesh (K_fem phi = lambda M phi), scaled as
 /// FitOptions::weighting says: the FEM's exact answer to f_m is phi_m itself; the pair springs
-/// use no scene's own load (the volume networks do: FitOptions::own_load). With x = log(k / k_prior) (the prior: Lloyd
-/// or van Gelder, see FitReport),
+/// use no scene's own load (the volume networks do: FitOptions::own_load). With
+/// x = log(k / k_prior) (the prior: Lloyd or van Gelder, see FitReport),
 ///   min_x  1/2 sum_m || P (K_s(x)^+ f_m) - phi_m ||^2  +  mu/2 ||x||^2 ,  k >= floor k_prior,
 /// P removing rigid motions, K_s the network's stiffness at rest; solved by Levenberg-Marquardt
 /// with a matrix-free CG on the normal equations (each product: one batched solve with the
