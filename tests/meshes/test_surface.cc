@@ -361,6 +361,46 @@ TEST(Surface, BadSurfacesAreRefusedWithOneLine) {
   expect_refused(write(dir, "a.dxf", off(v, f)), "unknown surface format");
 }
 
+TEST(Surface, PolygonsAreSplitIntoTrianglesThatKeepTheirShape) {
+  // An L-shaped prism (2 x 2 cm L of 1 cm arms, 1 cm tall): two non-convex hexagon caps and six
+  // quad sides. The split must stay inside each polygon, so the body encloses exactly the L's
+  // area times the height.
+  const double s = 0.01;
+  const std::vector<Eigen::Vector2d> l = {{0, 0}, {2 * s, 0}, {2 * s, s}, {s, s}, {s, 2 * s}, {0, 2 * s}};
+  std::vector<Eigen::Vector3d> p;
+  for (double z : {0.0, s})
+    for (const auto& q : l) p.emplace_back(q.x(), q.y(), z);
+  std::vector<std::vector<std::size_t>> faces = {{5, 4, 3, 2, 1, 0}, {6, 7, 8, 9, 10, 11}};
+  for (std::size_t i = 0; i < 6; ++i) faces.push_back({i, (i + 1) % 6, (i + 1) % 6 + 6, i + 6});
+  const Surface b = checked_surface(p, faces, "L");
+  EXPECT_EQ(b.triangles.size(), 2u * 4 + 6 * 2);
+  EXPECT_EQ(b.reoriented, 0);
+  // 20 triangles' triple products in doubles: rounding, far below one part in 10^12.
+  EXPECT_NEAR(enclosed_volume(b), 3 * s * s * s, 3 * s * s * s * 1e-12);
+}
+
+TEST(Surface, APolygonListedTwiceIsRefusedAsCrossingItself) {
+  // What the surface fuzzer found: one non-planar heptagon listed twice (a closed "pillow" of two
+  // faces, every edge used twice). With CGAL's default split (a constrained Delaunay
+  // triangulation in the polygon's projection plane) the first reached the triangle copy-out
+  // with seven corners in one face, and the second is undefined behaviour inside CGAL's CDT.
+  // Split by hole filling, the two sheets lie on each other: refused as self-intersecting.
+  const std::vector<std::size_t> hepta = {3, 8, 12, 10, 11, 15, 13};
+  const std::vector<std::vector<Eigen::Vector3d>> pillows = {
+      {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}, {0, 0, -7}, {-8, 0, 2}, {0, 2, 2}, {-5, 1, 2}, {3, -5, 4},
+       {7, 6, -5}, {5, 5, 6}, {-5, 0, 1}, {4, -5, 1}, {5, 4, -5}, {2, 6, 3}, {-5, 3, 6}},
+      {{0, 0, 0}, {-3, 0, 7}, {1, 6, -4}, {-5, -6, -3}, {-5, 0, -7}, {-8, 0, 2}, {0, 2, 2}, {-5, 1, 2}, {3, 1, 6},
+       {-4, 6, -5}, {1, 6, 5}, {-5, 5, 0}, {-4, 4, -2}, {0, 6, 4}, {2, -5, 3}, {-5, 3, 6}}};
+  for (const auto& p : pillows) try {
+      checked_surface(p, {hepta, hepta}, "pillow");
+      ADD_FAILURE() << "the pillow was accepted";
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.rfind("pillow: self-intersecting", 0), 0u) << msg;
+      EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    }
+}
+
 TEST(Grading, TheSizeGrowsFromTheRefinementToTheBodys) {
   const std::vector<Refinement> r{{Eigen::Vector3d(0, 0, 0), 0.01, 0.001}};
   EXPECT_EQ(graded_size(Eigen::Vector3d(0.005, 0, 0), 0.01, r), 0.001);
