@@ -268,17 +268,16 @@ Surface checked_surface(std::vector<Eigen::Vector3d> in_points, std::vector<std:
   PMP::polygon_soup_to_polygon_mesh(points, oriented, mesh);
   // Polygons are split by CGAL's hole filling (triangulate_hole_polyline), not by its default
   // constrained Delaunay triangulation in the polygon's projection plane: the latter is undefined
-  // behaviour (a null reference in CGAL 5.5's CDT) when the projection folds over itself, which
-  // the surface fuzzer reaches in a few thousand inputs. A polygon the hole filling cannot split
-  // either is refused here, by a corner of it (the soup's face numbers do not survive the
-  // conversion). What the split leaves crossing is refused by the self-intersection test below.
-  if (!CGAL::is_triangle_mesh(mesh) &&
-      !PMP::triangulate_faces(mesh, CGAL::parameters::use_delaunay_triangulation(false)))
-    for (auto f : mesh.faces())
-      if (mesh.degree(f) != 3)
-        throw InputError(src + ": a face of " + std::to_string(mesh.degree(f)) + " vertices near " +
-                         where(mesh.point(mesh.target(mesh.halfedge(f)))) +
-                         " cannot be split into triangles (it folds over itself or is far from planar)");
+  // behaviour (a null reference in CGAL 5.5's CDT) when the projection folds over itself. The
+  // triangle copy-out below needs three corners a face: a polygon left unsplit is refused here,
+  // by a corner of it (the soup's face numbers do not survive the conversion). What the split
+  // leaves crossing is refused by the self-intersection test.
+  if (!CGAL::is_triangle_mesh(mesh)) PMP::triangulate_faces(mesh, CGAL::parameters::use_delaunay_triangulation(false));
+  for (auto f : mesh.faces())
+    if (mesh.degree(f) != 3)
+      throw InputError(src + ": a face of " + std::to_string(mesh.degree(f)) + " vertices near " +
+                       where(mesh.point(mesh.target(mesh.halfedge(f)))) +
+                       " cannot be split into triangles (it folds over itself or is far from planar)");
   std::vector<std::pair<SurfaceMesh::Face_index, SurfaceMesh::Face_index>> crossing;
   PMP::self_intersections(mesh, std::back_inserter(crossing), CGAL::parameters::maximum_number(1));
   if (!crossing.empty()) {
