@@ -386,12 +386,14 @@ TEST(Surface, APolygonListedTwiceIsRefusedAsCrossingItself) {
   // with seven corners in one face, and the second is undefined behaviour inside CGAL's CDT.
   // Split by hole filling, the two sheets lie on each other: refused as self-intersecting.
   const std::vector<std::size_t> hepta = {3, 8, 12, 10, 11, 15, 13};
-  const std::vector<std::vector<Eigen::Vector3d>> pillows = {
-      {{0, 0, 0}, {2, 0, 0}, {0, 2, 0}, {2, 2, 0}, {0, 0, -7}, {-8, 0, 2}, {0, 2, 2}, {-5, 1, 2}, {3, -5, 4},
-       {7, 6, -5}, {5, 5, 6}, {-5, 0, 1}, {4, -5, 1}, {5, 4, -5}, {2, 6, 3}, {-5, 3, 6}},
-      {{0, 0, 0}, {-3, 0, 7}, {1, 6, -4}, {-5, -6, -3}, {-5, 0, -7}, {-8, 0, 2}, {0, 2, 2}, {-5, 1, 2}, {3, 1, 6},
-       {-4, 6, -5}, {1, 6, 5}, {-5, 5, 0}, {-4, 4, -2}, {0, 6, 4}, {2, -5, 3}, {-5, 3, 6}}};
-  for (const auto& p : pillows) try {
+  // The two pillows' 16 corners (x, y, z after each other), as the fuzzer's bytes decode.
+  const int pillows[2][48] = {{0, 0,  0, 2, 0, 0,  0, 2, 0, 2,  2, 0, 0, 0,  -7, -8, 0, 2,  0, 2, 2, -5, 1, 2,
+                               3, -5, 4, 7, 6, -5, 5, 5, 6, -5, 0, 1, 4, -5, 1,  5,  4, -5, 2, 6, 3, -5, 3, 6},
+                              {0, 0, 0, -3, 0, 7,  1, 6, -4, -5, -6, -3, -5, 0, -7, -8, 0, 2, 0, 2,  2, -5, 1, 2,
+                               3, 1, 6, -4, 6, -5, 1, 6, 5,  -5, 5,  0,  -4, 4, -2, 0,  6, 4, 2, -5, 3, -5, 3, 6}};
+  for (const auto& xyz : pillows) try {
+      std::vector<Eigen::Vector3d> p;
+      for (int i = 0; i < 16; ++i) p.emplace_back(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]);
       checked_surface(p, {hepta, hepta}, "pillow");
       ADD_FAILURE() << "the pillow was accepted";
     } catch (const InputError& e) {
