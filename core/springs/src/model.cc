@@ -1,7 +1,13 @@
 #include "vtb/springs/model.hh"
 
+#include "vtb/base/input_error.hh"
 #include "vtb/springs/calibration.hh"
+#include "vtb/springs/fitted_springs.hh"
 #include "vtb/springs/load_check.hh"
+#include "vtb/springs/load_pressure.hh"
+
+#include <cstdio>
+#include <limits>
 
 namespace vtb {
 
@@ -15,7 +21,37 @@ Model<dim> build_model(const Scene& scene, Mesh<dim> mesh, const FitProgress& pr
     if (model.constrained[static_cast<std::size_t>(v)]) supports.push_back(v);
   FitTarget target; // the continuum's answers where the yardstick gives them, else P1's
   if (yardstick && yardstick->target<dim>()) target = yardstick->target<dim>()(model, scene.material);
-  model.net = build_network(model.mesh, scene.material, scene.solver.springs, supports, progress, target);
+  // springs = "auto" on a scene whose loads press deep: the fitted network with the volume per
+  // node (docs/volume_term.md, "What auto builds"); else the pair springs (build_network).
+  std::string springs = scene.solver.springs, deep_note;
+  if (springs == "auto") {
+    Nodal<dim> f = Nodal<dim>::Zero(dim, model.num_nodes());
+    model.external_forces(std::numeric_limits<double>::infinity(), f);
+    const double press = deepest_load_pressure<dim>(model.mesh, Eigen::Map<const Eigen::VectorXd>(f.data(), f.size()),
+                                                    scene.material.young_modulus, scene.material.thickness);
+    if (press >= kDeepLoadPressure && fit_affordable(model.mesh, supports).empty()) {
+      springs = "fitted-nodal";
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "springs = \"auto\" builds fitted-nodal: a load presses %.2g E, past the %.2g E at which a pair "
+                    "network inverts cells",
+                    press, kDeepLoadPressure);
+      deep_note = line;
+    }
+  }
+  try {
+    model.net = build_network(model.mesh, scene.material, springs, supports, progress, target);
+  } catch (const InputError&) { // where the volume network's fit cannot run, auto's own fallback
+    if (deep_note.empty()) throw;
+    springs = "auto";
+    deep_note.clear();
+    model.net = build_network(model.mesh, scene.material, springs, supports, progress, target);
+  }
+  if (!deep_note.empty()) {
+    model.net.calibration_requested = "auto";
+    model.net.calibration_note =
+        model.net.calibration_note.empty() ? deep_note : deep_note + "; " + model.net.calibration_note;
+  }
   if (check_loads) {
     const LoadCheck check = static_load_check<dim>(model, model.net, scene.material, yardstick);
     model.net.calibration_load_error = check.springs;

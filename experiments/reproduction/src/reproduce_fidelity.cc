@@ -271,7 +271,11 @@ point = [0.02, 0.02, )"
 kind = ")"
      << solvers::kImplicitEuler << R"("
 dt = 0.02
+springs = "fitted"
 )";
+  // "fitted": the paper's pair network, fitted as auto builds it under light loads; auto itself
+  // builds the volume network under this press (docs/volume_term.md, "What auto builds"), whose
+  // row is springs-fitted-nodal.
   return os.str();
 }
 
@@ -387,8 +391,8 @@ density = 1.0
     }
     // The springs at rest under each level (at twice the continua's, for they soften early):
     // implicit Euler through the scene's 0.3 s ramp to 2 s; at rest when the last two samples
-    // (0.1 s apart) agree to 1e-3. The paper's pair network ("springs": the scene's auto, the
-    // fitted springs) and beside it the networks with the volume term per cell
+    // (0.1 s apart) agree to 1e-3. The paper's pair network ("springs": the fitted springs, named
+    // in the scene) and beside it the networks with the volume term per cell
     // (docs/volume_term.md): "springs-volume" (springs = "volume", the element fit) and
     // "springs-fitted-volume" (springs = "fitted-volume", fitted as the pair springs are) and
     // "springs-fitted-stable" (springs = "fitted-stable": the same with the stable energy's shear
